@@ -1,0 +1,248 @@
+// The blast wave (paper sections 2.1 and 3.1): reference TNT data scaled by the cube root of the
+// charge, the modified Friedlander positive phase, a separate negative phase, many charges.
+// Formulas, coefficients and check values: shared/reference/blast-data.md (sources cited in Blast.cpp).
+#pragma once
+
+#include <spall/core/Error.h>
+
+#include <Eigen/Core>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace spall {
+
+enum class BurstType { FreeAir, Surface };
+enum class BlastDataset { KingeryBulmash, KinneyGraham };
+
+BurstType parseBurstType(const std::string& name);        ///< "free-air" | "surface"
+BlastDataset parseBlastDataset(const std::string& name);  ///< "kingery-bulmash" | "kinney-graham"
+std::string toString(BurstType burst);
+std::string toString(BlastDataset dataset);
+
+struct Atmosphere {
+    double pressurePa = 101325.0;   ///< ambient pressure (unit: Pa)
+    double temperatureK = 288.15;   ///< ambient temperature (unit: K)
+};
+
+/// Where a scaled distance lies relative to the dataset's fitted range.
+enum class RangeStatus { Inside, ClampedNear, ExtrapolatedFar };
+
+/// Blast quantities of a 1 kg sea-level charge at scaled distance Z (Hopkinson–Cranz units:
+/// times in s/kg^(1/3), impulse in Pa s/kg^(1/3)).
+struct ScaledBlast {
+    double peakOverpressurePa = 0;
+    double arrivalTimeS = 0;
+    double positiveDurationS = 0;
+    double positiveImpulsePaS = 0;
+    double decayCoefficient = 0;
+    double negativePeakPa = 0;
+    double negativeDurationS = 0;
+    double reflectedPressurePa = 0;
+    double shockSpeedMS = 0;
+    RangeStatus status = RangeStatus::Inside;
+};
+
+/// Direct evaluation of the dataset's fits (polynomials or closed forms) at scaled distance Z
+/// (unit: m/kg^(1/3)). Below the fitted range values are held at its near end; beyond it they
+/// are extrapolated (power laws for Ps and Is, sound speed for ta); `status` says which.
+ScaledBlast scaledBlastDirect(BlastDataset dataset, BurstType burst, double scaledDistance);
+
+/// Every parameter, in SI units, of a charge of `tntKg` at `distanceM` (Sachs-scaled).
+struct BlastParameters {
+    double scaledDistanceMKg13 = 0;
+    double peakOverpressurePa = 0;
+    double arrivalTimeS = 0;
+    double positiveDurationS = 0;
+    double positiveImpulsePaS = 0;
+    double decayCoefficient = 0;
+    double negativePeakPa = 0;
+    double negativeDurationS = 0;
+    double reflectedPressurePa = 0;
+    double shockSpeedMS = 0;
+    RangeStatus status = RangeStatus::Inside;
+};
+
+/// Validates inputs (throws InputError naming the field) and evaluates the direct fits.
+BlastParameters blastParameters(BlastDataset dataset, BurstType burst, double tntKg, double distanceM,
+                                const Atmosphere& atmosphere = {});
+
+/// Friedlander decay coefficient b such that the pulse carries impulse fraction
+/// k = Is / (Ps T+) (blast-data.md §3); any k > 0, b <= 0 included.
+double solveDecayCoefficient(double impulseFraction);
+/// Impulse fraction k(b) = 1/b - (1 - e^-b)/b^2, with its series near b = 0.
+double friedlanderImpulseFraction(double b);
+
+/// Overpressure (p - p0, unit: Pa) of the positive phase at time s after arrival, 0 <= s <= T.
+inline double friedlanderOverpressure(double peakPa, double durationS, double b, double s)
+{
+    const double x = s / durationS;
+    return peakPa * (1.0 - x) * std::exp(-b * x);
+}
+
+/// Negative phase after T+: cubic pulse of NAVFAC DM-2.08 eq. 14a, peak -Ps- at tau = T-/3.
+inline double negativePhaseOverpressure(double negativePeakPa, double negativeDurationS, double tau)
+{
+    const double x = tau / negativeDurationS;
+    return -negativePeakPa * 6.75 * x * (1.0 - x) * (1.0 - x);
+}
+
+/// Overpressure history at one point: zero before arrival, Friedlander, negative phase, zero.
+double overpressureAt(const BlastParameters& p, double timeSinceDetonationS);
+
+/// A charge of TNT.
+struct Charge {
+    Eigen::Vector3d positionM = Eigen::Vector3d::Zero();
+    double tntKg = 1.0;
+    double detonationTimeS = 0.0;
+    BurstType burst = BurstType::Surface;
+};
+
+struct BlastSettings {
+    BlastDataset dataset = BlastDataset::KingeryBulmash;
+    /// Table nodes per decade of scaled distance; see docs/accuracy.md for the error it buys.
+    int tableNodesPerDecade = 128;
+    Atmosphere atmosphere;
+};
+
+/// log2(x) for finite x > 0 without a libm call: exponent bits plus a 4097-entry mantissa table
+/// with linear interpolation (absolute error below 1.1e-8).
+double fastLog2(double x);
+
+/// Sea-level scaled quantities tabulated uniformly in log Z, built once per dataset and burst.
+class BlastTable {
+public:
+    struct Node {
+        double arrivalTimeS, positiveDurationS, peakOverpressurePa, decayCoefficient, negativePeakPa;
+        double windowEndS;  ///< arrival + T+ + T-, running maximum from the near end
+    };
+    BlastTable(BlastDataset dataset, BurstType burst, int nodesPerDecade);
+
+    /// Linear interpolation in log Z; log2 Z outside the table clamps to its ends.
+    Node lookupLog2(double log2Z) const
+    {
+        double u = (log2Z - mLog2ZMin) * mNodesPerLog2;
+        if (u <= 0.0) return mNodes.front();
+        const double last = static_cast<double>(mNodes.size() - 1);
+        if (u >= last) return mNodes.back();
+        const size_t i = static_cast<size_t>(u);
+        const double w = u - static_cast<double>(i);
+        const Node& a = mNodes[i];
+        const Node& b = mNodes[i + 1];
+        return {a.arrivalTimeS + w * (b.arrivalTimeS - a.arrivalTimeS),
+                a.positiveDurationS + w * (b.positiveDurationS - a.positiveDurationS),
+                a.peakOverpressurePa + w * (b.peakOverpressurePa - a.peakOverpressurePa),
+                a.decayCoefficient + w * (b.decayCoefficient - a.decayCoefficient),
+                a.negativePeakPa + w * (b.negativePeakPa - a.negativePeakPa),
+                a.windowEndS + w * (b.windowEndS - a.windowEndS)};
+    }
+    double scaledDistanceMin() const { return std::exp2(mLog2ZMin); }
+    double scaledDistanceMax() const { return std::exp2(mLog2ZMin + double(mNodes.size() - 1) / mNodesPerLog2); }
+    /// Scaled distance of the shock front at scaled time tau (s/kg^(1/3)).
+    double frontScaledDistance(double tauS) const;
+    /// Largest scaled distance at which the window [ta, ta+T++T-] has closed by tau.
+    double rearScaledDistance(double tauS) const;
+    size_t nodeCount() const { return mNodes.size(); }
+
+private:
+    double scaledDistanceOfNode(double u) const { return std::exp2(mLog2ZMin + u / mNodesPerLog2); }
+    double mLog2ZMin = 0;
+    double mNodesPerLog2 = 1;
+    std::vector<Node> mNodes;
+    double mSoundSpeedMS = 340.29;
+};
+
+/// Distances (unit: m) from one charge where its pressure window is open at a given time.
+struct OpenWindow {
+    int charge = 0;
+    double minDistanceM = 0;
+    double maxDistanceM = 0;
+};
+
+/// Overpressure at one point from all charges, with the charge that contributes most.
+struct PressureSample {
+    double overpressurePa = 0;
+    int dominantCharge = -1;
+    double dominantOverpressurePa = 0;
+};
+
+/// The pressure field of all charges. Thread-safe for concurrent queries.
+class BlastField {
+public:
+    BlastField(std::vector<Charge> charges, const BlastSettings& settings);
+
+    const std::vector<Charge>& charges() const { return mCharges; }
+    const BlastSettings& settings() const { return mSettings; }
+
+    /// Charges whose window is open somewhere at time t, with the open distance range (padded
+    /// by one table cell, so nothing inside is ever skipped).
+    std::vector<OpenWindow> openWindows(double timeS) const;
+
+    /// Window [start, end] (absolute times, unit: s) of a charge at a distance.
+    std::pair<double, double> window(int charge, double distanceM) const;
+
+    /// Overpressure at a world point (unit: Pa) from the charges in `windows` (from openWindows
+    /// at the same time). Costs a fast log2, table reads and one exp per charge in range.
+    PressureSample sample(const Eigen::Vector3d& pointM, double timeS, const std::vector<OpenWindow>& windows) const
+    {
+        PressureSample out;
+        for (const OpenWindow& w : windows) {
+            const PerCharge& c = mPerCharge[w.charge];
+            const double r2 = (pointM - mCharges[w.charge].positionM).squaredNorm();
+            if (r2 < w.minDistanceM * w.minDistanceM || r2 > w.maxDistanceM * w.maxDistanceM) continue;
+            const double p = chargeOverpressure(c, r2, timeS);
+            out.overpressurePa += p;
+            if (std::abs(p) > std::abs(out.dominantOverpressurePa)) {
+                out.dominantOverpressurePa = p;
+                out.dominantCharge = w.charge;
+            }
+        }
+        return out;
+    }
+
+    /// Convenience for callers outside hot loops.
+    double overpressurePa(const Eigen::Vector3d& pointM, double timeS) const
+    {
+        return sample(pointM, timeS, openWindows(timeS)).overpressurePa;
+    }
+
+    /// Shock front speed (unit: m/s) of a charge at a distance; for time-step control.
+    double shockSpeedMS(int charge, double distanceM) const;
+
+    /// Parameters of one charge at a distance from the table (what the hot path uses).
+    BlastParameters tableParameters(int charge, double distanceM) const;
+
+private:
+    struct PerCharge {
+        const BlastTable* table;
+        double detonationTimeS;
+        double log2LengthScale;  ///< log2 of Z/R
+        double lengthScale;      ///< Z/R (unit: kg^(-1/3), Sachs-scaled)
+        double timeScale;        ///< real time / scaled time
+        double pressureScale;    ///< p / p0 (Sachs)
+    };
+    double chargeOverpressure(const PerCharge& c, double r2, double timeS) const
+    {
+        const double tau = (timeS - c.detonationTimeS) / c.timeScale;
+        const BlastTable::Node n = c.table->lookupLog2(0.5 * fastLog2(r2) + c.log2LengthScale);
+        const double s = tau - n.arrivalTimeS;
+        if (s < 0.0) return 0.0;
+        if (s <= n.positiveDurationS)
+            return c.pressureScale * friedlanderOverpressure(n.peakOverpressurePa, n.positiveDurationS, n.decayCoefficient, s);
+        const double tauNeg = s - n.positiveDurationS;
+        if (tauNeg < mNegativeDurationScaledS)
+            return c.pressureScale * negativePhaseOverpressure(n.negativePeakPa, mNegativeDurationScaledS, tauNeg);
+        return 0.0;
+    }
+
+    std::vector<Charge> mCharges;
+    BlastSettings mSettings;
+    std::vector<BlastTable> mTables;  ///< [0] free air, [1] surface
+    std::vector<PerCharge> mPerCharge;
+    double mNegativeDurationScaledS;
+};
+
+}  // namespace spall

@@ -1,0 +1,131 @@
+// Connected-voxel bodies (paper section 3.2).
+//
+// A body is an OpenVDB grid in its own index space: active voxels are solid material and each
+// voxel's value holds link bits to its six face neighbours (kept symmetric) plus one anchor bit
+// bonding the voxel to the world. A fragment keeps its parent's index space, so splitting copies no
+// geometry and the exported index-to-world map is exact.
+#pragma once
+
+#include <openvdb/openvdb.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <vector>
+
+namespace spall {
+
+/// Active voxel = solid; value = LinkBits. Int32 is a grid type every OpenVDB reader knows.
+using LinkGrid = openvdb::Int32Grid;
+using LinkTree = LinkGrid::TreeType;
+using LinkLeaf = LinkTree::LeafNodeType;
+
+/// Face (and link) directions: bit f of a voxel's value is the link across face f.
+enum Face : int { kNegX = 0, kPosX = 1, kNegY = 2, kPosY = 3, kNegZ = 4, kPosZ = 5 };
+inline constexpr int kFaceCount = 6;
+inline constexpr int32_t kAllLinks = 0x3f;
+/// Bond to the world (an anchor); a body holding any anchored voxel is static.
+inline constexpr int32_t kAnchorBit = 0x40;
+
+inline int oppositeFace(int face) { return face ^ 1; }
+inline int faceAxis(int face) { return face >> 1; }
+inline int faceSign(int face) { return (face & 1) ? 1 : -1; }
+inline openvdb::Coord faceOffset(int face)
+{
+    openvdb::Coord c(0, 0, 0);
+    c[faceAxis(face)] = faceSign(face);
+    return c;
+}
+inline Eigen::Vector3d faceNormal(int face)
+{
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    n[faceAxis(face)] = faceSign(face);
+    return n;
+}
+
+/// Mass properties of voxels taken as solid cubes of side h.
+struct MassProperties {
+    int64_t voxelCount = 0;
+    double massKg = 0.0;
+    /// Centre of mass in the body's local frame, local = index * h (unit: m).
+    Eigen::Vector3d centreOfMassLocalM = Eigen::Vector3d::Zero();
+    /// Inertia tensor about the centre of mass, local axes (unit: kg m^2).
+    Eigen::Matrix3d inertiaKgM2 = Eigen::Matrix3d::Zero();
+};
+
+/// An exposed face: the neighbour across it is not in the body. Cached per body; it changes
+/// only when the body splits.
+struct ExposedFace {
+    openvdb::Coord voxel;
+    int face;
+};
+
+/// One rigid body of connected voxels.
+struct Body {
+    int64_t id = 0;
+    int64_t parentId = -1;
+    int materialIndex = 0;
+    LinkGrid::Ptr grid;
+    double voxelSizeM = 0.1;
+    double densityKgM3 = 1000.0;
+    MassProperties mass;
+    /// Radius of the sphere about the centre of mass that holds every voxel (unit: m).
+    double boundingRadiusM = 0.0;
+    bool anchored = false;
+
+    // Pose and motion, world frame.
+    Eigen::Vector3d positionM = Eigen::Vector3d::Zero();  ///< centre of mass
+    Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+    Eigen::Vector3d linearVelocityMS = Eigen::Vector3d::Zero();
+    Eigen::Vector3d angularVelocityRadS = Eigen::Vector3d::Zero();
+    bool asleep = false;
+    double restTimeS = 0.0;  ///< how long the body has been below the sleep thresholds
+
+    std::vector<ExposedFace> exposedFaces;
+
+    /// Local (index * h) position of a voxel centre relative to the centre of mass (unit: m).
+    Eigen::Vector3d voxelOffsetM(const openvdb::Coord& ijk) const
+    {
+        return Eigen::Vector3d(ijk.x(), ijk.y(), ijk.z()) * voxelSizeM - mass.centreOfMassLocalM;
+    }
+    Eigen::Vector3d voxelWorldM(const openvdb::Coord& ijk) const
+    {
+        return positionM + orientation * voxelOffsetM(ijk);
+    }
+    Eigen::Matrix3d worldInertiaKgM2() const
+    {
+        const Eigen::Matrix3d r = orientation.toRotationMatrix();
+        return r * mass.inertiaKgM2 * r.transpose();
+    }
+    /// The exact index-to-world map, as OpenVDB's transform (row-vector convention).
+    openvdb::math::Transform::Ptr indexToWorld() const;
+};
+
+/// Sets the link bits of every active voxel to match its active face neighbours.
+void linkAllNeighbours(LinkGrid& grid);
+
+/// Number of intact links, each counted once.
+int64_t countLinks(const LinkGrid& grid);
+
+/// Breaks the link across `face` of `ijk` on both sides. Returns false if it was already broken.
+bool breakLink(LinkGrid::Accessor& acc, const openvdb::Coord& ijk, int face);
+
+/// True when every link bit is matched by its neighbour's bit and only joins active voxels.
+bool linksAreSymmetric(const LinkGrid& grid);
+
+MassProperties computeMassProperties(const LinkGrid& grid, double voxelSizeM, double densityKgM3);
+
+/// All exposed faces, in leaf order (deterministic).
+std::vector<ExposedFace> collectExposedFaces(const LinkGrid& grid);
+
+/// Voxels with at least one exposed face, in leaf order.
+std::vector<openvdb::Coord> collectBoundaryVoxels(const LinkGrid& grid);
+
+/// Fills mass properties, bounding radius, anchoring and exposed faces from the grid.
+void refreshDerivedData(Body& body);
+
+/// A body from a grid placed so that its local frame maps to the world by translation only.
+Body makeBody(LinkGrid::Ptr grid, double voxelSizeM, double densityKgM3);
+
+}  // namespace spall

@@ -1,0 +1,55 @@
+// Solid voxelisation of meshes (through assimp and OpenVDB's mesh-to-volume) and of primitives.
+#pragma once
+
+#include <spall/core/Error.h>
+#include <spall/voxel/Body.h>
+
+#include <Eigen/Core>
+
+#include <string>
+#include <vector>
+
+namespace spall {
+
+struct VoxeliseSettings {
+    double voxelSizeM = 0.05;          ///< edge of a voxel (unit: m)
+    int64_t maxVoxels = 200'000'000;   ///< refuse larger results (unit: voxels)
+};
+
+enum class PrimitiveShape { Box, Sphere, Cylinder };
+
+/// A primitive centred on the origin: a box of full extents sizeM, a sphere of radius
+/// sizeM.x(), or a cylinder along z of radius sizeM.x() and height sizeM.z().
+struct Primitive {
+    PrimitiveShape shape = PrimitiveShape::Box;
+    Eigen::Vector3d sizeM = Eigen::Vector3d::Ones();
+};
+
+struct VoxeliseResult {
+    LinkGrid::Ptr grid;  ///< solid voxels, all links intact, index space at voxel size
+    int64_t voxelCount = 0;
+    /// Repairs and observations a user should know about (open edges, dropped points, ...).
+    std::vector<std::string> notes;
+};
+
+/// A triangle mesh in metres.
+struct TriangleMesh {
+    std::vector<Eigen::Vector3f> positionsM;
+    std::vector<Eigen::Vector3i> triangles;
+};
+
+/// Loads every triangle of every mesh in a file assimp reads (OBJ, STL, PLY, OFF, glTF, ...).
+/// Throws InputError naming the file and the reason.
+TriangleMesh loadMesh(const std::string& path, std::vector<std::string>* notes = nullptr);
+
+/// Solid interior of a mesh: voxel centres inside the surface. Throws InputError if the
+/// interior is not well defined.
+VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& settings,
+                            const std::string& sourceName, Interrupter* interrupter = nullptr);
+
+VoxeliseResult voxelisePrimitive(const Primitive& primitive, const VoxeliseSettings& settings);
+
+/// Volume enclosed by a closed, consistently wound mesh (divergence theorem; unit: m^3).
+double meshVolumeM3(const TriangleMesh& mesh);
+
+}  // namespace spall

@@ -1,0 +1,34 @@
+#pragma once
+
+#include <spall/io/VdbIo.h>
+#include <spall/voxel/Body.h>
+
+#include <openvdb/openvdb.h>
+
+#include <initializer_list>
+
+namespace spall::test {
+
+/// A linked grid from an explicit list of voxels.
+inline LinkGrid::Ptr gridFromVoxels(std::initializer_list<openvdb::Coord> voxels, double h = 1.0)
+{
+    initialiseOpenVdb();
+    LinkGrid::Ptr g = LinkGrid::create(0);
+    g->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    for (const auto& c : voxels) g->tree().setValueOn(c, 0);
+    linkAllNeighbours(*g);
+    return g;
+}
+
+/// A solid box of nx*ny*nz voxels starting at the origin, all links intact.
+inline LinkGrid::Ptr boxGrid(int nx, int ny, int nz, double h = 1.0)
+{
+    initialiseOpenVdb();
+    LinkGrid::Ptr g = LinkGrid::create(0);
+    g->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    g->tree().denseFill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(nx - 1, ny - 1, nz - 1)), 0, true);
+    linkAllNeighbours(*g);
+    return g;
+}
+
+}  // namespace spall::test

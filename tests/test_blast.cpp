@@ -1,0 +1,233 @@
+#include <spall/blast/Blast.h>
+
+#include <gtest/gtest.h>
+
+using namespace spall;
+
+namespace {
+BlastParameters kb(double w, double r, BurstType burst = BurstType::FreeAir)
+{
+    return blastParameters(BlastDataset::KingeryBulmash, burst, w, r);
+}
+}  // namespace
+
+TEST(DecayCoefficient, MatchesNavfacPairs)
+{
+    // NAVFAC DM-2.08 (blast-data.md §3): k <-> b.
+    const std::pair<double, double> pairs[] = {{0.70, -0.934}, {0.60, -0.524}, {0.50, 0.0}, {0.40, 0.710},
+                                               {0.30, 1.772},  {0.20, 3.673},  {0.10, 8.873}};
+    for (auto [k, b] : pairs) EXPECT_NEAR(solveDecayCoefficient(k), b, 2e-3) << "k = " << k;
+}
+
+TEST(DecayCoefficient, RoundTripsIncludingNegative)
+{
+    for (double b : {-20.0, -3.0, -1e-5, 0.0, 1e-6, 0.3, 5.0, 40.0})
+        EXPECT_NEAR(solveDecayCoefficient(friedlanderImpulseFraction(b)), b, 1e-8 * std::max(1.0, std::abs(b)));
+}
+
+TEST(Friedlander, ImpulseIntegralMatchesClosedForm)
+{
+    for (double b : {-0.9, 0.0, 0.7, 3.7, 12.0}) {
+        const double ps = 1e5, t = 0.01;
+        const int n = 20000;
+        double sum = 0.0;
+        for (int i = 0; i < n; ++i) sum += friedlanderOverpressure(ps, t, b, (i + 0.5) * t / n) * t / n;
+        EXPECT_NEAR(sum, ps * t * friedlanderImpulseFraction(b), 1e-6 * ps * t) << "b = " << b;
+    }
+}
+
+TEST(Friedlander, SlopeAtArrival)
+{
+    const double ps = 2e5, t = 4e-3, b = 1.3, ds = 1e-9;
+    const double slope = (friedlanderOverpressure(ps, t, b, ds) - friedlanderOverpressure(ps, t, b, 0.0)) / ds;
+    EXPECT_NEAR(slope, -ps * (1 + b) / t, 1e-5 * ps * (1 + b) / t);
+}
+
+TEST(KingeryBulmash, PulseCarriesTheReferenceImpulse)
+{
+    const BlastParameters p = kb(10.0, 6.0);
+    EXPECT_NEAR(p.peakOverpressurePa * p.positiveDurationS * friedlanderImpulseFraction(p.decayCoefficient),
+                p.positiveImpulsePaS, 1e-9 * p.positiveImpulsePaS);
+}
+
+TEST(KingeryBulmash, SurfaceBurstMatchesSwisdakExample)
+{
+    // blast-data.md §1.2: 10 t TNT at 500 m, Swisdak's fit (within ±1 % of KB).
+    const BlastParameters p = kb(10000.0, 500.0, BurstType::Surface);
+    EXPECT_NEAR(p.arrivalTimeS, 1.276, 0.01 * 1.276);
+    EXPECT_NEAR(p.peakOverpressurePa, 5055.0, 0.01 * 5055.0);
+    EXPECT_NEAR(p.positiveDurationS, 0.1332, 0.01 * 0.1332);
+    EXPECT_NEAR(p.positiveImpulsePaS, 295.9, 0.01 * 295.9);
+}
+
+TEST(KinneyGraham, MatchesWorkedExample)
+{
+    // blast-data.md §2: W = 8 kg, R = 4 m.
+    const BlastParameters p = blastParameters(BlastDataset::KinneyGraham, BurstType::FreeAir, 8.0, 4.0);
+    EXPECT_NEAR(p.scaledDistanceMKg13, 2.0, 1e-12);
+    EXPECT_NEAR(p.peakOverpressurePa, 207.9e3, 0.002 * 207.9e3);
+    EXPECT_NEAR(p.positiveDurationS, 2.34e-3, 0.005 * 2.34e-3);
+    EXPECT_NEAR(p.positiveImpulsePaS, 172.8, 0.002 * 172.8);
+}
+
+TEST(KinneyGraham, AgreesWithKingeryBulmashWhereTheReferenceSays)
+{
+    // blast-data.md §2: Ps within about 10 % for Z <= 20, ta within 5 % for Z > 1.
+    for (double z : {0.5, 1.0, 2.0, 5.0, 10.0, 20.0}) {
+        const BlastParameters k = kb(1.0, z);
+        const BlastParameters g = blastParameters(BlastDataset::KinneyGraham, BurstType::FreeAir, 1.0, z);
+        EXPECT_NEAR(g.peakOverpressurePa / k.peakOverpressurePa, 1.0, 0.12) << "Z = " << z;
+        if (z > 1.0) EXPECT_NEAR(g.arrivalTimeS / k.arrivalTimeS, 1.0, 0.05) << "Z = " << z;
+    }
+}
+
+TEST(Scaling, HopkinsonCranz)
+{
+    const double lambda = 3.7;
+    for (auto burst : {BurstType::FreeAir, BurstType::Surface}) {
+        for (double r : {0.5, 3.0, 20.0}) {
+            const BlastParameters a = kb(2.0, r, burst);
+            const BlastParameters b = kb(2.0 * lambda * lambda * lambda, lambda * r, burst);
+            EXPECT_NEAR(b.peakOverpressurePa, a.peakOverpressurePa, 1e-9 * a.peakOverpressurePa);
+            EXPECT_NEAR(b.arrivalTimeS, lambda * a.arrivalTimeS, 1e-9 * b.arrivalTimeS);
+            EXPECT_NEAR(b.positiveDurationS, lambda * a.positiveDurationS, 1e-9 * b.positiveDurationS);
+            EXPECT_NEAR(b.positiveImpulsePaS, lambda * a.positiveImpulsePaS, 1e-9 * b.positiveImpulsePaS);
+        }
+    }
+}
+
+TEST(Scaling, MonotoneAndSubsonicFrontSlope)
+{
+    const double c0 = 340.29;
+    for (auto burst : {BurstType::FreeAir, BurstType::Surface}) {
+        BlastParameters prev = kb(1.0, 0.06, burst);
+        for (double r = 0.07; r < 60.0; r *= 1.03) {
+            const BlastParameters p = kb(1.0, r, burst);
+            EXPECT_LT(p.peakOverpressurePa, prev.peakOverpressurePa) << "R = " << r;
+            EXPECT_GT(p.arrivalTimeS, prev.arrivalTimeS) << "R = " << r;
+            // The front outruns sound: dta/dR < 1/c0.
+            EXPECT_LT((p.arrivalTimeS - prev.arrivalTimeS) / (r - r / 1.03), 1.0 / c0 * 1.001) << "R = " << r;
+            prev = p;
+        }
+    }
+}
+
+TEST(KingeryBulmash, SegmentJumpsAreWithinTheReference)
+{
+    // blast-data.md §1.1: T+ jumps +0.92 % at Z = 0.888 and +0.09 % at 2.28; Is -0.40 % at 0.792.
+    auto jump = [](double z, auto field) {
+        const double below = field(kb(1.0, z * (1 - 1e-9))), above = field(kb(1.0, z * (1 + 1e-9)));
+        return above / below - 1.0;
+    };
+    auto td = [](const BlastParameters& p) { return p.positiveDurationS; };
+    auto is = [](const BlastParameters& p) { return p.positiveImpulsePaS; };
+    EXPECT_NEAR(jump(0.888, td), 0.0092, 0.0005);
+    EXPECT_NEAR(jump(2.28, td), 0.0009, 0.0005);
+    EXPECT_NEAR(jump(0.792, is), -0.0040, 0.0005);
+}
+
+TEST(NegativePhase, BoundedBelowAmbient)
+{
+    for (double r : {0.2, 1.0, 5.0, 50.0, 500.0}) {
+        const BlastParameters p = kb(5.0, r);
+        for (int i = 0; i <= 1000; ++i) {
+            const double t = p.arrivalTimeS + (p.positiveDurationS + p.negativeDurationS) * 1.1 * i / 1000;
+            const double dp = overpressureAt(p, t);
+            EXPECT_GT(dp, -101325.0);
+            EXPECT_TRUE(std::isfinite(dp));
+        }
+        // Peak suction at T-/3 after the positive phase.
+        EXPECT_NEAR(overpressureAt(p, p.arrivalTimeS + p.positiveDurationS + p.negativeDurationS / 3), -p.negativePeakPa,
+                    1e-9 * p.negativePeakPa);
+    }
+}
+
+TEST(Range, OutsideTheFitsIsFlaggedAndFinite)
+{
+    const BlastParameters near = kb(100.0, 0.01);
+    EXPECT_EQ(near.status, RangeStatus::ClampedNear);
+    EXPECT_TRUE(std::isfinite(near.peakOverpressurePa) && near.peakOverpressurePa > 0);
+    const BlastParameters far = kb(1.0, 200.0);
+    EXPECT_EQ(far.status, RangeStatus::ExtrapolatedFar);
+    EXPECT_TRUE(std::isfinite(far.peakOverpressurePa) && far.peakOverpressurePa > 0);
+    EXPECT_LT(far.peakOverpressurePa, kb(1.0, 40.0).peakOverpressurePa);
+    EXPECT_EQ(kb(1.0, 10.0).status, RangeStatus::Inside);
+}
+
+TEST(Range, BadInputIsRejected)
+{
+    EXPECT_THROW(kb(0.0, 1.0), InputError);
+    EXPECT_THROW(kb(-1.0, 1.0), InputError);
+    EXPECT_THROW(kb(1.0, 0.0), InputError);
+    EXPECT_THROW(kb(std::nan(""), 1.0), InputError);
+    EXPECT_THROW(parseBurstType("underwater"), InputError);
+    EXPECT_THROW(parseBlastDataset("friedlander"), InputError);
+}
+
+TEST(Sachs, HalfPressureAtmosphere)
+{
+    Atmosphere thin{0.5 * 101325.0, 288.15};
+    const BlastParameters a = blastParameters(BlastDataset::KingeryBulmash, BurstType::FreeAir, 1.0, 3.0, thin);
+    const double zs = 3.0 * std::cbrt(0.5);
+    const BlastParameters sl = kb(1.0, zs);
+    EXPECT_NEAR(a.peakOverpressurePa, 0.5 * sl.peakOverpressurePa, 1e-9 * a.peakOverpressurePa);
+    EXPECT_NEAR(a.arrivalTimeS, sl.arrivalTimeS / std::cbrt(0.5), 1e-9 * a.arrivalTimeS);
+}
+
+TEST(FastLog2, IsAccurate)
+{
+    for (double x = 1e-6; x < 1e6; x *= 1.0137) EXPECT_NEAR(fastLog2(x), std::log2(x), 2e-8);
+}
+
+TEST(BlastField, TableMatchesDirectFits)
+{
+    BlastSettings settings;
+    settings.tableNodesPerDecade = 128;
+    const BlastField field({Charge{Eigen::Vector3d::Zero(), 4.0, 0.0, BurstType::FreeAir}}, settings);
+    for (double r = 0.2; r < 50.0; r *= 1.07) {
+        const BlastParameters direct = kb(4.0, r);
+        const BlastParameters table = field.tableParameters(0, r);
+        EXPECT_NEAR(table.peakOverpressurePa / direct.peakOverpressurePa, 1.0, 2e-3) << r;
+        EXPECT_NEAR(table.arrivalTimeS / direct.arrivalTimeS, 1.0, 2e-3) << r;
+        EXPECT_NEAR(table.positiveDurationS / direct.positiveDurationS, 1.0, 1e-2) << r;
+    }
+}
+
+TEST(BlastField, SuperposesChargesAndDelays)
+{
+    BlastSettings settings;
+    const Charge a{Eigen::Vector3d(0, 0, 0), 2.0, 0.0, BurstType::FreeAir};
+    const Charge b{Eigen::Vector3d(10, 0, 0), 2.0, 0.004, BurstType::FreeAir};
+    const BlastField one({a}, settings), both({a, b}, settings);
+    const Eigen::Vector3d x(5, 0, 0);
+    const BlastParameters p = one.tableParameters(0, 5.0);
+    const double t = p.arrivalTimeS + 0.3 * p.positiveDurationS;
+    EXPECT_NEAR(both.overpressurePa(x, t), one.overpressurePa(x, t), 1e-9) << "b not arrived yet";
+    const double t2 = p.arrivalTimeS + 0.004 + 0.1 * p.positiveDurationS;  // both positive
+    const double pa = one.overpressurePa(x, t2);
+    const double pb = BlastField({Charge{b}}, settings).overpressurePa(x, t2);
+    EXPECT_GT(pb, 0.0);
+    EXPECT_NEAR(both.overpressurePa(x, t2), pa + pb, 1e-9 * (pa + pb));
+}
+
+TEST(BlastField, WindowsContainEveryNonzeroPressure)
+{
+    BlastSettings settings;
+    const BlastField field({Charge{Eigen::Vector3d(1, 2, 0), 3.0, 0.01, BurstType::Surface}}, settings);
+    EXPECT_TRUE(field.openWindows(0.005).empty()) << "before detonation";
+    for (double t = 0.0102; t < 0.2; t *= 1.3) {
+        const auto windows = field.openWindows(t);
+        for (double r = 0.1; r < 80.0; r *= 1.05) {
+            const double p = field.overpressurePa(Eigen::Vector3d(1 + r, 2, 0), t);
+            if (p != 0.0) {
+                ASSERT_EQ(windows.size(), 1u);
+                EXPECT_GE(r, windows[0].minDistanceM) << "t = " << t;
+                EXPECT_LE(r, windows[0].maxDistanceM) << "t = " << t;
+            }
+            const auto [start, end] = field.window(0, r);
+            if (t < start || t > end) {
+                EXPECT_EQ(p, 0.0);
+            }
+        }
+    }
+}

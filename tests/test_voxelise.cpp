@@ -1,0 +1,213 @@
+#include "TestUtil.h"
+
+#include <spall/voxel/Voxelise.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+using namespace spall;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path scratchDir()
+{
+    fs::path dir = fs::temp_directory_path() / ("spall_test_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    return dir;
+}
+
+/// Icosphere of radius r (subdivided, outward winding).
+TriangleMesh icosphere(double r, int subdivisions)
+{
+    const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+    std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                                      {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    std::vector<Eigen::Vector3i> f = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                                      {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
+                                      {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+    for (auto& p : v) p.normalize();
+    for (int s = 0; s < subdivisions; ++s) {
+        std::map<std::pair<int, int>, int> mid;
+        auto midpoint = [&](int a, int b) {
+            auto key = std::minmax(a, b);
+            auto it = mid.find(key);
+            if (it != mid.end()) return it->second;
+            v.push_back((v[a] + v[b]).normalized());
+            return mid[key] = int(v.size() - 1);
+        };
+        std::vector<Eigen::Vector3i> next;
+        for (const auto& tri : f) {
+            const int a = midpoint(tri[0], tri[1]), b = midpoint(tri[1], tri[2]), c = midpoint(tri[2], tri[0]);
+            next.push_back({tri[0], a, c});
+            next.push_back({tri[1], b, a});
+            next.push_back({tri[2], c, b});
+            next.push_back({a, b, c});
+        }
+        f = next;
+    }
+    TriangleMesh mesh;
+    for (const auto& p : v) mesh.positionsM.push_back((p * r).cast<float>());
+    mesh.triangles = f;
+    return mesh;
+}
+
+}  // namespace
+
+TEST(Voxelise, MeshVolumeConvergesLinearly)
+{
+    // A tilted box (edges 0.7, 0.5, 0.4 m): exact inside test, no voxel centre lies on a face.
+    initialiseOpenVdb();
+    const Eigen::Matrix3d rot = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+    const Eigen::Vector3d half(0.35, 0.25, 0.2), centre(0.013, -0.007, 0.021);
+    TriangleMesh mesh;
+    for (int k = 0; k < 8; ++k) {
+        const Eigen::Vector3d corner((k & 1 ? 1 : -1) * half.x(), (k & 2 ? 1 : -1) * half.y(), (k & 4 ? 1 : -1) * half.z());
+        mesh.positionsM.push_back((rot * corner + centre).cast<float>());
+    }
+    mesh.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                      {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+    const double exact = meshVolumeM3(mesh);
+    EXPECT_NEAR(exact, 0.7 * 0.5 * 0.4, 1e-6);
+    std::vector<double> volumeErrors, mismatchErrors;
+    for (double h : {0.04, 0.02, 0.01}) {
+        VoxeliseSettings s;
+        s.voxelSizeM = h;
+        const VoxeliseResult r = voxeliseMesh(mesh, s, "tilted box");
+        EXPECT_TRUE(r.notes.empty()) << "closed mesh needs no repair";
+        volumeErrors.push_back(std::abs(r.voxelCount * h * h * h - exact) / exact);
+        // Every voxel centre must be classified on its true side of the surface.
+        auto acc = r.grid->getConstAccessor();
+        const int n = static_cast<int>(std::ceil(0.5 / h));
+        int64_t wrong = 0;
+        for (int i = -n; i <= n; ++i)
+            for (int j = -n; j <= n; ++j)
+                for (int k = -n; k <= n; ++k) {
+                    const Eigen::Vector3d local = rot.transpose() * (Eigen::Vector3d(i, j, k) * h - centre);
+                    const bool inside = (local.cwiseAbs() - half).maxCoeff() < 0.0;
+                    wrong += inside != acc.isValueOn(openvdb::Coord(i, j, k));
+                }
+        mismatchErrors.push_back(wrong * h * h * h / exact);
+    }
+    // With exact classification the volume error is pure point sampling, bounded by the surface
+    // area times h/2: a bound that falls linearly with h, which each resolution must meet.
+    const double area = 2 * (0.7 * 0.5 + 0.5 * 0.4 + 0.7 * 0.4);
+    const double hs[] = {0.04, 0.02, 0.01};
+    for (size_t i = 0; i < 3; ++i) {
+        EXPECT_EQ(mismatchErrors[i], 0.0) << "h = " << hs[i];
+        EXPECT_LT(volumeErrors[i] * exact, 0.5 * area * hs[i]) << "h = " << hs[i];
+    }
+    EXPECT_LT(volumeErrors[2], 0.01);
+}
+
+TEST(Voxelise, ReadsCommonFormats)
+{
+    initialiseOpenVdb();
+    const fs::path dir = scratchDir();
+    // A unit cube in OBJ, STL, PLY and OFF.
+    const char* obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                      "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+    const char* off = "OFF\n8 6 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+                      "4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n4 3 0 4 7\n";
+    const char* ply = "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\n"
+                      "element face 6\nproperty list uchar int vertex_indices\nend_header\n"
+                      "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+                      "4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n4 3 0 4 7\n";
+    std::ofstream(dir / "cube.obj") << obj;
+    std::ofstream(dir / "cube.off") << off;
+    std::ofstream(dir / "cube.ply") << ply;
+    {
+        // STL: the OBJ cube's quads split into triangles.
+        const TriangleMesh m = loadMesh((dir / "cube.obj").string());
+        std::ofstream stl(dir / "cube.stl");
+        stl << "solid cube\n";
+        for (const auto& t : m.triangles) {
+            stl << "facet normal 0 0 0\nouter loop\n";
+            for (int k = 0; k < 3; ++k) {
+                const auto& p = m.positionsM[t[k]];
+                stl << "vertex " << p.x() << " " << p.y() << " " << p.z() << "\n";
+            }
+            stl << "endloop\nendfacet\n";
+        }
+        stl << "endsolid cube\n";
+    }
+    for (const char* name : {"cube.obj", "cube.off", "cube.ply", "cube.stl"}) {
+        const TriangleMesh m = loadMesh((dir / name).string());
+        EXPECT_EQ(m.triangles.size(), 12u) << name;
+        EXPECT_NEAR(meshVolumeM3(m), 1.0, 1e-6) << name;
+        VoxeliseSettings s;
+        s.voxelSizeM = 0.08;  // centres i*0.08 in [0, 1): i = 0..12; centres on a face count as inside
+        const VoxeliseResult r = voxeliseMesh(m, s, name);
+        EXPECT_EQ(r.voxelCount, 13 * 13 * 13) << name;
+    }
+    fs::remove_all(dir);
+}
+
+TEST(Voxelise, OpenMeshIsReported)
+{
+    initialiseOpenVdb();
+    TriangleMesh mesh = icosphere(0.5, 3);
+    mesh.triangles.pop_back();  // a one-triangle hole
+    VoxeliseSettings s;
+    s.voxelSizeM = 0.05;
+    const VoxeliseResult r = voxeliseMesh(mesh, s, "holed");
+    ASSERT_FALSE(r.notes.empty());
+    EXPECT_NE(r.notes[0].find("open edges"), std::string::npos);
+    EXPECT_NEAR(r.voxelCount * 0.05 * 0.05 * 0.05, meshVolumeM3(icosphere(0.5, 3)), 0.05);
+}
+
+TEST(Voxelise, BadInputNamesTheFileAndReason)
+{
+    initialiseOpenVdb();
+    const fs::path dir = scratchDir();
+    auto expectError = [](const std::string& path, const std::string& reason) {
+        try {
+            loadMesh(path);
+            ADD_FAILURE() << "no error for " << path;
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find(path), std::string::npos) << what;
+            EXPECT_NE(what.find(reason), std::string::npos) << what;
+        }
+    };
+    expectError((dir / "missing.obj").string(), "no such file");
+    std::ofstream(dir / "empty.obj").close();
+    expectError((dir / "empty.obj").string(), "empty");
+    std::ofstream(dir / "garbage.stl") << "\x01\x02 this is not a mesh at all \xff";
+    expectError((dir / "garbage.stl").string(), "cannot be read");
+    std::ofstream(dir / "points.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    expectError((dir / "points.obj").string(), "no");
+    fs::remove_all(dir);
+
+    VoxeliseSettings s;
+    const TriangleMesh mesh = icosphere(0.5, 1);
+    for (double h : {0.0, -0.1, std::nan("")}) {
+        s.voxelSizeM = h;
+        EXPECT_THROW(voxeliseMesh(mesh, s, "x"), InputError) << h;
+    }
+    s.voxelSizeM = 0.001;
+    s.maxVoxels = 1000;
+    EXPECT_THROW(voxeliseMesh(mesh, s, "x"), InputError);
+}
+
+TEST(Voxelise, PrimitivesHaveTheRightVoxelCounts)
+{
+    initialiseOpenVdb();
+    VoxeliseSettings s;
+    s.voxelSizeM = 0.1;
+    EXPECT_EQ(voxelisePrimitive({PrimitiveShape::Box, {1.0, 0.5, 2.0}}, s).voxelCount, 10 * 5 * 20);
+    s.voxelSizeM = 0.05;
+    const double cell = 0.05 * 0.05 * 0.05;
+    const double sphere = voxelisePrimitive({PrimitiveShape::Sphere, {1.0, 1.0, 1.0}}, s).voxelCount * cell;
+    EXPECT_NEAR(sphere, 4.0 / 3.0 * M_PI, 0.03 * 4.0 / 3.0 * M_PI);
+    const double cylinder = voxelisePrimitive({PrimitiveShape::Cylinder, {0.5, 0.5, 1.0}}, s).voxelCount * cell;
+    EXPECT_NEAR(cylinder, M_PI * 0.25, 0.05 * M_PI * 0.25);
+    s.voxelSizeM = 0.1;
+    const auto box = voxelisePrimitive({PrimitiveShape::Box, {0.3, 0.3, 0.3}}, s);
+    EXPECT_EQ(countLinks(*box.grid), 54);
+    EXPECT_TRUE(linksAreSymmetric(*box.grid));
+}
