@@ -28,6 +28,34 @@ openvdb::math::Transform::Ptr Body::indexToWorld() const
     return openvdb::math::Transform::createLinearTransform(m);
 }
 
+openvdb::Int32Grid::Ptr toStandardGrid(const LinkGrid& grid)
+{
+    auto out = openvdb::Int32Grid::create(grid.background());
+    out->setTransform(grid.transform().copy());
+    out->setName(grid.getName());
+    out->insertMeta(grid);
+    for (auto leaf = grid.constTree().cbeginLeaf(); leaf; ++leaf) {
+        auto* target = out->tree().touchLeaf(leaf->origin());
+        for (auto it = leaf->cbeginValueOn(); it; ++it) target->setValueOn(it.pos(), *it);
+    }
+    return out;
+}
+
+LinkGrid::Ptr fromStandardGrid(const openvdb::Int32Grid& grid)
+{
+    openvdb::Int32Tree voxels(grid.tree());
+    voxels.voxelizeActiveTiles();
+    auto out = LinkGrid::create(grid.background());
+    out->setTransform(grid.transform().copy());
+    out->setName(grid.getName());
+    out->insertMeta(grid);
+    for (auto leaf = voxels.cbeginLeaf(); leaf; ++leaf) {
+        auto* target = out->tree().touchLeaf(leaf->origin());
+        for (auto it = leaf->cbeginValueOn(); it; ++it) target->setValueOn(it.pos(), *it);
+    }
+    return out;
+}
+
 void linkAllNeighbours(LinkGrid& grid)
 {
     // Reads topology through a const accessor per task and writes only the task's own leaf.
@@ -189,6 +217,7 @@ void refreshDerivedData(Body& body)
 {
     body.mass = computeMassProperties(*body.grid, body.voxelSizeM, body.densityKgM3);
     body.exposedFaces = collectExposedFaces(*body.grid);
+    body.linkCount = countLinks(*body.grid);
     // Bounding radius over boundary voxels' far corners: every voxel lies inside it.
     double r2 = 0.0;
     const double halfDiagonal = 0.5 * std::sqrt(3.0) * body.voxelSizeM;

@@ -165,8 +165,8 @@ VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& se
     auto interior = openvdb::tools::sdfInteriorMask(*sdf);
 
     result.grid = newLinkGrid(h);
-    result.grid->tree().topologyUnion(interior->tree());
-    result.grid->tree().voxelizeActiveTiles();
+    interior->tree().voxelizeActiveTiles();
+    copyActiveTopology(result.grid->tree(), interior->tree(), 0);
     result.voxelCount = static_cast<int64_t>(result.grid->activeVoxelCount());
     if (result.voxelCount == 0) {
         throw InputError(sourceName + ": the mesh encloses no voxel centre at voxel size " + std::to_string(h) +
@@ -194,14 +194,19 @@ VoxeliseResult voxelisePrimitive(const Primitive& primitive, const VoxeliseSetti
     }
     checkVoxelBudget(2.0 * half, h, settings.maxVoxels, "primitive");
 
-    // Voxel centres i*h inside the half-open extent [-half, half): a box of n*h holds n voxels.
-    constexpr double kTolerance = 1e-9;
+    // A box is rounded to whole voxels per axis and centred: an odd count puts a voxel centre on
+    // the axis (offset 0), an even count puts a face there (offset h/2), so the voxel cubes tile the
+    // box exactly. Spheres and cylinders keep the voxels whose centre is inside.
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
     openvdb::Coord lo, hi;
     for (int a = 0; a < 3; ++a) {
-        lo[a] = static_cast<int>(std::ceil(-half[a] / h - kTolerance));
-        hi[a] = static_cast<int>(std::ceil(half[a] / h - kTolerance)) - 1;
+        const int n = std::max(1, static_cast<int>(std::lround(2.0 * half[a] / h)));
+        offset[a] = (n % 2 == 0) ? 0.5 * h : 0.0;
+        lo[a] = -(n / 2);
+        hi[a] = lo[a] + n - 1;
     }
     VoxeliseResult result;
+    result.localOffsetM = offset;
     result.grid = newLinkGrid(h);
     if (primitive.shape == PrimitiveShape::Box) {
         result.grid->tree().denseFill(openvdb::CoordBBox(lo, hi), 0, true);
@@ -211,9 +216,9 @@ VoxeliseResult voxelisePrimitive(const Primitive& primitive, const VoxeliseSetti
         for (int i = lo.x(); i <= hi.x(); ++i)
             for (int j = lo.y(); j <= hi.y(); ++j)
                 for (int k = lo.z(); k <= hi.z(); ++k) {
-                    const double x = i * h, y = j * h, z = k * h;
+                    const double x = i * h + offset.x(), y = j * h + offset.y(), z = k * h + offset.z();
                     const bool inside = primitive.shape == PrimitiveShape::Sphere ? x * x + y * y + z * z < r2
-                                                                                  : x * x + y * y < r2;
+                                                                                  : x * x + y * y < r2 && std::abs(z) < half.z();
                     if (inside) acc.setValueOn(openvdb::Coord(i, j, k), 0);
                 }
     }

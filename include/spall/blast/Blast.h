@@ -203,6 +203,20 @@ public:
         return out;
     }
 
+    /// Calls f(chargeIndex, overpressurePa, chargePositionM) for every charge in `windows` whose
+    /// window holds the point, for loads that need each charge's direction.
+    template <typename F>
+    void forEachCharge(const Eigen::Vector3d& pointM, double timeS, const std::vector<OpenWindow>& windows, F&& f) const
+    {
+        for (const OpenWindow& w : windows) {
+            const Eigen::Vector3d& c = mCharges[w.charge].positionM;
+            const double r2 = (pointM - c).squaredNorm();
+            if (r2 < w.minDistanceM * w.minDistanceM || r2 > w.maxDistanceM * w.maxDistanceM) continue;
+            const double p = chargeOverpressure(mPerCharge[w.charge], r2, timeS);
+            if (p != 0.0) f(w.charge, p, c);
+        }
+    }
+
     /// Convenience for callers outside hot loops.
     double overpressurePa(const Eigen::Vector3d& pointM, double timeS) const
     {

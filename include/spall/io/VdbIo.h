@@ -21,3 +21,37 @@ void writeGridsAtomically(const std::string& path, const openvdb::GridPtrVec& gr
 LinkGrid::Ptr readLinkGrid(const std::string& path);
 
 }  // namespace spall
+
+#include <unordered_map>
+#include <vector>
+
+namespace spall {
+
+struct FrameInfo {
+    int frame = 0;
+    double timeS = 0;
+};
+
+/// Writes OUTDIR/fragments.NNNN.vdb: one FloatGrid per body named fragment_<id> (value 1 inside,
+/// transform = the body's exact index-to-world map, motion metadata) plus, if asked, a
+/// world-space `density` grid with all bodies. Trees are cached per body id and shared between
+/// frames while the body's voxels do not change.
+class FrameWriter {
+public:
+    FrameWriter(std::string outputDirectory, bool densityGrid);
+    /// Returns the path written.
+    std::string write(const FrameInfo& info, const std::vector<Body>& bodies);
+    static std::string framePath(const std::string& directory, int frame);
+
+private:
+    openvdb::FloatTree::Ptr solidTree(const Body& body);
+    std::string mDirectory;
+    bool mDensityGrid;
+    std::unordered_map<int64_t, openvdb::FloatTree::Ptr> mTrees;
+};
+
+/// Rasterises bodies into one world-space grid of voxel size h (value 1 where a voxel centre of
+/// the world grid falls inside some body voxel).
+openvdb::FloatGrid::Ptr rasteriseDensity(const std::vector<Body>& bodies, double voxelSizeM);
+
+}  // namespace spall

@@ -18,7 +18,7 @@ struct VoxeliseSettings {
 
 enum class PrimitiveShape { Box, Sphere, Cylinder };
 
-/// A primitive centred on the origin: a box of full extents sizeM, a sphere of radius
+/// A primitive centred on the object's origin: a box of full extents sizeM, a sphere of radius
 /// sizeM.x(), or a cylinder along z of radius sizeM.x() and height sizeM.z().
 struct Primitive {
     PrimitiveShape shape = PrimitiveShape::Box;
@@ -28,6 +28,9 @@ struct Primitive {
 struct VoxeliseResult {
     LinkGrid::Ptr grid;  ///< solid voxels, all links intact, index space at voxel size
     int64_t voxelCount = 0;
+    /// Object-local position of index (0,0,0): local = index * h + offset (unit: m). Boxes use 0 or
+    /// h/2 per axis so that their voxel cubes tile the box exactly; meshes use 0.
+    Eigen::Vector3d localOffsetM = Eigen::Vector3d::Zero();
     /// Repairs and observations a user should know about (open edges, dropped points, ...).
     std::vector<std::string> notes;
 };

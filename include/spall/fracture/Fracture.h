@@ -1,0 +1,77 @@
+// Fracture (paper sections 2.2 and 3.3): link loading by the blast, the paper's four algorithms,
+// and splitting bodies into the connected components of their intact links.
+#pragma once
+
+#include <spall/blast/Blast.h>
+#include <spall/fracture/Material.h>
+#include <spall/voxel/Body.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace spall {
+
+enum class FractureAlgorithm {
+    YieldLimit,      ///< variable limit (1), with weakening (2) and orientation (3) as switched
+    DavisonStevens,  ///< damage accumulation (4)
+    None,            ///< unbreakable
+};
+FractureAlgorithm parseFractureAlgorithm(const std::string& name);
+std::string toString(FractureAlgorithm algorithm);
+
+enum class SmallFragmentPolicy { Keep, Dust };
+
+struct FractureSettings {
+    FractureAlgorithm algorithm = FractureAlgorithm::YieldLimit;
+    bool weakening = true;    ///< algorithm 2 on top of 1
+    bool orientation = true;  ///< algorithm 3 on top of 1
+    uint64_t seed = 1;        ///< yield limits derive from a hash of (seed, voxel, axis)
+    int64_t minFragmentVoxels = 1;  ///< smaller pieces follow smallFragments (unit: voxels)
+    SmallFragmentPolicy smallFragments = SmallFragmentPolicy::Keep;
+};
+
+/// Link bits 8..31 of a voxel's value: for each +x, +y, +z link, 1 + the index of the charge that
+/// first loaded it beyond its weakened limit (0: never). Kept in the link grid because it is the
+/// link's own state, and so it follows the voxel through every split for free.
+inline constexpr int kWeakenedShift = 8;
+inline int weakenedByCharge(int32_t bits, int axis) { return ((bits >> (kWeakenedShift + 8 * axis)) & 0xff) - 1; }
+
+/// Deterministic uniform number in [0, 1) from (seed, voxel, axis) (splitmix64 mixing).
+double linkRandom(uint64_t seed, const openvdb::Coord& ijk, int axis);
+
+/// Yield limit of a link before weakening and orientation (unit: Pa).
+inline double baseYieldLimit(const Material& m, uint64_t seed, const openvdb::Coord& ijk, int axis)
+{
+    return m.meanYieldPa * (1.0 + m.yieldVariation * (2.0 * linkRandom(seed, ijk, axis) - 1.0));
+}
+
+/// What one step of loading did to one body.
+struct LoadResult {
+    int64_t brokenLinks = 0;
+    int64_t brokenAnchors = 0;
+    int64_t weakenedLinks = 0;
+    int64_t visitedLeaves = 0;
+    int64_t skippedLeaves = 0;
+};
+
+/// Loads every intact link of `body` inside an open window at time t and breaks or weakens it
+/// (generate in parallel over leaves, apply in leaf order). `damage` is the per-voxel
+/// Davison–Stevens damage grid (same topology as the body; only for that algorithm).
+LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, const BlastField& field,
+                     const std::vector<OpenWindow>& windows, double timeS, double dtS, const FractureSettings& settings);
+
+/// True when the body's bounding sphere meets some window's distance range.
+bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows);
+
+/// A piece that left its parent.
+struct SplitPart {
+    Body body;
+    DamageGrid::Ptr damage;
+};
+
+/// Splits a body into the connected components of its intact links. Each part gets the parent's
+/// velocity field at its own centre of mass (v + w x dc, same w), so momentum is conserved.
+/// Returns an empty vector when the body is still one piece. Part ids are left to the caller.
+std::vector<SplitPart> splitBody(const Body& body, const DamageGrid* damage);
+
+}  // namespace spall

@@ -1,0 +1,37 @@
+// Materials in physical units, with presets calibrated on published blast-damage tables.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace spall {
+
+struct Material {
+    std::string name;
+    double densityKgM3 = 2000.0;        ///< (unit: kg/m^3)
+    double meanYieldPa = 50e3;          ///< mean link yield limit, as side-on overpressure (unit: Pa)
+    double yieldVariation = 0.1;        ///< limits are uniform in mean * [1 - v, 1 + v] (unit: fraction)
+    double weakeningFraction = 0.2;     ///< limit reduction after an earlier charge loaded the link (unit: fraction)
+    double orientationFactor = 0.1;     ///< limit * (1 - f |link . wave|) (unit: fraction; 0 turns it off)
+    double damageRatePerS = 300.0;      ///< Davison–Stevens B in rate form (unit: 1/s)
+    double damageStressScalePerPa = 0;  ///< Davison–Stevens C (unit: 1/Pa); 0 means 1 / meanYieldPa
+    /// Where the numbers come from.
+    std::string source;
+};
+
+/// The named presets: glass, wood, brick-masonry, concrete, reinforced-concrete.
+const std::vector<Material>& materialPresets();
+
+/// A preset by name; throws InputError listing the known names.
+const Material& findMaterialPreset(const std::string& name);
+
+/// Throws InputError naming the field when a value is out of range.
+void validateMaterial(const Material& material);
+
+/// Builds a material whose walls start to break at the low end of a published failure range and
+/// break completely at its high end (see docs/materials.md): with f = orientation factor,
+/// mean (1 - v)(1 - f) = pLow and mean (1 + v) = pHigh.
+Material calibrateMaterial(const std::string& name, double densityKgM3, double failureLowPa, double failureHighPa,
+                           const std::string& source);
+
+}  // namespace spall

@@ -1,0 +1,90 @@
+// history.h5: per-frame and per-body arrays (unit in every name), a CSR offset array linking
+// frames to body rows, fracture events, dust and charges. Flushed every frame, so a run that is
+// interrupted keeps every frame written so far readable. Layout: docs/file-formats.md.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace spall {
+
+inline constexpr const char* kHistoryFormatName = "spall-history";
+inline constexpr int kHistoryFormatVersion = 1;
+
+struct FrameRow {
+    double timeS = 0;
+    double kineticEnergyJ = 0;
+    Eigen::Vector3d linearMomentum = Eigen::Vector3d::Zero();   ///< kg m/s
+    Eigen::Vector3d angularMomentum = Eigen::Vector3d::Zero();  ///< kg m^2/s, about the origin
+    int64_t brokenLinks = 0;  ///< since the previous frame
+    int64_t steps = 0;        ///< since the previous frame
+    double minDtS = 0;
+    int64_t bodyCount = 0;
+    int64_t voxelCount = 0;
+    double dustMassKg = 0;    ///< cumulative
+};
+
+struct BodyRow {
+    int64_t id = 0, parentId = -1;
+    Eigen::Vector3d positionM = Eigen::Vector3d::Zero();
+    Eigen::Vector4d orientationWxyz = Eigen::Vector4d(1, 0, 0, 0);
+    Eigen::Vector3d linearVelocityMS = Eigen::Vector3d::Zero();
+    Eigen::Vector3d angularVelocityRadS = Eigen::Vector3d::Zero();
+    double massKg = 0;
+    int64_t voxelCount = 0;
+    bool asleep = false;
+    bool anchored = false;
+};
+
+struct FractureEventRow {
+    double timeS = 0;
+    int64_t parentId = -1;
+    std::vector<int64_t> childIds;
+};
+
+struct DustRow {
+    double timeS = 0;
+    int64_t parentId = -1;
+    int64_t voxelCount = 0;
+    double massKg = 0;
+    Eigen::Vector3d linearMomentum = Eigen::Vector3d::Zero();
+};
+
+struct ChargeRow {
+    Eigen::Vector3d positionM;
+    double tntKg;
+    double detonationTimeS;
+    std::string burst;
+};
+
+struct HistoryHeader {
+    double voxelSizeM = 0;
+    uint64_t seed = 0;
+    std::string sceneJson;
+    std::vector<ChargeRow> charges;
+};
+
+/// Writes history.h5 incrementally. Throws IoError.
+class HistoryWriter {
+public:
+    HistoryWriter(const std::string& path, const HistoryHeader& header);
+    ~HistoryWriter();
+    HistoryWriter(const HistoryWriter&) = delete;
+    HistoryWriter& operator=(const HistoryWriter&) = delete;
+
+    /// Appends one frame with its bodies and the events and dust since the last frame; flushes.
+    void appendFrame(const FrameRow& frame, const std::vector<BodyRow>& bodies, const std::vector<FractureEventRow>& events,
+                     const std::vector<DustRow>& dust);
+    /// Marks the run complete (root attribute run_complete = 1) and closes the file.
+    void finish();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> mImpl;
+};
+
+}  // namespace spall

@@ -1,0 +1,71 @@
+// Scenes: JSON in SI units. Every key is documented in docs/scene-format.md; unknown keys, wrong
+// types and out-of-range values are errors naming the file, the key and the reason.
+#pragma once
+
+#include <spall/blast/Blast.h>
+#include <spall/dynamics/Dynamics.h>
+#include <spall/fracture/Fracture.h>
+#include <spall/fracture/Material.h>
+#include <spall/voxel/Voxelise.h>
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace spall {
+
+enum class AnchorMode { None, Ground };
+
+struct ObjectSpec {
+    std::string name;
+    std::string meshPath;                 ///< resolved against the scene file; empty for primitives
+    std::optional<Primitive> primitive;
+    Eigen::Vector3d positionM = Eigen::Vector3d::Zero();     ///< where the object's local origin goes
+    Eigen::Vector3d rotationDeg = Eigen::Vector3d::Zero();   ///< about x, then y, then z (world axes)
+    std::string material = "brick-masonry";
+    AnchorMode anchor = AnchorMode::None;
+};
+
+struct OutputSettings {
+    bool vdb = true;           ///< fragments.NNNN.vdb per frame
+    bool densityGrid = true;   ///< world-space `density` grid in each frame
+    bool history = true;       ///< history.h5
+};
+
+struct Scene {
+    std::string sourceName = "<built-in default>";
+    double voxelSizeM = 0.05;
+    double durationS = 4.0;
+    double frameRateHz = 24.0;
+    uint64_t seed = 1;
+    int64_t maxVoxels = 20'000'000;
+    WorldSettings world;
+    SleepSettings sleep;
+    BlastSettings blast;
+    FractureSettings fracture;
+    TimeStepSettings timeStep;
+    std::vector<Material> materials;  ///< presets plus the scene's own
+    std::vector<ObjectSpec> objects;
+    std::vector<Charge> charges;
+    OutputSettings output;
+
+    int frameCount() const { return static_cast<int>(std::floor(durationS * frameRateHz + 1e-9)) + 1; }
+    const Material& material(const std::string& name) const;
+};
+
+/// The built-in default scene (also assets/scenes/default.json).
+const char* defaultSceneJson();
+
+/// Parses scene JSON. `sourceName` names the file in errors; relative mesh paths resolve
+/// against `baseDirectory`.
+Scene parseScene(const std::string& text, const std::string& sourceName, const std::string& baseDirectory);
+
+/// Reads and parses a scene file.
+Scene loadScene(const std::string& path);
+
+/// The scene with every default filled in, in the same format (parses back to the same scene).
+nlohmann::json sceneToJson(const Scene& scene);
+
+}  // namespace spall

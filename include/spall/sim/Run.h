@@ -1,0 +1,40 @@
+// A whole run: scene -> simulation -> frames (.vdb) and history (.h5) in an output directory.
+#pragma once
+
+#include <spall/core/Error.h>
+#include <spall/io/Scene.h>
+
+#include <functional>
+#include <string>
+
+namespace spall {
+
+struct RunOptions {
+    std::string outputDirectory = "out";
+    int maxFrames = -1;  ///< stop after this many frames (-1: the scene's duration)
+};
+
+/// What the progress callback sees after each frame.
+struct RunProgress {
+    int frame = 0;
+    int frameCount = 0;
+    double timeS = 0;
+    size_t bodies = 0;
+    int64_t totalSteps = 0;
+    double elapsedS = 0;
+};
+
+struct RunReport {
+    int framesWritten = 0;
+    bool complete = false;  ///< false when interrupted
+    int64_t totalSteps = 0;
+    size_t finalBodies = 0;
+    int64_t fractureEvents = 0;
+    double wallTimeS = 0;
+};
+
+/// Runs a scene and writes OUTDIR/scene.json, fragments.NNNN.vdb and history.h5. The callback
+/// returns false to stop after the current frame (frames written so far stay readable).
+RunReport runScene(const Scene& scene, const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame);
+
+}  // namespace spall

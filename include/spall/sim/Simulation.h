@@ -1,0 +1,80 @@
+// The step (DESIGN §3): blast field -> link loading -> breaks -> split; face forces -> integrate
+// -> ground contacts -> sleep. Frames are written by runScene.
+#pragma once
+
+#include <spall/blast/Blast.h>
+#include <spall/dynamics/Dynamics.h>
+#include <spall/fracture/Fracture.h>
+#include <spall/io/Scene.h>
+#include <spall/voxel/Body.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace spall {
+
+struct FractureEvent {
+    double timeS = 0;
+    int64_t parentId = -1;
+    std::vector<int64_t> childIds;
+};
+
+/// A piece removed as dust (smaller than the minimum fragment size), with what it carried.
+struct DustRecord {
+    double timeS = 0;
+    int64_t parentId = -1;
+    int64_t voxelCount = 0;
+    double massKg = 0;
+    Eigen::Vector3d linearMomentum = Eigen::Vector3d::Zero();
+    Eigen::Vector3d angularMomentumAboutOrigin = Eigen::Vector3d::Zero();
+};
+
+/// Totals since the last call to takeStepStats().
+struct StepStats {
+    int64_t steps = 0;
+    double minDtS = 0;
+    int64_t brokenLinks = 0;
+    int64_t contacts = 0;
+};
+
+class Simulation {
+public:
+    /// Voxelises every object and places it (throws InputError for bad input, e.g. a charge
+    /// inside an object).
+    explicit Simulation(const Scene& scene, Interrupter* interrupter = nullptr);
+
+    /// Steps (adaptively) until time t exactly.
+    void advanceTo(double timeS);
+
+    double timeS() const { return mTimeS; }
+    const std::vector<Body>& bodies() const { return mBodies; }
+    const std::vector<FractureEvent>& fractureEvents() const { return mEvents; }
+    const std::vector<DustRecord>& dust() const { return mDust; }
+    const BlastField& field() const { return *mField; }
+    const Scene& scene() const { return mScene; }
+    int64_t initialVoxelCount() const { return mInitialVoxels; }
+    StepStats takeStepStats();
+
+    /// Chooses the next step: fine while a front crosses a body, coarse in free flight, and
+    /// never letting a voxel travel more than a fraction of a voxel.
+    double chooseTimeStep(const std::vector<OpenWindow>& windows) const;
+
+private:
+    void step(double dtS);
+    void fractureStep(const std::vector<OpenWindow>& windows, double dtS);
+    void motionStep(const std::vector<OpenWindow>& windows, double dtS);
+
+    Scene mScene;
+    std::unique_ptr<BlastField> mField;
+    std::vector<Body> mBodies;
+    std::vector<DamageGrid::Ptr> mDamage;  ///< per body, Davison–Stevens only
+    std::vector<FractureEvent> mEvents;
+    std::vector<DustRecord> mDust;
+    double mTimeS = 0;
+    int64_t mNextId = 0;
+    int64_t mInitialVoxels = 0;
+    StepStats mStats;
+};
+
+}  // namespace spall

@@ -1,0 +1,254 @@
+#include <spall/fracture/Fracture.h>
+
+#include <spall/voxel/Components.h>
+
+#include <openvdb/tree/LeafManager.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace spall {
+
+FractureAlgorithm parseFractureAlgorithm(const std::string& name)
+{
+    if (name == "yield-limit") return FractureAlgorithm::YieldLimit;
+    if (name == "davison-stevens") return FractureAlgorithm::DavisonStevens;
+    if (name == "none") return FractureAlgorithm::None;
+    throw InputError("fracture algorithm '" + name + "' is unknown (expected yield-limit, davison-stevens or none)");
+}
+
+std::string toString(FractureAlgorithm algorithm)
+{
+    switch (algorithm) {
+    case FractureAlgorithm::YieldLimit: return "yield-limit";
+    case FractureAlgorithm::DavisonStevens: return "davison-stevens";
+    case FractureAlgorithm::None: return "none";
+    }
+    return "none";
+}
+
+double linkRandom(uint64_t seed, const openvdb::Coord& ijk, int axis)
+{
+    // splitmix64 finaliser over a combination of the inputs.
+    uint64_t z = seed * 0x9E3779B97F4A7C15ull ^ (uint64_t(uint32_t(ijk.x())) * 0xBF58476D1CE4E5B9ull) ^
+                 (uint64_t(uint32_t(ijk.y())) * 0x94D049BB133111EBull) ^ (uint64_t(uint32_t(ijk.z())) << 21) ^
+                 (uint64_t(axis) << 58);
+    z += 0x9E3779B97F4A7C15ull;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    z ^= z >> 31;
+    return double(z >> 11) * (1.0 / 9007199254740992.0);
+}
+
+bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows)
+{
+    for (const OpenWindow& w : windows) {
+        const double d = (body.positionM - field.charges()[w.charge].positionM).norm();
+        if (d + body.boundingRadiusM >= w.minDistanceM && d - body.boundingRadiusM <= w.maxDistanceM) return true;
+    }
+    return false;
+}
+
+namespace {
+
+enum class EventKind : uint8_t { BreakLink, Weaken, BreakAnchor };
+
+struct LinkEvent {
+    openvdb::Coord ijk;
+    EventKind kind;
+    int8_t face;    ///< face for BreakLink, axis for Weaken
+    int16_t charge; ///< for Weaken
+};
+
+/// Loads at one point: total overpressure and the dominant charge's direction.
+struct PointLoad {
+    double pressurePa = 0;
+    int dominant = -1;
+    Eigen::Vector3d direction = Eigen::Vector3d::Zero();  ///< unit radius vector of the dominant charge
+};
+
+PointLoad pointLoad(const BlastField& field, const Eigen::Vector3d& x, double t, const std::vector<OpenWindow>& windows)
+{
+    PointLoad load;
+    double dominantPa = 0.0;
+    Eigen::Vector3d dominantCharge = Eigen::Vector3d::Zero();
+    field.forEachCharge(x, t, windows, [&](int charge, double p, const Eigen::Vector3d& c) {
+        load.pressurePa += p;
+        if (p > dominantPa) {
+            dominantPa = p;
+            load.dominant = charge;
+            dominantCharge = c;
+        }
+    });
+    if (load.dominant >= 0) {
+        const Eigen::Vector3d r = x - dominantCharge;
+        const double n = r.norm();
+        if (n > 0) load.direction = r / n;
+    }
+    return load;
+}
+
+}  // namespace
+
+LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, const BlastField& field,
+                     const std::vector<OpenWindow>& windows, double timeS, double dtS, const FractureSettings& settings)
+{
+    LoadResult result;
+    if (settings.algorithm == FractureAlgorithm::None || windows.empty()) return result;
+    const double h = body.voxelSizeM;
+    const Eigen::Matrix3d rot = body.orientation.toRotationMatrix();
+    const double leafRadius = 0.5 * std::sqrt(3.0) * LinkLeaf::DIM * h;
+    const bool davisonStevens = settings.algorithm == FractureAlgorithm::DavisonStevens;
+    const double orientationFactor = settings.orientation ? material.orientationFactor : 0.0;
+    const double weakening = settings.weakening ? material.weakeningFraction : 0.0;
+    const double stressScale = material.damageStressScalePerPa > 0 ? material.damageStressScalePerPa : 1.0 / material.meanYieldPa;
+    constexpr double kMaxDamage = 6.0;  // D*: six links per voxel
+
+    openvdb::tree::LeafManager<const LinkTree> leaves(body.grid->constTree());
+    std::vector<std::vector<LinkEvent>> events(leaves.leafCount());
+    std::vector<char> skipped(leaves.leafCount(), 0);
+
+    // Generate: a pure pass over leaves; each task writes only its own event list (and, for
+    // Davison–Stevens, its own leaf of the damage grid).
+    leaves.foreach ([&](const LinkLeaf& leaf, size_t n) {
+        const openvdb::Coord centreIjk = leaf.origin() + openvdb::Coord(LinkLeaf::DIM / 2);
+        const Eigen::Vector3d leafCentre = body.voxelWorldM(centreIjk) - rot * Eigen::Vector3d::Constant(0.5 * h);
+        bool inside = false;
+        for (const OpenWindow& w : windows) {
+            const double d = (leafCentre - field.charges()[w.charge].positionM).norm();
+            inside |= d + leafRadius >= w.minDistanceM && d - leafRadius <= w.maxDistanceM;
+        }
+        if (!inside) {
+            skipped[n] = 1;
+            return;
+        }
+        DamageTree::LeafNodeType* damageLeaf = damage ? damage->tree().probeLeaf(leaf.origin()) : nullptr;
+        auto& out = events[n];
+        for (auto it = leaf.cbeginValueOn(); it; ++it) {
+            const openvdb::Coord ijk = it.getCoord();
+            const int32_t bits = it.getValue();
+            const Eigen::Vector3d x = body.voxelWorldM(ijk);
+            if (bits & kAnchorBit) {
+                const PointLoad load = pointLoad(field, x, timeS, windows);
+                if (load.pressurePa >= baseYieldLimit(material, settings.seed, ijk, 3))
+                    out.push_back({ijk, EventKind::BreakAnchor, 0, 0});
+            }
+            if (davisonStevens) {
+                // Rate form of Davison–Stevens (paper eq. 2.2, 3.2): dD/dt = B D* (exp(C s) - 1),
+                // s = max(p - mean yield, 0); the paper's per-step B equals B dt here.
+                if (!(bits & kAllLinks) || !damageLeaf) continue;
+                const PointLoad load = pointLoad(field, x, timeS, windows);
+                const double sigma = std::max(load.pressurePa - material.meanYieldPa, 0.0);
+                if (sigma <= 0.0) continue;
+                const double before = damageLeaf->getValue(it.pos());
+                const double rate = material.damageRatePerS * kMaxDamage * std::expm1(std::min(stressScale * sigma, 50.0));
+                const double after = std::min(before + rate * dtS, kMaxDamage);
+                damageLeaf->setValueOnly(it.pos(), static_cast<float>(after));
+                int toBreak = static_cast<int>(std::floor(after)) - static_cast<int>(std::floor(before));
+                if (toBreak <= 0) continue;
+                // Break the intact links most aligned with the wave first (ties: face order).
+                std::array<std::pair<double, int>, kFaceCount> order;
+                int count = 0;
+                for (int f = 0; f < kFaceCount; ++f) {
+                    if (bits & (1 << f)) order[count++] = {-std::abs((rot * faceNormal(f)).dot(load.direction)), f};
+                }
+                // Insertion sort: at most six entries.
+                for (int a = 1; a < count; ++a)
+                    for (int b = a; b > 0 && order[b] < order[b - 1]; --b) std::swap(order[b], order[b - 1]);
+                for (int k = 0; k < std::min(toBreak, count); ++k)
+                    out.push_back({ijk, EventKind::BreakLink, static_cast<int8_t>(order[k].second), 0});
+                continue;
+            }
+            for (int axis = 0; axis < 3; ++axis) {
+                const int face = 2 * axis + 1;
+                if (!(bits & (1 << face))) continue;
+                const Eigen::Vector3d linkDir = rot.col(axis);
+                const PointLoad load = pointLoad(field, x + 0.5 * h * linkDir, timeS, windows);
+                if (load.pressurePa <= 0.0) continue;
+                double limit = baseYieldLimit(material, settings.seed, ijk, axis);
+                limit *= 1.0 - orientationFactor * std::abs(linkDir.dot(load.direction));
+                const int weakenedBy = weakenedByCharge(bits, axis);
+                const bool weakenedEarlier = weakening > 0 && weakenedBy >= 0 && weakenedBy != load.dominant;
+                if (load.pressurePa >= (weakenedEarlier ? (1.0 - weakening) * limit : limit)) {
+                    out.push_back({ijk, EventKind::BreakLink, static_cast<int8_t>(face), 0});
+                } else if (weakening > 0 && weakenedBy < 0 && load.pressurePa >= (1.0 - weakening) * limit) {
+                    out.push_back({ijk, EventKind::Weaken, static_cast<int8_t>(axis), static_cast<int16_t>(load.dominant)});
+                }
+            }
+        }
+    });
+
+    // Apply in leaf order: the result does not depend on how the pass was scheduled.
+    auto acc = body.grid->getAccessor();
+    for (size_t n = 0; n < events.size(); ++n) {
+        result.skippedLeaves += skipped[n];
+        result.visitedLeaves += !skipped[n];
+        for (const LinkEvent& e : events[n]) {
+            switch (e.kind) {
+            case EventKind::BreakLink: result.brokenLinks += breakLink(acc, e.ijk, e.face); break;
+            case EventKind::Weaken: {
+                const int32_t bits = acc.getValue(e.ijk);
+                const int shift = kWeakenedShift + 8 * e.face;
+                acc.setValueOn(e.ijk, (bits & ~(0xff << shift)) | (((e.charge + 1) & 0xff) << shift));
+                ++result.weakenedLinks;
+                break;
+            }
+            case EventKind::BreakAnchor:
+                acc.setValueOn(e.ijk, acc.getValue(e.ijk) & ~kAnchorBit);
+                ++result.brokenAnchors;
+                break;
+            }
+        }
+    }
+    return result;
+}
+
+std::vector<SplitPart> splitBody(const Body& body, const DamageGrid* damage)
+{
+    const ComponentLabels labels = labelComponents(*body.grid);
+    std::vector<SplitPart> parts;
+    if (labels.componentCount <= 1) return parts;
+    std::vector<LinkGrid::Ptr> grids = splitByLabels(*body.grid, labels);
+
+    std::vector<DamageGrid::Ptr> damageParts(grids.size());
+    if (damage) {
+        for (auto& d : damageParts) {
+            d = DamageGrid::create(0.0f);
+            d->setTransform(damage->transform().copy());
+            d->setName(damage->getName());
+        }
+        for (size_t n = 0; n < labels.leaves.size(); ++n) {
+            const LinkLeaf& leaf = *labels.leaves[n];
+            const auto* source = damage->constTree().probeConstLeaf(leaf.origin());
+            for (auto it = leaf.cbeginValueOn(); it; ++it) {
+                const uint32_t label = labels.labelOfSlot[n * LinkLeaf::SIZE + it.pos()];
+                damageParts[label]->tree().touchLeaf(leaf.origin())->setValueOn(it.pos(), source ? source->getValue(it.pos()) : 0.0f);
+            }
+        }
+    }
+
+    const Eigen::Matrix3d rot = body.orientation.toRotationMatrix();
+    parts.reserve(grids.size());
+    for (size_t i = 0; i < grids.size(); ++i) {
+        SplitPart part;
+        Body& child = part.body;
+        child.parentId = body.id;
+        child.materialIndex = body.materialIndex;
+        child.grid = grids[i];
+        child.voxelSizeM = body.voxelSizeM;
+        child.densityKgM3 = body.densityKgM3;
+        refreshDerivedData(child);
+        child.orientation = body.orientation;
+        // The parent's rigid velocity field at the child's centre of mass (paper 4.1).
+        const Eigen::Vector3d offset = rot * (child.mass.centreOfMassLocalM - body.mass.centreOfMassLocalM);
+        child.positionM = body.positionM + offset;
+        child.angularVelocityRadS = body.angularVelocityRadS;
+        child.linearVelocityMS = body.linearVelocityMS + body.angularVelocityRadS.cross(offset);
+        part.damage = damageParts[i];
+        parts.push_back(std::move(part));
+    }
+    return parts;
+}
+
+}  // namespace spall

@@ -1,0 +1,271 @@
+#include <spall/io/History.h>
+
+#include <spall/core/Error.h>
+
+#include <hdf5.h>
+
+#include <cstring>
+
+namespace spall {
+
+namespace {
+
+void check(herr_t status, const std::string& what)
+{
+    if (status < 0) throw IoError("history.h5: " + what + " failed");
+}
+
+hid_t checkId(hid_t id, const std::string& what)
+{
+    if (id < 0) throw IoError("history.h5: " + what + " failed");
+    return id;
+}
+
+/// One extensible, chunked, compressed dataset of rows x cols.
+class Series {
+public:
+    Series() = default;
+    Series(hid_t parent, const char* name, hid_t type, hsize_t cols, hsize_t chunkRows = 1024) : mType(type), mCols(cols)
+    {
+        const int rank = cols > 1 ? 2 : 1;
+        hsize_t dims[2] = {0, cols}, maxDims[2] = {H5S_UNLIMITED, cols}, chunk[2] = {chunkRows, cols};
+        const hid_t space = checkId(H5Screate_simple(rank, dims, maxDims), "dataspace");
+        const hid_t plist = checkId(H5Pcreate(H5P_DATASET_CREATE), "property list");
+        check(H5Pset_chunk(plist, rank, chunk), "chunking");
+        check(H5Pset_shuffle(plist), "shuffle filter");
+        check(H5Pset_deflate(plist, 4), "deflate filter");
+        mId = checkId(H5Dcreate2(parent, name, type, space, H5P_DEFAULT, plist, H5P_DEFAULT), std::string("creating ") + name);
+        H5Pclose(plist);
+        H5Sclose(space);
+    }
+    void append(const void* data, hsize_t rows)
+    {
+        if (rows == 0) return;
+        const int rank = mCols > 1 ? 2 : 1;
+        hsize_t newDims[2] = {mRows + rows, mCols};
+        check(H5Dset_extent(mId, newDims), "extending a dataset");
+        const hid_t file = H5Dget_space(mId);
+        hsize_t start[2] = {mRows, 0}, count[2] = {rows, mCols};
+        check(H5Sselect_hyperslab(file, H5S_SELECT_SET, start, nullptr, count, nullptr), "selecting rows");
+        const hid_t memory = H5Screate_simple(rank, count, nullptr);
+        check(H5Dwrite(mId, mType, memory, file, H5P_DEFAULT, data), "writing rows");
+        H5Sclose(memory);
+        H5Sclose(file);
+        mRows += rows;
+    }
+    void close()
+    {
+        if (mId >= 0) H5Dclose(mId);
+        mId = -1;
+    }
+
+private:
+    hid_t mId = -1;
+    hid_t mType = -1;
+    hsize_t mCols = 1;
+    hsize_t mRows = 0;
+};
+
+void writeStringAttribute(hid_t object, const char* name, const std::string& value)
+{
+    const hid_t type = H5Tcopy(H5T_C_S1);
+    H5Tset_size(type, value.empty() ? 1 : value.size());
+    H5Tset_strpad(type, H5T_STR_NULLTERM);
+    const hid_t space = H5Screate(H5S_SCALAR);
+    const hid_t attr = checkId(H5Acreate2(object, name, type, space, H5P_DEFAULT, H5P_DEFAULT), name);
+    check(H5Awrite(attr, type, value.empty() ? "" : value.c_str()), name);
+    H5Aclose(attr);
+    H5Sclose(space);
+    H5Tclose(type);
+}
+
+template <typename T>
+void writeScalarAttribute(hid_t object, const char* name, hid_t type, T value)
+{
+    const hid_t space = H5Screate(H5S_SCALAR);
+    hid_t attr = H5Aexists(object, name) > 0 ? H5Aopen(object, name, H5P_DEFAULT)
+                                             : H5Acreate2(object, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
+    checkId(attr, name);
+    check(H5Awrite(attr, type, &value), name);
+    H5Aclose(attr);
+    H5Sclose(space);
+}
+
+}  // namespace
+
+struct HistoryWriter::Impl {
+    std::string path;
+    hid_t file = -1;
+    hid_t groups[6] = {-1, -1, -1, -1, -1, -1};
+    Series time, bodyOffset, kinetic, linear, angular, broken, steps, minDt, bodyCount, voxelCount, dustMass;
+    Series id, parent, position, orientation, linVel, angVel, mass, voxels, asleep, anchored;
+    Series eventTime, eventParent, eventChildOffset, eventChild;
+    Series dustTime, dustParent, dustVoxels, dustMassRows, dustMomentum;
+    int64_t bodyRows = 0, childRows = 0;
+
+    void flush() { check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flushing"); }
+    void close()
+    {
+        for (Series* s : {&time, &bodyOffset, &kinetic, &linear, &angular, &broken, &steps, &minDt, &bodyCount, &voxelCount, &dustMass,
+                          &id, &parent, &position, &orientation, &linVel, &angVel, &mass, &voxels, &asleep, &anchored, &eventTime,
+                          &eventParent, &eventChildOffset, &eventChild, &dustTime, &dustParent, &dustVoxels, &dustMassRows, &dustMomentum})
+            s->close();
+        for (hid_t& g : groups)
+            if (g >= 0) H5Gclose(g), g = -1;
+        if (file >= 0) H5Fclose(file);
+        file = -1;
+    }
+};
+
+HistoryWriter::HistoryWriter(const std::string& path, const HistoryHeader& header) : mImpl(std::make_unique<Impl>())
+{
+    Impl& m = *mImpl;
+    m.path = path;
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors become IoError, not stderr noise
+    m.file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    if (m.file < 0) throw IoError(path + ": cannot create the HDF5 history");
+    try {
+        writeStringAttribute(m.file, "format", kHistoryFormatName);
+        writeScalarAttribute(m.file, "format_version", H5T_NATIVE_INT, kHistoryFormatVersion);
+        writeScalarAttribute(m.file, "voxel_size_m", H5T_NATIVE_DOUBLE, header.voxelSizeM);
+        writeScalarAttribute(m.file, "seed", H5T_NATIVE_UINT64, header.seed);
+        writeStringAttribute(m.file, "scene_json", header.sceneJson);
+        writeScalarAttribute(m.file, "run_complete", H5T_NATIVE_INT, 0);
+
+        const hid_t frames = m.groups[0] = checkId(H5Gcreate2(m.file, "frames", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "frames");
+        const hid_t bodies = m.groups[1] = checkId(H5Gcreate2(m.file, "bodies", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "bodies");
+        const hid_t events = m.groups[2] = checkId(H5Gcreate2(m.file, "events", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "events");
+        const hid_t fracture = m.groups[3] = checkId(H5Gcreate2(events, "fracture", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "fracture");
+        const hid_t dust = m.groups[4] = checkId(H5Gcreate2(m.file, "dust", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "dust");
+        const hid_t charges = m.groups[5] = checkId(H5Gcreate2(m.file, "charges", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "charges");
+        const hid_t d = H5T_NATIVE_DOUBLE, i64 = H5T_NATIVE_INT64, i8 = H5T_NATIVE_INT8;
+        m.time = Series(frames, "time_s", d, 1, 256);
+        m.bodyOffset = Series(frames, "body_offset", i64, 1, 256);
+        m.kinetic = Series(frames, "kinetic_energy_J", d, 1, 256);
+        m.linear = Series(frames, "linear_momentum_kg_m_s", d, 3, 256);
+        m.angular = Series(frames, "angular_momentum_kg_m2_s", d, 3, 256);
+        m.broken = Series(frames, "broken_links", i64, 1, 256);
+        m.steps = Series(frames, "steps", i64, 1, 256);
+        m.minDt = Series(frames, "min_dt_s", d, 1, 256);
+        m.bodyCount = Series(frames, "body_count", i64, 1, 256);
+        m.voxelCount = Series(frames, "voxel_count", i64, 1, 256);
+        m.dustMass = Series(frames, "dust_mass_kg", d, 1, 256);
+        m.id = Series(bodies, "id", i64, 1);
+        m.parent = Series(bodies, "parent_id", i64, 1);
+        m.position = Series(bodies, "position_m", d, 3);
+        m.orientation = Series(bodies, "orientation_wxyz", d, 4);
+        m.linVel = Series(bodies, "linear_velocity_m_s", d, 3);
+        m.angVel = Series(bodies, "angular_velocity_rad_s", d, 3);
+        m.mass = Series(bodies, "mass_kg", d, 1);
+        m.voxels = Series(bodies, "voxel_count", i64, 1);
+        m.asleep = Series(bodies, "asleep", i8, 1);
+        m.anchored = Series(bodies, "anchored", i8, 1);
+        m.eventTime = Series(fracture, "time_s", d, 1, 256);
+        m.eventParent = Series(fracture, "parent_id", i64, 1, 256);
+        m.eventChildOffset = Series(fracture, "child_offset", i64, 1, 256);
+        m.eventChild = Series(fracture, "child_id", i64, 1, 1024);
+        m.dustTime = Series(dust, "time_s", d, 1, 256);
+        m.dustParent = Series(dust, "parent_id", i64, 1, 256);
+        m.dustVoxels = Series(dust, "voxel_count", i64, 1, 256);
+        m.dustMassRows = Series(dust, "mass_kg", d, 1, 256);
+        m.dustMomentum = Series(dust, "linear_momentum_kg_m_s", d, 3, 256);
+        const int64_t zero = 0;
+        m.bodyOffset.append(&zero, 1);
+        m.eventChildOffset.append(&zero, 1);
+
+        Series chargePos(charges, "position_m", d, 3, 16), chargeMass(charges, "tnt_kg", d, 1, 16),
+            chargeTime(charges, "detonation_time_s", d, 1, 16);
+        Series chargeBurst(charges, "surface_burst", i8, 1, 16);
+        for (const ChargeRow& c : header.charges) {
+            chargePos.append(c.positionM.data(), 1);
+            chargeMass.append(&c.tntKg, 1);
+            chargeTime.append(&c.detonationTimeS, 1);
+            const int8_t surface = c.burst == "surface";
+            chargeBurst.append(&surface, 1);
+        }
+        for (Series* s : {&chargePos, &chargeMass, &chargeTime, &chargeBurst}) s->close();
+        m.flush();
+    } catch (...) {
+        m.close();
+        throw;
+    }
+}
+
+HistoryWriter::~HistoryWriter()
+{
+    if (mImpl) mImpl->close();
+}
+
+void HistoryWriter::appendFrame(const FrameRow& f, const std::vector<BodyRow>& bodies, const std::vector<FractureEventRow>& events,
+                                const std::vector<DustRow>& dust)
+{
+    Impl& m = *mImpl;
+    const size_t n = bodies.size();
+    std::vector<int64_t> ids(n), parents(n), voxels(n);
+    std::vector<double> pos(3 * n), ori(4 * n), lin(3 * n), ang(3 * n), mass(n);
+    std::vector<int8_t> asleep(n), anchored(n);
+    for (size_t i = 0; i < n; ++i) {
+        const BodyRow& b = bodies[i];
+        ids[i] = b.id;
+        parents[i] = b.parentId;
+        voxels[i] = b.voxelCount;
+        mass[i] = b.massKg;
+        asleep[i] = b.asleep;
+        anchored[i] = b.anchored;
+        for (int k = 0; k < 3; ++k) {
+            pos[3 * i + k] = b.positionM[k];
+            lin[3 * i + k] = b.linearVelocityMS[k];
+            ang[3 * i + k] = b.angularVelocityRadS[k];
+        }
+        for (int k = 0; k < 4; ++k) ori[4 * i + k] = b.orientationWxyz[k];
+    }
+    m.id.append(ids.data(), n);
+    m.parent.append(parents.data(), n);
+    m.position.append(pos.data(), n);
+    m.orientation.append(ori.data(), n);
+    m.linVel.append(lin.data(), n);
+    m.angVel.append(ang.data(), n);
+    m.mass.append(mass.data(), n);
+    m.voxels.append(voxels.data(), n);
+    m.asleep.append(asleep.data(), n);
+    m.anchored.append(anchored.data(), n);
+
+    for (const FractureEventRow& e : events) {
+        m.eventTime.append(&e.timeS, 1);
+        m.eventParent.append(&e.parentId, 1);
+        m.eventChild.append(e.childIds.data(), e.childIds.size());
+        m.childRows += static_cast<int64_t>(e.childIds.size());
+        m.eventChildOffset.append(&m.childRows, 1);
+    }
+    for (const DustRow& d : dust) {
+        m.dustTime.append(&d.timeS, 1);
+        m.dustParent.append(&d.parentId, 1);
+        m.dustVoxels.append(&d.voxelCount, 1);
+        m.dustMassRows.append(&d.massKg, 1);
+        m.dustMomentum.append(d.linearMomentum.data(), 1);
+    }
+
+    // The frame row goes last: a reader that sees frame f also sees all of its bodies.
+    m.bodyRows += static_cast<int64_t>(n);
+    m.kinetic.append(&f.kineticEnergyJ, 1);
+    m.linear.append(f.linearMomentum.data(), 1);
+    m.angular.append(f.angularMomentum.data(), 1);
+    m.broken.append(&f.brokenLinks, 1);
+    m.steps.append(&f.steps, 1);
+    m.minDt.append(&f.minDtS, 1);
+    m.bodyCount.append(&f.bodyCount, 1);
+    m.voxelCount.append(&f.voxelCount, 1);
+    m.dustMass.append(&f.dustMassKg, 1);
+    m.bodyOffset.append(&m.bodyRows, 1);
+    m.time.append(&f.timeS, 1);
+    m.flush();
+}
+
+void HistoryWriter::finish()
+{
+    writeScalarAttribute(mImpl->file, "run_complete", H5T_NATIVE_INT, 1);
+    mImpl->flush();
+    mImpl->close();
+}
+
+}  // namespace spall

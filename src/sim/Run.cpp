@@ -1,0 +1,112 @@
+#include <spall/sim/Run.h>
+
+#include <spall/io/History.h>
+#include <spall/io/VdbIo.h>
+#include <spall/sim/Simulation.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+
+namespace spall {
+
+namespace {
+
+void writeTextAtomically(const std::filesystem::path& path, const std::string& text)
+{
+    const std::filesystem::path temporary = path.string() + ".partial";
+    {
+        std::ofstream out(temporary);
+        out << text;
+        out.flush();
+        if (!out) {
+            std::error_code ec;
+            std::filesystem::remove(temporary, ec);
+            throw IoError(path.string() + ": cannot write (disk full or not writable?)");
+        }
+    }
+    std::error_code ec;
+    std::filesystem::rename(temporary, path, ec);
+    if (ec) throw IoError(path.string() + ": cannot rename into place: " + ec.message());
+}
+
+}  // namespace
+
+RunReport runScene(const Scene& scene, const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame)
+{
+    const auto start = std::chrono::steady_clock::now();
+    namespace fs = std::filesystem;
+    const fs::path dir = options.outputDirectory;
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec || !fs::is_directory(dir)) throw IoError(dir.string() + ": cannot create the output directory: " + ec.message());
+    writeTextAtomically(dir / "scene.json", sceneToJson(scene).dump(2) + "\n");
+
+    Simulation sim(scene);
+    const int frameCount = options.maxFrames >= 0 ? std::min(options.maxFrames, scene.frameCount()) : scene.frameCount();
+
+    std::unique_ptr<HistoryWriter> history;
+    if (scene.output.history) {
+        HistoryHeader header;
+        header.voxelSizeM = scene.voxelSizeM;
+        header.seed = scene.seed;
+        header.sceneJson = sceneToJson(scene).dump();
+        for (const Charge& c : scene.charges) header.charges.push_back({c.positionM, c.tntKg, c.detonationTimeS, toString(c.burst)});
+        history = std::make_unique<HistoryWriter>((dir / "history.h5").string(), header);
+    }
+    std::unique_ptr<FrameWriter> frames;
+    if (scene.output.vdb) frames = std::make_unique<FrameWriter>(dir.string(), scene.output.densityGrid);
+
+    RunReport report;
+    size_t eventsWritten = 0, dustWritten = 0;
+    for (int f = 0; f < frameCount; ++f) {
+        const double t = f / scene.frameRateHz;
+        sim.advanceTo(t);
+        const StepStats stats = sim.takeStepStats();
+        report.totalSteps += stats.steps;
+        if (frames) frames->write({f, t}, sim.bodies());
+        if (history) {
+            FrameRow row;
+            row.timeS = t;
+            row.brokenLinks = stats.brokenLinks;
+            row.steps = stats.steps;
+            row.minDtS = stats.steps > 0 ? stats.minDtS : 0.0;
+            row.bodyCount = static_cast<int64_t>(sim.bodies().size());
+            std::vector<BodyRow> rows;
+            rows.reserve(sim.bodies().size());
+            for (const Body& b : sim.bodies()) {
+                row.kineticEnergyJ += kineticEnergyJ(b);
+                row.linearMomentum += linearMomentum(b);
+                row.angularMomentum += angularMomentumAboutOrigin(b);
+                row.voxelCount += b.mass.voxelCount;
+                rows.push_back({b.id, b.parentId, b.positionM,
+                                Eigen::Vector4d(b.orientation.w(), b.orientation.x(), b.orientation.y(), b.orientation.z()),
+                                b.linearVelocityMS, b.angularVelocityRadS, b.mass.massKg, b.mass.voxelCount, b.asleep, b.anchored});
+            }
+            std::vector<FractureEventRow> events;
+            for (; eventsWritten < sim.fractureEvents().size(); ++eventsWritten) {
+                const FractureEvent& e = sim.fractureEvents()[eventsWritten];
+                events.push_back({e.timeS, e.parentId, e.childIds});
+            }
+            std::vector<DustRow> dust;
+            for (; dustWritten < sim.dust().size(); ++dustWritten) {
+                const DustRecord& d = sim.dust()[dustWritten];
+                dust.push_back({d.timeS, d.parentId, d.voxelCount, d.massKg, d.linearMomentum});
+            }
+            for (const DustRecord& d : sim.dust()) row.dustMassKg += d.massKg;
+            history->appendFrame(row, rows, events, dust);
+        }
+        report.framesWritten = f + 1;
+        RunProgress progress{f, frameCount, t, sim.bodies().size(), report.totalSteps,
+                             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};
+        if (onFrame && !onFrame(progress) && f + 1 < frameCount) break;
+    }
+    report.complete = report.framesWritten == frameCount;
+    if (history && report.complete) history->finish();
+    report.finalBodies = sim.bodies().size();
+    report.fractureEvents = static_cast<int64_t>(sim.fractureEvents().size());
+    report.wallTimeS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return report;
+}
+
+}  // namespace spall

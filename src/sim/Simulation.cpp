@@ -1,0 +1,239 @@
+#include <spall/sim/Simulation.h>
+
+#include <spall/io/VdbIo.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace spall {
+
+namespace {
+
+Eigen::Quaterniond rotationFromDegrees(const Eigen::Vector3d& deg)
+{
+    const double k = M_PI / 180.0;
+    return Eigen::AngleAxisd(deg.z() * k, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(deg.y() * k, Eigen::Vector3d::UnitY()) *
+           Eigen::AngleAxisd(deg.x() * k, Eigen::Vector3d::UnitX());
+}
+
+/// Sets the anchor bit of voxels whose lowest point lies within a quarter voxel of the ground.
+void anchorToGround(Body& body, const GroundPlane& ground)
+{
+    const Eigen::Matrix3d rot = body.orientation.toRotationMatrix();
+    const Eigen::Vector3d& n = ground.normal;
+    const double support = 0.5 * body.voxelSizeM * (std::abs(n.dot(rot.col(0))) + std::abs(n.dot(rot.col(1))) + std::abs(n.dot(rot.col(2))));
+    for (auto it = body.grid->beginValueOn(); it; ++it) {
+        const double lowest = n.dot(body.voxelWorldM(it.getCoord())) - support - ground.offsetM;
+        if (lowest <= 0.25 * body.voxelSizeM) it.setValue(*it | kAnchorBit);
+    }
+}
+
+}  // namespace
+
+Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(scene)
+{
+    initialiseOpenVdb();
+    mField = std::make_unique<BlastField>(scene.charges, scene.blast);
+    VoxeliseSettings vs;
+    vs.voxelSizeM = scene.voxelSizeM;
+    vs.maxVoxels = scene.maxVoxels;
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+        const ObjectSpec& spec = scene.objects[i];
+        VoxeliseResult vox = spec.primitive ? voxelisePrimitive(*spec.primitive, vs)
+                                            : voxeliseMesh(loadMesh(spec.meshPath), vs, spec.meshPath, interrupter);
+        const Material& material = scene.material(spec.material);
+        validateMaterial(material);
+        Body body = makeBody(vox.grid, scene.voxelSizeM, material.densityKgM3);
+        body.id = mNextId++;
+        body.materialIndex = static_cast<int>(std::find_if(scene.materials.begin(), scene.materials.end(),
+                                                           [&](const Material& m) { return m.name == spec.material; }) -
+                                              scene.materials.begin());
+        if (body.materialIndex >= static_cast<int>(scene.materials.size())) {
+            mScene.materials.push_back(material);
+            body.materialIndex = static_cast<int>(mScene.materials.size() - 1);
+        }
+        // world = t + Q (index h + offset): the centre of mass goes to t + Q (c + offset).
+        body.orientation = rotationFromDegrees(spec.rotationDeg);
+        body.positionM = spec.positionM + body.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
+        if (spec.anchor == AnchorMode::Ground) {
+            anchorToGround(body, scene.world.ground);
+            refreshDerivedData(body);
+            body.positionM = spec.positionM + body.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
+            if (!body.anchored) throw InputError(scene.sourceName + ": objects[" + std::to_string(i) + "].anchor: no voxel of '" + spec.name + "' touches the ground");
+        }
+        // A charge inside an object would need contact detonation physics the model does not have.
+        for (size_t c = 0; c < scene.charges.size(); ++c) {
+            const Eigen::Vector3d local = (body.orientation.inverse() * (scene.charges[c].positionM - body.positionM) +
+                                           body.mass.centreOfMassLocalM) / body.voxelSizeM;
+            const openvdb::Coord ijk(static_cast<int>(std::lround(local.x())), static_cast<int>(std::lround(local.y())),
+                                     static_cast<int>(std::lround(local.z())));
+            if (body.grid->tree().isValueOn(ijk))
+                throw InputError(scene.sourceName + ": charges[" + std::to_string(c) + "].position_m: the charge is inside object '" + spec.name + "'");
+        }
+        mInitialVoxels += body.mass.voxelCount;
+        mDamage.push_back(nullptr);
+        if (scene.fracture.algorithm == FractureAlgorithm::DavisonStevens) {
+            auto damage = DamageGrid::create(0.0f);
+            damage->setTransform(body.grid->transform().copy());
+            copyActiveTopology(damage->tree(), body.grid->constTree(), 0.0f);
+            mDamage.back() = damage;
+        }
+        mBodies.push_back(std::move(body));
+    }
+    mStats.minDtS = scene.timeStep.maxTimeStepS;
+}
+
+StepStats Simulation::takeStepStats()
+{
+    StepStats s = mStats;
+    mStats = StepStats();
+    mStats.minDtS = mScene.timeStep.maxTimeStepS;
+    return s;
+}
+
+double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
+{
+    const TimeStepSettings& ts = mScene.timeStep;
+    const double h = mScene.voxelSizeM;
+    double dt = ts.maxTimeStepS;
+    for (const Body& body : mBodies) {
+        for (const OpenWindow& w : windows) {
+            const double d = (body.positionM - mField->charges()[w.charge].positionM).norm();
+            const double near = std::max(d - body.boundingRadiusM, 0.0), far = d + body.boundingRadiusM;
+            if (far < w.minDistanceM || near > w.maxDistanceM) continue;
+            if (w.maxDistanceM >= near - h && w.maxDistanceM <= far + h) {
+                // The front is crossing this body.
+                dt = std::min(dt, ts.frontFraction * h / mField->shockSpeedMS(w.charge, std::max(w.maxDistanceM, h)));
+            } else {
+                // Behind the front: resolve the pulse at the body's nearest point.
+                const BlastParameters p = mField->tableParameters(w.charge, std::max(near, h));
+                dt = std::min(dt, ts.pulseFraction * p.positiveDurationS);
+            }
+        }
+        // Never step over the moment a front first reaches the body.
+        for (size_t c = 0; c < mField->charges().size(); ++c) {
+            const double d = (body.positionM - mField->charges()[c].positionM).norm();
+            const double arrival = mField->window(static_cast<int>(c), std::max(d - body.boundingRadiusM, h)).first;
+            if (arrival > mTimeS) dt = std::min(dt, arrival - mTimeS);
+        }
+        if (!body.anchored && !body.asleep) {
+            const double speed = maxVoxelSpeedMS(body);
+            if (speed > 0) dt = std::min(dt, ts.speedFraction * h / speed);
+        }
+    }
+    return std::max(dt, ts.minTimeStepS);
+}
+
+void Simulation::advanceTo(double target)
+{
+    while (mTimeS < target) {
+        const std::vector<OpenWindow> windows = mField->openWindows(mTimeS);
+        const double remaining = target - mTimeS;
+        double dt = chooseTimeStep(windows);
+        // Land exactly on the target without a sliver of a step just before it.
+        const bool last = dt >= remaining;
+        if (last)
+            dt = remaining;
+        else if (remaining < 2.0 * dt)
+            dt = 0.5 * remaining;
+        fractureStep(windows, dt);
+        motionStep(windows, dt);
+        mTimeS = last ? target : mTimeS + dt;
+        ++mStats.steps;
+        mStats.minDtS = std::min(mStats.minDtS, dt);
+    }
+}
+
+void Simulation::fractureStep(const std::vector<OpenWindow>& windows, double dt)
+{
+    if (windows.empty() || mScene.fracture.algorithm == FractureAlgorithm::None) return;
+    std::vector<char> changed(mBodies.size(), 0);
+    for (size_t i = 0; i < mBodies.size(); ++i) {
+        Body& body = mBodies[i];
+        if (body.linkCount == 0 && !body.anchored) continue;
+        if (!bodyInWindows(body, *mField, windows)) continue;
+        body.asleep = false;
+        body.restTimeS = 0;
+        const LoadResult r = loadLinks(body, mDamage[i].get(), mScene.materials[body.materialIndex], *mField, windows, mTimeS, dt,
+                                       mScene.fracture);
+        mStats.brokenLinks += r.brokenLinks;
+        body.linkCount -= r.brokenLinks;
+        if (r.brokenAnchors > 0) {
+            bool anchored = false;
+            for (auto it = body.grid->cbeginValueOn(); it && !anchored; ++it) anchored = (*it & kAnchorBit) != 0;
+            body.anchored = anchored;
+        }
+        changed[i] = r.brokenLinks > 0 || r.brokenAnchors > 0;
+    }
+    if (std::none_of(changed.begin(), changed.end(), [](char c) { return c; })) return;
+
+    // Split only bodies that lost links or anchors, in body order; parts replace their parent.
+    std::vector<Body> next;
+    std::vector<DamageGrid::Ptr> nextDamage;
+    next.reserve(mBodies.size());
+    for (size_t i = 0; i < mBodies.size(); ++i) {
+        std::vector<SplitPart> parts;
+        if (changed[i]) parts = splitBody(mBodies[i], mDamage[i].get());
+        if (parts.empty()) {
+            next.push_back(std::move(mBodies[i]));
+            nextDamage.push_back(mDamage[i]);
+            continue;
+        }
+        FractureEvent event;
+        event.timeS = mTimeS;
+        event.parentId = mBodies[i].id;
+        for (SplitPart& part : parts) {
+            const bool small = part.body.mass.voxelCount < mScene.fracture.minFragmentVoxels;
+            if (small && mScene.fracture.smallFragments == SmallFragmentPolicy::Dust && !part.body.anchored) {
+                mDust.push_back({mTimeS, mBodies[i].id, part.body.mass.voxelCount, part.body.mass.massKg,
+                                 linearMomentum(part.body), angularMomentumAboutOrigin(part.body)});
+                continue;
+            }
+            part.body.id = mNextId++;
+            event.childIds.push_back(part.body.id);
+            next.push_back(std::move(part.body));
+            nextDamage.push_back(part.damage);
+        }
+        mEvents.push_back(std::move(event));
+    }
+    mBodies = std::move(next);
+    mDamage = std::move(nextDamage);
+}
+
+void Simulation::motionStep(const std::vector<OpenWindow>& windows, double dt)
+{
+    const WorldSettings& world = mScene.world;
+    const double gravity = world.gravityMS2.norm();
+    std::vector<int> contacts(mBodies.size(), 0);
+    // Bodies are independent here: each task writes only its own body.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, mBodies.size()), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t i = range.begin(); i != range.end(); ++i) {
+            Body& body = mBodies[i];
+            if (body.anchored) continue;
+            const bool loaded = !windows.empty() && bodyInWindows(body, *mField, windows);
+            if (loaded) {
+                body.asleep = false;
+                body.restTimeS = 0;
+            }
+            if (body.asleep) continue;
+            const double m = body.mass.massKg;
+            auto wrench = [&](double t, const Eigen::Vector3d& x, const Eigen::Quaterniond& q, const Eigen::Vector3d& v,
+                              const Eigen::Vector3d& w) {
+                Wrench total = loaded ? blastWrench(body, x, q, *mField, windows, t, world.reflectedPressure) : Wrench();
+                total.forceN += m * world.gravityMS2 - world.linearDragPerS * m * v;
+                const Eigen::Matrix3d r = q.toRotationMatrix();
+                total.torqueNm -= world.angularDragPerS * (r * body.mass.inertiaKgM2 * r.transpose() * w);
+                return total;
+            };
+            integrateBody(body, mTimeS, dt, mScene.timeStep.integrator, wrench);
+            contacts[i] = resolveGroundContacts(body, world.ground, dt, gravity);
+            if (!loaded) updateSleep(body, mScene.sleep, dt);
+        }
+    });
+    for (int c : contacts) mStats.contacts += c;
+}
+
+}  // namespace spall
