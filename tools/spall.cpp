@@ -101,11 +101,7 @@ int runVoxelise(const std::string& input, const std::string& primitiveSpec, cons
         result.notes.insert(result.notes.begin(), notes.begin(), notes.end());
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    result.grid->insertMeta("voxel_size_m", openvdb::DoubleMetadata(voxelSize));
-    result.grid->insertMeta("source", openvdb::StringMetadata(source));
-    result.grid->insertMeta("material", openvdb::StringMetadata("unassigned"));
-    result.grid->insertMeta("spall_version", openvdb::StringMetadata(SPALL_VERSION));
-    spall::writeGridsAtomically(output, {spall::toStandardGrid(*result.grid)});
+    spall::writeVoxelisedBody(output, *result.grid, voxelSize, source);
 
     const spall::MassProperties mp = spall::computeMassProperties(*result.grid, voxelSize, 1000.0);
     const openvdb::CoordBBox box = result.grid->evalActiveVoxelBoundingBox();

@@ -181,6 +181,7 @@ const char* defaultSceneJson()
   ]
 }
 )";
+}
 
 Scene parseScene(const std::string& text, const std::string& sourceName, const std::string& baseDirectory)
 {

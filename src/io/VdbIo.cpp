@@ -39,6 +39,32 @@ void writeGridsAtomically(const std::string& path, const openvdb::GridPtrVec& gr
     }
 }
 
+void writeVoxelisedBody(const std::string& path, const LinkGrid& grid, double voxelSizeM, const std::string& source,
+                        const std::string& material)
+{
+    // Link bits as exact small integers in a FloatGrid: Python's pyopenvdb cannot even list a
+    // file that holds an Int32 grid.
+    auto links = openvdb::FloatGrid::create(0.0f);
+    for (auto leaf = grid.constTree().cbeginLeaf(); leaf; ++leaf) {
+        auto* target = links->tree().touchLeaf(leaf->origin());
+        for (auto it = leaf->cbeginValueOn(); it; ++it) target->setValueOn(it.pos(), static_cast<float>(*it & (kAllLinks | kAnchorBit)));
+    }
+    links->setTransform(grid.transform().copy());
+    links->setName("links");
+    auto solid = openvdb::FloatGrid::create(0.0f);
+    copyActiveTopology(solid->tree(), grid.constTree(), 1.0f);
+    solid->setTransform(grid.transform().copy());
+    solid->setName("solid");
+    solid->setGridClass(openvdb::GRID_FOG_VOLUME);
+    for (openvdb::GridBase* g : {static_cast<openvdb::GridBase*>(solid.get()), static_cast<openvdb::GridBase*>(links.get())}) {
+        g->insertMeta("voxel_size_m", openvdb::DoubleMetadata(voxelSizeM));
+        g->insertMeta("source", openvdb::StringMetadata(source));
+        g->insertMeta("material", openvdb::StringMetadata(material));
+        g->insertMeta("spall_version", openvdb::StringMetadata(SPALL_VERSION));
+    }
+    writeGridsAtomically(path, {solid, links});
+}
+
 LinkGrid::Ptr readLinkGrid(const std::string& path)
 {
     initialiseOpenVdb();
@@ -48,12 +74,24 @@ LinkGrid::Ptr readLinkGrid(const std::string& path)
         openvdb::GridPtrVecPtr grids = file.getGrids();
         file.close();
         for (const auto& g : *grids) {
-            if (auto link = openvdb::gridPtrCast<openvdb::Int32Grid>(g)) return fromStandardGrid(*link);
+            auto links = openvdb::gridPtrCast<openvdb::FloatGrid>(g);
+            if (!links || links->getName() != "links") continue;
+            auto out = LinkGrid::create(0);
+            out->setTransform(links->transform().copy());
+            out->setName("links");
+            out->insertMeta(*links);
+            openvdb::FloatTree voxels(links->tree());
+            voxels.voxelizeActiveTiles();
+            for (auto leaf = voxels.cbeginLeaf(); leaf; ++leaf) {
+                auto* target = out->tree().touchLeaf(leaf->origin());
+                for (auto it = leaf->cbeginValueOn(); it; ++it) target->setValueOn(it.pos(), static_cast<int32_t>(*it));
+            }
+            return out;
         }
     } catch (const std::exception& e) {
         throw IoError(path + ": cannot read as .vdb: " + e.what());
     }
-    throw IoError(path + ": holds no Int32 solid grid");
+    throw IoError(path + ": holds no grid named 'links' (not written by spall voxelise?)");
 }
 
 }  // namespace spall

@@ -28,34 +28,6 @@ openvdb::math::Transform::Ptr Body::indexToWorld() const
     return openvdb::math::Transform::createLinearTransform(m);
 }
 
-openvdb::Int32Grid::Ptr toStandardGrid(const LinkGrid& grid)
-{
-    auto out = openvdb::Int32Grid::create(grid.background());
-    out->setTransform(grid.transform().copy());
-    out->setName(grid.getName());
-    out->insertMeta(grid);
-    for (auto leaf = grid.constTree().cbeginLeaf(); leaf; ++leaf) {
-        auto* target = out->tree().touchLeaf(leaf->origin());
-        for (auto it = leaf->cbeginValueOn(); it; ++it) target->setValueOn(it.pos(), *it);
-    }
-    return out;
-}
-
-LinkGrid::Ptr fromStandardGrid(const openvdb::Int32Grid& grid)
-{
-    openvdb::Int32Tree voxels(grid.tree());
-    voxels.voxelizeActiveTiles();
-    auto out = LinkGrid::create(grid.background());
-    out->setTransform(grid.transform().copy());
-    out->setName(grid.getName());
-    out->insertMeta(grid);
-    for (auto leaf = voxels.cbeginLeaf(); leaf; ++leaf) {
-        auto* target = out->tree().touchLeaf(leaf->origin());
-        for (auto it = leaf->cbeginValueOn(); it; ++it) target->setValueOn(it.pos(), *it);
-    }
-    return out;
-}
-
 void linkAllNeighbours(LinkGrid& grid)
 {
     // Reads topology through a const accessor per task and writes only the task's own leaf.

@@ -17,7 +17,14 @@ void initialiseOpenVdb();
 void writeGridsAtomically(const std::string& path, const openvdb::GridPtrVec& grids,
                           const openvdb::MetaMap& fileMetadata = openvdb::MetaMap());
 
-/// Reads the first Int32 grid of a voxelised body file. Throws IoError naming the file.
+/// Writes a voxelised body: `solid` (FloatGrid, 1 inside, for any reader: vdb_print, pyopenvdb,
+/// Blender, Houdini) and `links` (FloatGrid of the link and anchor bits as exact integers, which
+/// spall reads back), with metadata
+/// voxel_size_m, source, material and spall_version.
+void writeVoxelisedBody(const std::string& path, const LinkGrid& grid, double voxelSizeM, const std::string& source,
+                        const std::string& material = "unassigned");
+
+/// Reads the `links` grid of a voxelised body file. Throws IoError naming the file.
 LinkGrid::Ptr readLinkGrid(const std::string& path);
 
 }  // namespace spall

@@ -19,7 +19,7 @@ namespace spall {
 /// Active voxel = solid; value = link bits. Bodies use a shallow tree (8^3 leaves under two 8^3
 /// internal levels): a one-voxel fragment then costs about 10 KB instead of the ~300 KB of
 /// OpenVDB's standard 5-4-3 tree, which matters when a blast makes thousands of fragments.
-/// Files use the standard Int32Grid (toStandardGrid / fromStandardGrid).
+/// Files hold standard FloatGrids (io/VdbIo.h), which every reader knows.
 using LinkTree = openvdb::tree::Tree4<int32_t, 3, 3, 3>::Type;
 using LinkGrid = openvdb::Grid<LinkTree>;
 using LinkLeaf = LinkTree::LeafNodeType;
@@ -38,10 +38,6 @@ void copyActiveTopology(TargetTreeT& target, const SourceTreeT& source, typename
     }
 }
 
-/// The same voxels and values in OpenVDB's standard Int32Grid, with transform, name and metadata.
-openvdb::Int32Grid::Ptr toStandardGrid(const LinkGrid& grid);
-/// Back from a standard Int32Grid (active tiles become voxels).
-LinkGrid::Ptr fromStandardGrid(const openvdb::Int32Grid& grid);
 
 /// Face (and link) directions: bit f of a voxel's value is the link across face f.
 enum Face : int { kNegX = 0, kPosX = 1, kNegY = 2, kPosY = 3, kNegZ = 4, kPosZ = 5 };

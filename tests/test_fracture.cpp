@@ -1,0 +1,231 @@
+#include "TestUtil.h"
+
+#include <spall/fracture/Fracture.h>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+using namespace spall;
+using openvdb::Coord;
+
+namespace {
+
+Body blockBody(int nx, int ny, int nz, double h, const Eigen::Vector3d& centre)
+{
+    Body b = makeBody(test::boxGrid(nx, ny, nz, h), h, 2000.0);
+    b.positionM = centre;
+    return b;
+}
+
+Material plainMaterial(double meanYieldPa)
+{
+    Material m;
+    m.name = "test";
+    m.meanYieldPa = meanYieldPa;
+    m.yieldVariation = 0.0;
+    m.weakeningFraction = 0.25;
+    m.orientationFactor = 0.2;
+    m.damageRatePerS = 300.0;
+    return m;
+}
+
+/// Loads a body at n evenly spaced times across [t0, t1].
+int64_t loadOver(Body& body, DamageGrid* damage, const Material& m, const BlastField& field, double t0, double t1, int n,
+                 const FractureSettings& s)
+{
+    int64_t broken = 0;
+    const double dt = (t1 - t0) / n;
+    for (int i = 0; i < n; ++i) {
+        const double t = t0 + i * dt;
+        broken += loadLinks(body, damage, m, field, field.openWindows(t), t, dt, s).brokenLinks;
+    }
+    return broken;
+}
+
+}  // namespace
+
+TEST(Fracture, BreaksExactlyTheLinksAboveTheirLimit)
+{
+    BlastSettings bs;
+    const BlastField field({Charge{Eigen::Vector3d(0, 0, 0), 2.0, 0.0, BurstType::FreeAir}}, bs);
+    Body body = blockBody(20, 6, 6, 0.1, Eigen::Vector3d(3.0, 0, 0));
+    Material m = findMaterialPreset("brick-masonry");
+    FractureSettings s;
+    s.orientation = false;
+    s.weakening = false;
+    const double t = field.tableParameters(0, 2.6).arrivalTimeS + 1e-4;  // the front is inside the block
+    const auto windows = field.openWindows(t);
+    auto before = body.grid->deepCopy();
+    loadLinks(body, nullptr, m, field, windows, t, 1e-5, s);
+    int64_t broken = 0, checked = 0;
+    for (auto it = before->cbeginValueOn(); it; ++it) {
+        for (int axis = 0; axis < 3; ++axis) {
+            if (!(*it & (1 << (2 * axis + 1)))) continue;
+            const Eigen::Vector3d mid = body.voxelWorldM(it.getCoord()) + 0.05 * Eigen::Vector3d::Unit(axis);
+            const bool shouldBreak = field.overpressurePa(mid, t) >= baseYieldLimit(m, s.seed, it.getCoord(), axis);
+            const bool didBreak = !(body.grid->tree().getValue(it.getCoord()) & (1 << (2 * axis + 1)));
+            EXPECT_EQ(shouldBreak, didBreak) << it.getCoord() << " axis " << axis;
+            broken += didBreak;
+            ++checked;
+        }
+    }
+    EXPECT_GT(broken, 0);
+    EXPECT_LT(broken, checked) << "the front is part-way through, so some links must hold";
+    EXPECT_TRUE(linksAreSymmetric(*body.grid));
+}
+
+TEST(Fracture, StrongerChargeBreaksMore)
+{
+    BlastSettings bs;
+    FractureSettings s;
+    const Material m = findMaterialPreset("brick-masonry");
+    int64_t previous = -1;
+    for (double w : {0.1, 0.15, 0.22}) {
+        const BlastField field({Charge{Eigen::Vector3d(0, -2.0, 0), w, 0.0, BurstType::FreeAir}}, bs);
+        Body body = blockBody(30, 2, 20, 0.1, Eigen::Vector3d(0, 0, 0));
+        const int64_t broken = loadOver(body, nullptr, m, field, 0.0, 0.03, 600, s);
+        EXPECT_GT(broken, previous) << w;
+        previous = broken;
+    }
+    EXPECT_LT(previous, 2900) << "the strongest charge must not saturate the test";
+}
+
+TEST(Fracture, TwoSubCriticalChargesBreakOnlyWithWeakening)
+{
+    // Two equal charges 10 m away on either side, 0.5 s apart; each peaks at 85 % of the limit.
+    BlastSettings bs;
+    const Charge a{Eigen::Vector3d(-10, 0, 0), 5.0, 0.0, BurstType::FreeAir};
+    const Charge b{Eigen::Vector3d(10, 0, 0), 5.0, 0.5, BurstType::FreeAir};
+    const BlastField field({a, b}, bs);
+    const double peak = field.tableParameters(0, 10.0).peakOverpressurePa;
+    Material m = plainMaterial(peak / 0.85);
+    m.orientationFactor = 0.0;
+    for (bool weakening : {false, true}) {
+        FractureSettings s;
+        s.weakening = weakening;
+        Body body = blockBody(2, 1, 1, 0.05, Eigen::Vector3d(0, 0, 0));
+        const double arrival = field.tableParameters(0, 10.0).arrivalTimeS;
+        int64_t broken = loadOver(body, nullptr, m, field, arrival - 1e-4, arrival + 2e-3, 400, s);
+        EXPECT_EQ(broken, 0) << "one charge alone never breaks it";
+        broken += loadOver(body, nullptr, m, field, 0.5 + arrival - 1e-4, 0.5 + arrival + 2e-3, 400, s);
+        EXPECT_EQ(broken, weakening ? 1 : 0) << "weakening " << weakening;
+    }
+}
+
+TEST(Fracture, OrientationBreaksMoreAlongTheWave)
+{
+    BlastSettings bs;
+    const BlastField field({Charge{Eigen::Vector3d(-20, 0, 0), 10.0, 0.0, BurstType::FreeAir}}, bs);
+    const double peak = field.tableParameters(0, 20.0).peakOverpressurePa;
+    Material m = plainMaterial(peak / 0.9);  // only links weakened by > 10 % can break
+    m.yieldVariation = 0.0;
+    FractureSettings s;
+    s.weakening = false;
+    Body body = blockBody(4, 4, 4, 0.05, Eigen::Vector3d(0, 0, 0));
+    loadOver(body, nullptr, m, field, 0.0, 0.1, 2000, s);
+    int64_t intact[3] = {0, 0, 0};
+    for (auto it = body.grid->cbeginValueOn(); it; ++it)
+        for (int axis = 0; axis < 3; ++axis) intact[axis] += (*it >> (2 * axis + 1)) & 1;
+    EXPECT_EQ(intact[0], 0) << "links along the wave (x) are weaker by 20 % and break";
+    EXPECT_EQ(intact[1], 48) << "links across the wave hold";
+    EXPECT_EQ(intact[2], 48);
+}
+
+TEST(Fracture, DavisonStevensConvergesAsTheStepShrinks)
+{
+    BlastSettings bs;
+    const BlastField field({Charge{Eigen::Vector3d(0, -3.0, 0), 1.0, 0.0, BurstType::FreeAir}}, bs);
+    Material m = findMaterialPreset("concrete");
+    FractureSettings s;
+    s.algorithm = FractureAlgorithm::DavisonStevens;
+    std::vector<int64_t> counts;
+    for (int steps : {250, 500, 1000, 2000}) {
+        Body body = blockBody(20, 2, 10, 0.1, Eigen::Vector3d(0, 0, 0));
+        auto damage = DamageGrid::create(0.0f);
+        copyActiveTopology(damage->tree(), body.grid->constTree(), 0.0f);
+        counts.push_back(loadOver(body, damage.get(), m, field, 0.0, 0.012, steps, s));
+    }
+    EXPECT_GT(counts.back(), 0);
+    const double d1 = std::abs(double(counts[1] - counts[0])), d3 = std::abs(double(counts[3] - counts[2]));
+    EXPECT_LE(d3, d1) << counts[0] << " " << counts[1] << " " << counts[2] << " " << counts[3];
+    EXPECT_NEAR(double(counts[3]), double(counts[2]), 0.02 * counts[3] + 2);
+}
+
+TEST(Fracture, SplitConservesMomentumExactly)
+{
+    Body body = blockBody(12, 5, 7, 0.1, Eigen::Vector3d(1.0, 2.0, 3.0));
+    body.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, -2, 0.5).normalized()));
+    body.linearVelocityMS = Eigen::Vector3d(3.0, -1.0, 2.5);
+    body.angularVelocityRadS = Eigen::Vector3d(4.0, 1.5, -2.0);
+    auto acc = body.grid->getAccessor();
+    for (int y = 0; y < 5; ++y)
+        for (int z = 0; z < 7; ++z) {
+            breakLink(acc, Coord(3, y, z), kPosX);
+            breakLink(acc, Coord(8, y, z), kPosX);
+        }
+    for (int x = 0; x < 4; ++x)
+        for (int y = 0; y < 5; ++y) breakLink(acc, Coord(x, y, 2), kPosZ);
+    const std::vector<SplitPart> parts = splitBody(body, nullptr);
+    ASSERT_EQ(parts.size(), 4u);
+    Eigen::Vector3d p = Eigen::Vector3d::Zero(), l = Eigen::Vector3d::Zero();
+    int64_t voxels = 0;
+    for (const SplitPart& part : parts) {
+        p += part.body.mass.massKg * part.body.linearVelocityMS;
+        const Body& c = part.body;
+        l += c.worldInertiaKgM2() * c.angularVelocityRadS + c.positionM.cross(c.mass.massKg * c.linearVelocityMS);
+        voxels += c.mass.voxelCount;
+        EXPECT_EQ(c.parentId, body.id);
+    }
+    const Eigen::Vector3d p0 = body.mass.massKg * body.linearVelocityMS;
+    const Eigen::Vector3d l0 = body.worldInertiaKgM2() * body.angularVelocityRadS + body.positionM.cross(p0);
+    EXPECT_EQ(voxels, body.mass.voxelCount);
+    EXPECT_LT((p - p0).norm(), 1e-12 * p0.norm());
+    EXPECT_LT((l - l0).norm(), 1e-12 * l0.norm());
+}
+
+TEST(Fracture, OneAndTwoThreadsGiveIdenticalResults)
+{
+    BlastSettings bs;
+    const BlastField field({Charge{Eigen::Vector3d(0, -1.5, 0.2), 0.1, 0.0, BurstType::FreeAir}}, bs);
+    const Material m = findMaterialPreset("brick-masonry");
+    FractureSettings s;
+    std::vector<LinkGrid::Ptr> results;
+    for (int threads : {1, 2}) {
+        tbb::global_control c(tbb::global_control::max_allowed_parallelism, threads);
+        Body body = blockBody(40, 4, 30, 0.05, Eigen::Vector3d(0, 0, 0));
+        loadOver(body, nullptr, m, field, 0.0, 0.01, 200, s);
+        results.push_back(body.grid);
+    }
+    const int64_t left = countLinks(*results[0]);
+    EXPECT_GT(left, 0);
+    EXPECT_LT(left, countLinks(*test::boxGrid(40, 4, 30))) << "some links must break";
+    bool same = results[0]->activeVoxelCount() == results[1]->activeVoxelCount();
+    auto other = results[1]->getConstAccessor();
+    for (auto it = results[0]->cbeginValueOn(); it && same; ++it) same = other.getValue(it.getCoord()) == *it;
+    EXPECT_TRUE(same);
+}
+
+TEST(Materials, PresetsBreakAtThePublishedPressures)
+{
+    // A wall in uniform side-on overpressure (Clancey 1972 ranges, see Material.cpp): nothing
+    // breaks just below the low end, every link breaks just above the high end.
+    struct Case {
+        const char* name;
+        double low, high;
+    };
+    for (const Case c : {Case{"glass", 3.4e3, 6.9e3}, Case{"wood", 6.9e3, 13.8e3}, Case{"brick-masonry", 48.2e3, 55.1e3},
+                         Case{"concrete", 13.8e3, 20.7e3}}) {
+        const Material& m = findMaterialPreset(c.name);
+        validateMaterial(m);
+        double weakest = 1e300, strongest = 0;
+        for (int x = 0; x < 20; ++x)
+            for (int axis = 0; axis < 3; ++axis) {
+                const double limit = baseYieldLimit(m, 1, Coord(x, 3 * x, -x), axis);
+                weakest = std::min(weakest, limit * (1.0 - m.orientationFactor));
+                strongest = std::max(strongest, limit);
+            }
+        EXPECT_GE(weakest, 0.999 * c.low) << c.name;
+        EXPECT_LE(strongest, 1.001 * c.high) << c.name;
+    }
+    EXPECT_THROW(findMaterialPreset("cheese"), InputError);
+}
