@@ -27,7 +27,7 @@ public:
     ProgressPrinter(std::string label, bool quiet) : mLabel(std::move(label)), mQuiet(quiet) {}
     ~ProgressPrinter() override
     {
-        if (mPrinted) std::fprintf(stderr, "\n");
+        if (mPrinted) std::fprintf(stderr, "\r%s done\n", mLabel.c_str());
     }
     bool wasInterrupted(int percent) override
     {
