@@ -1,2 +1,263 @@
+// spall benchmarks (Google Benchmark). Each benchmark has a baseline run in the same process;
+// after the run a table prints each one's time as a ratio to its baseline.
+//   build/spall_bench                          all
+//   build/spall_bench --benchmark_filter=Label  one group
+#include <spall/blast/Blast.h>
+#include <spall/fracture/Fracture.h>
+#include <spall/io/VdbIo.h>
+#include <spall/voxel/Components.h>
+#include <spall/voxel/Voxelise.h>
+
 #include <benchmark/benchmark.h>
-BENCHMARK_MAIN();
+#include <openvdb/tree/LeafManager.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <string>
+
+using namespace spall;
+
+namespace {
+
+LinkGrid::Ptr block(int n)
+{
+    initialiseOpenVdb();
+    LinkGrid::Ptr g = LinkGrid::create(0);
+    g->tree().denseFill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(n - 1)), 0, true);
+    linkAllNeighbours(*g);
+    return g;
+}
+
+/// The block cut into cubes of `piece` voxels on a side.
+LinkGrid::Ptr cutBlock(int n, int piece)
+{
+    LinkGrid::Ptr g = block(n);
+    openvdb::tree::LeafManager<LinkTree> leaves(g->tree());
+    leaves.foreach ([piece](LinkLeaf& leaf, size_t) {
+        for (auto it = leaf.beginValueOn(); it; ++it) {
+            const openvdb::Coord c = it.getCoord();
+            int32_t bits = *it;
+            for (int axis = 0; axis < 3; ++axis) {
+                if (c[axis] % piece == piece - 1) bits &= ~(1 << (2 * axis + 1));
+                if (c[axis] % piece == 0) bits &= ~(1 << (2 * axis));
+            }
+            it.setValue(bits);
+        }
+    });
+    return g;
+}
+
+/// Baseline: read and write every voxel's value once, in parallel over leaves.
+void trivialPass(LinkGrid& grid)
+{
+    openvdb::tree::LeafManager<LinkTree> leaves(grid.tree());
+    leaves.foreach ([](LinkLeaf& leaf, size_t) {
+        for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(*it ^ 0x80);
+    });
+}
+
+void BM_Label_TrivialPass256(benchmark::State& state)
+{
+    auto g = block(256);
+    for (auto _ : state) trivialPass(*g);
+    state.counters["voxels_per_s"] = benchmark::Counter(double(g->activeVoxelCount()), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Label_TrivialPass256)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Label_Components256Whole(benchmark::State& state)
+{
+    auto g = block(256);
+    for (auto _ : state) benchmark::DoNotOptimize(labelComponents(*g).componentCount);
+    state.counters["components"] = labelComponents(*g).componentCount;
+    state.counters["voxels_per_s"] = benchmark::Counter(double(g->activeVoxelCount()), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Label_Components256Whole)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Label_Components256Cut(benchmark::State& state)
+{
+    auto g = cutBlock(256, 12);  // 22^3 = 10648 pieces
+    for (auto _ : state) benchmark::DoNotOptimize(labelComponents(*g).componentCount);
+    state.counters["components"] = labelComponents(*g).componentCount;
+    state.counters["voxels_per_s"] = benchmark::Counter(double(g->activeVoxelCount()), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Label_Components256Cut)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Voxelise_PrimitiveBox(benchmark::State& state)
+{
+    initialiseOpenVdb();
+    VoxeliseSettings s;
+    s.voxelSizeM = 0.01;
+    int64_t voxels = 0;
+    for (auto _ : state) voxels = voxelisePrimitive({PrimitiveShape::Box, {1.0, 1.0, 1.0}}, s).voxelCount;
+    state.counters["voxels_per_s"] = benchmark::Counter(double(voxels), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Voxelise_PrimitiveBox)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Voxelise_TorusMesh(benchmark::State& state)
+{
+    initialiseOpenVdb();
+    const TriangleMesh mesh = loadMesh(SPALL_SOURCE_DIR "/assets/meshes/torus.obj");
+    VoxeliseSettings s;
+    s.voxelSizeM = 0.005;
+    int64_t voxels = 0;
+    for (auto _ : state) voxels = voxeliseMesh(mesh, s, "torus").voxelCount;
+    state.counters["voxels_per_s"] = benchmark::Counter(double(voxels), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Voxelise_TorusMesh)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Pressure evaluations: the table (hot path) against the direct fits (polynomials, a log and
+// pow per quantity, a decay-coefficient solve).
+constexpr int kPressureSamples = 1 << 16;
+
+void BM_Pressure_DirectFits(benchmark::State& state)
+{
+    double sum = 0;
+    for (auto _ : state) {
+        for (int i = 0; i < kPressureSamples; i += 64) {
+            const double r = 1.0 + 20.0 * i / kPressureSamples;
+            const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::FreeAir, 10.0, r);
+            sum += overpressureAt(p, p.arrivalTimeS + 0.3 * p.positiveDurationS);
+        }
+    }
+    benchmark::DoNotOptimize(sum);
+    state.counters["evals_per_s"] = benchmark::Counter(kPressureSamples / 64, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Pressure_DirectFits)->Unit(benchmark::kMicrosecond)->UseRealTime();
+
+void BM_Pressure_Table(benchmark::State& state)
+{
+    BlastSettings bs;
+    bs.tableNodesPerDecade = static_cast<int>(state.range(0));
+    const BlastField field({Charge{Eigen::Vector3d::Zero(), 10.0, 0.0, BurstType::FreeAir}}, bs);
+    const double t = 0.02;
+    const auto windows = field.openWindows(t);
+    double sum = 0;
+    for (auto _ : state) {
+        for (int i = 0; i < kPressureSamples; ++i)
+            sum += field.sample(Eigen::Vector3d(1.0 + 20.0 * i / kPressureSamples, 0.1, 0.2), t, windows).overpressurePa;
+    }
+    benchmark::DoNotOptimize(sum);
+    state.counters["evals_per_s"] = benchmark::Counter(kPressureSamples, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Pressure_Table)->Arg(16)->Arg(64)->Arg(128)->Arg(512)->Unit(benchmark::kMicrosecond)->UseRealTime();
+
+// Link loading: a 256^3 block entirely inside the open window, against the trivial pass.
+void BM_Loading_Links256(benchmark::State& state)
+{
+    auto g = block(256);
+    Body body = makeBody(g, 0.01, 2000.0);
+    body.positionM = Eigen::Vector3d(0, 0, 0);
+    BlastSettings bs;
+    const BlastField field({Charge{Eigen::Vector3d(-5.0, 0, 0), 100.0, 0.0, BurstType::FreeAir}}, bs);
+    // The worst case: every link evaluated, none broken, so every iteration does the same work.
+    // The front has just passed the far corner (7.6 m); every leaf's peak exceeds the limit, so
+    // no leaf is skipped, but the decayed pressure now is below it everywhere.
+    const BlastParameters far = field.tableParameters(0, 7.6);
+    const double t = far.arrivalTimeS + 0.2 * far.positiveDurationS;
+    Material m = findMaterialPreset("reinforced-concrete");
+    m.meanYieldPa = 0.99 * far.peakOverpressurePa;
+    m.yieldVariation = 0.0;
+    const auto windows = field.openWindows(t);
+    FractureSettings fs;
+    fs.weakening = false;
+    fs.orientation = false;
+    if (loadLinks(body, nullptr, m, field, windows, t, 1e-6, fs).skippedLeaves != 0) state.SkipWithError("leaves were skipped");
+    for (auto _ : state) benchmark::DoNotOptimize(loadLinks(body, nullptr, m, field, windows, t, 1e-6, fs).brokenLinks);
+    state.counters["links_per_s"] = benchmark::Counter(double(countLinks(*g)), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Loading_Links256)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+/// Console output plus, at the end, each benchmark's time relative to its baseline.
+class RatioReporter : public benchmark::ConsoleReporter {
+public:
+    void ReportRuns(const std::vector<Run>& runs) override
+    {
+        for (const Run& r : runs)
+            if (r.run_type == Run::RT_Iteration) {
+                std::string name = r.benchmark_name();
+                const std::string suffix = "/real_time";
+                if (name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0)
+                    name.resize(name.size() - suffix.size());
+                mTimes[name] = r.GetAdjustedRealTime() * timeUnitSeconds(r.time_unit);
+            }
+        ConsoleReporter::ReportRuns(runs);
+    }
+    void Finalize() override
+    {
+        ConsoleReporter::Finalize();
+        const std::pair<const char*, const char*> pairs[] = {
+            {"BM_Label_Components256Whole", "BM_Label_TrivialPass256"},
+            {"BM_Label_Components256Cut", "BM_Label_TrivialPass256"},
+            {"BM_Loading_Links256", "BM_Label_TrivialPass256"},
+            {"BM_Pressure_Table/16", "BM_Pressure_DirectFits"},
+            {"BM_Pressure_Table/64", "BM_Pressure_DirectFits"},
+            {"BM_Pressure_Table/128", "BM_Pressure_DirectFits"},
+            {"BM_Pressure_Table/512", "BM_Pressure_DirectFits"},
+        };
+        std::printf("\nRatios to the baseline in this run (time / baseline time):\n");
+        for (auto [name, base] : pairs) {
+            auto a = mTimes.find(name), b = mTimes.find(base);
+            if (a == mTimes.end() || b == mTimes.end()) continue;
+            // Pressure benchmarks differ in sample count: compare per evaluation.
+            const double perEval = std::string(name).rfind("BM_Pressure", 0) == 0 ? 64.0 : 1.0;
+            std::printf("  %-32s / %-26s = %8.3f\n", name, base, a->second / b->second / perEval);
+        }
+    }
+
+private:
+    static double timeUnitSeconds(benchmark::TimeUnit unit)
+    {
+        switch (unit) {
+        case benchmark::kNanosecond: return 1e-9;
+        case benchmark::kMicrosecond: return 1e-6;
+        case benchmark::kMillisecond: return 1e-3;
+        case benchmark::kSecond: return 1.0;
+        }
+        return 1.0;
+    }
+    std::map<std::string, double> mTimes;
+};
+
+/// Error of the blast table against the direct fits, per resolution (docs/accuracy.md).
+void printBlastTableAccuracy()
+{
+    std::printf("Blast table against the direct Kingery-Bulmash fits, 1 kg free air, 20000 distances in Z = 0.06..40:\n");
+    std::printf("  %-18s %-22s %-22s %-22s\n", "nodes per decade", "Ps max / p99 rel err", "ta max / p99", "T+ max / p99");
+    for (int nodes : {16, 32, 64, 128, 256, 512}) {
+        BlastSettings bs;
+        bs.tableNodesPerDecade = nodes;
+        const BlastField field({Charge{Eigen::Vector3d::Zero(), 1.0, 0.0, BurstType::FreeAir}}, bs);
+        std::vector<double> e[3];
+        const int samples = 20000;
+        for (int i = 0; i < samples; ++i) {
+            const double z = 0.06 * std::pow(40.0 / 0.06, (i + 0.5) / samples);
+            const BlastParameters d = blastParameters(BlastDataset::KingeryBulmash, BurstType::FreeAir, 1.0, z);
+            const BlastParameters t = field.tableParameters(0, z);
+            e[0].push_back(std::abs(t.peakOverpressurePa / d.peakOverpressurePa - 1));
+            e[1].push_back(std::abs(t.arrivalTimeS / d.arrivalTimeS - 1));
+            e[2].push_back(std::abs(t.positiveDurationS / d.positiveDurationS - 1));
+        }
+        std::printf("  %-18d", nodes);
+        for (auto& v : e) {
+            std::sort(v.begin(), v.end());
+            std::printf(" %9.2e / %9.2e  ", v.back(), v[size_t(0.99 * (v.size() - 1))]);
+        }
+        std::printf("\n");
+    }
+    std::printf("\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+    printBlastTableAccuracy();
+    RatioReporter reporter;
+    benchmark::RunSpecifiedBenchmarks(&reporter);
+    benchmark::Shutdown();
+    return 0;
+}

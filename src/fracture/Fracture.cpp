@@ -104,6 +104,12 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
     const double weakening = settings.weakening ? material.weakeningFraction : 0.0;
     const double stressScale = material.damageStressScalePerPa > 0 ? material.damageStressScalePerPa : 1.0 / material.meanYieldPa;
     constexpr double kMaxDamage = 6.0;  // D*: six links per voxel
+    // The least pressure that can change anything: a link's lowest possible limit (after
+    // variation, orientation and weakening), or the damage threshold.
+    const double leastEffectivePa =
+        davisonStevens ? material.meanYieldPa
+                       : std::min(material.meanYieldPa * (1.0 - material.yieldVariation) * (1.0 - orientationFactor) * (1.0 - weakening),
+                                  material.meanYieldPa * (1.0 - material.yieldVariation));  // anchors
 
     openvdb::tree::LeafManager<const LinkTree> leaves(body.grid->constTree());
     std::vector<std::vector<LinkEvent>> events(leaves.leafCount());
@@ -114,12 +120,17 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
     leaves.foreach ([&](const LinkLeaf& leaf, size_t n) {
         const openvdb::Coord centreIjk = leaf.origin() + openvdb::Coord(LinkLeaf::DIM / 2);
         const Eigen::Vector3d leafCentre = body.voxelWorldM(centreIjk) - rot * Eigen::Vector3d::Constant(0.5 * h);
+        // Skip the leaf when no window reaches it, or when even the peak overpressure at its
+        // nearest point (peaks fall with distance) cannot reach the least effective limit.
         bool inside = false;
+        double peakBoundPa = 0.0;
         for (const OpenWindow& w : windows) {
             const double d = (leafCentre - field.charges()[w.charge].positionM).norm();
-            inside |= d + leafRadius >= w.minDistanceM && d - leafRadius <= w.maxDistanceM;
+            if (d + leafRadius < w.minDistanceM || d - leafRadius > w.maxDistanceM) continue;
+            inside = true;
+            peakBoundPa += field.tableParameters(w.charge, std::max(d - leafRadius, 1e-3)).peakOverpressurePa;
         }
-        if (!inside) {
+        if (!inside || peakBoundPa < leastEffectivePa) {
             skipped[n] = 1;
             return;
         }
