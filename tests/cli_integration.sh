@@ -78,4 +78,38 @@ assert len(fragments) > 1, "the wall should have broken"
 p = h["frames/linear_momentum_kg_m_s"][:]
 assert np.all(np.isfinite(p))
 PY
+# the h5py example of docs/file-formats.md, as written there
+docs=$(dirname "$0")/../docs/file-formats.md
+sed -n '/^```python/,/^```/p' "$docs" | sed '1d;$d' | sed "s#out/history.h5#$dir/out/history.h5#" > "$dir/example.py"
+$py "$dir/example.py" | grep -q "bodies, heaviest" || fail "the documented h5py example does not run"
+
+# interruption: Ctrl-C finishes the current frame; SIGKILL leaves complete frames and a readable history
+cat > "$dir/long.json" <<'JSON'
+{"voxel_size_m": 0.1, "duration_s": 30.0, "frame_rate_hz": 24, "seed": 5,
+ "objects": [{"name": "wall", "primitive": {"shape": "box", "size_m": [2.0, 0.3, 1.5]},
+              "position_m": [0, 0, 0.75], "material": "brick-masonry", "anchor": "ground"}],
+ "charges": [{"position_m": [0.2, -2.0, 0.0], "tnt_kg": 3.0, "burst": "surface"}],
+ "solver": {"sleep": false}}
+JSON
+for signal in INT KILL; do
+  "$spall" run "$dir/long.json" -o "$dir/long_$signal" --quiet > /dev/null 2>&1 &
+  pid=$!
+  for _ in $(seq 100); do [[ -e "$dir/long_$signal/fragments.0010.vdb" ]] && break; sleep 0.1; done
+  kill -$signal $pid
+  set +e; wait $pid; code=$?; set -e
+  if [[ $signal == INT ]]; then [[ $code == 130 ]] || fail "Ctrl-C exit code $code, expected 130"; fi
+  $py - "$dir/long_$signal" <<'PY'
+import glob, sys, h5py, pyopenvdb as vdb
+out = sys.argv[1]
+frames = sorted(glob.glob(out + "/fragments.*.vdb"))
+for path in frames:
+    for m in vdb.readAllGridMetadata(path):
+        vdb.read(path, m.name)
+h = h5py.File(out + "/history.h5", "r")
+assert h.attrs["run_complete"] == 0
+n = len(h["frames/time_s"])
+assert n >= 10 and abs(n - len(frames)) <= 1, (n, len(frames))
+assert len(h["frames/body_offset"]) >= n + 1
+PY
+done
 echo "cli integration: ok"

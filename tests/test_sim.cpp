@@ -49,6 +49,15 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
     EXPECT_EQ(errorOf(defaultSceneJson()), "");
 }
 
+TEST(Scene, ShippedScenesParseAndTheDefaultMatchesItsAsset)
+{
+    const std::string dir = SPALL_SOURCE_DIR "/assets/scenes/";
+    const Scene asset = loadScene(dir + "default.json");
+    const Scene builtIn = parseScene(defaultSceneJson(), "built-in", ".");
+    EXPECT_EQ(sceneToJson(asset), sceneToJson(builtIn));
+    for (const char* name : {"two-charges-concrete.json", "pillar-davison-stevens.json"}) EXPECT_NO_THROW(loadScene(dir + name)) << name;
+}
+
 TEST(Scene, ResolvedSceneParsesBackToItself)
 {
     const Scene a = parseScene(kSmallScene, "small", ".");
