@@ -44,6 +44,28 @@ for key in ["peak_overpressure_Pa", "arrival_time_s", "positive_duration_s", "de
 assert abs(j["peak_overpressure_Pa"] - 207.9e3) < 0.01 * 207.9e3
 PY
 
+# blast curves: CSV and a PNG plot
+"$spall" blast --tnt-kg 4 --distance-m 3 --curve "$dir/curve.csv" > /dev/null
+head -1 "$dir/curve.csv" | grep -q "time_s,overpressure_Pa" || fail "curve CSV header"
+"$spall" blast --tnt-kg 4 --distance-m 3 --curve "$dir/curve.png" > /dev/null
+$py -c "import sys; from PIL import Image; im = Image.open(sys.argv[1]); assert im.size == (900, 560)" "$dir/curve.png" 2>/dev/null \
+  || head -c 8 "$dir/curve.png" | od -c | grep -q "P   N   G" || fail "curve PNG"
+
+# glTF (embedded buffer): a unit cube through assimp
+$py - "$dir/cube.gltf" <<'PY'
+import base64, json, struct, sys
+v = [(0,0,0),(1,0,0),(1,1,0),(0,1,0),(0,0,1),(1,0,1),(1,1,1),(0,1,1)]
+f = [(0,3,2),(0,2,1),(4,5,6),(4,6,7),(0,1,5),(0,5,4),(1,2,6),(1,6,5),(2,3,7),(2,7,6),(3,0,4),(3,4,7)]
+data = b"".join(struct.pack("<3f", *p) for p in v) + b"".join(struct.pack("<3H", *t) for t in f)
+json.dump({"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "scene": 0, "nodes": [{"mesh": 0}],
+           "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+           "buffers": [{"byteLength": len(data), "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}],
+           "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 96}, {"buffer": 0, "byteOffset": 96, "byteLength": 72}],
+           "accessors": [{"bufferView": 0, "componentType": 5126, "count": 8, "type": "VEC3", "min": [0,0,0], "max": [1,1,1]},
+                         {"bufferView": 1, "componentType": 5123, "count": 36, "type": "SCALAR"}]}, open(sys.argv[1], "w"))
+PY
+"$spall" voxelise "$dir/cube.gltf" --voxel-size 0.08 -o "$dir/gltf.vdb" --quiet | grep -q "voxels: *2197" || fail "glTF cube"
+
 # run: a short scene, then every frame through vdb_print and pyopenvdb, the history through h5py
 cat > "$dir/scene.json" <<'JSON'
 {"voxel_size_m": 0.1, "duration_s": 0.25, "frame_rate_hz": 24, "seed": 5,
@@ -78,6 +100,14 @@ assert len(fragments) > 1, "the wall should have broken"
 p = h["frames/linear_momentum_kg_m_s"][:]
 assert np.all(np.isfinite(p))
 PY
+# inspect: text and JSON, a frame and a body; bad input named
+"$spall" inspect "$dir/out" | grep -q "7 frames" || fail "inspect summary"
+"$spall" inspect "$dir/out/history.h5" --json --frame 3 --body 0 | $py -c "import json,sys; j=json.load(sys.stdin); assert j['frame']['index']==3 and j['body']['id']==0"
+if "$spall" inspect "$dir/out" --frame 99 2> "$dir/err.txt"; then fail "inspect accepted a missing frame"; fi
+grep -q "frame 99 does not exist" "$dir/err.txt" || fail "inspect error: $(cat "$dir/err.txt")"
+if "$spall" inspect "$dir/cube.obj" 2> "$dir/err.txt"; then fail "inspect accepted a non-HDF5 file"; fi
+grep -q "not an HDF5 file" "$dir/err.txt" || fail "inspect error: $(cat "$dir/err.txt")"
+
 # the h5py example of docs/file-formats.md, as written there
 docs=$(dirname "$0")/../docs/file-formats.md
 sed -n '/^```python/,/^```/p' "$docs" | sed '1d;$d' | sed "s#out/history.h5#$dir/out/history.h5#" > "$dir/example.py"

@@ -269,3 +269,102 @@ void HistoryWriter::finish()
 }
 
 }  // namespace spall
+
+namespace spall {
+
+namespace {
+
+class Reader {
+public:
+    explicit Reader(const std::string& path) : mPath(path)
+    {
+        H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+        if (H5Fis_hdf5(path.c_str()) <= 0) throw IoError(path + ": not an HDF5 file (or missing)");
+        mFile = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+        if (mFile < 0) throw IoError(path + ": cannot open");
+    }
+    ~Reader()
+    {
+        if (mFile >= 0) H5Fclose(mFile);
+    }
+    template <typename T>
+    std::vector<T> read(const char* name, hid_t type, size_t cols = 1)
+    {
+        const hid_t d = H5Dopen2(mFile, name, H5P_DEFAULT);
+        if (d < 0) throw IoError(mPath + ": missing dataset " + name + " (not a spall history?)");
+        const hid_t space = H5Dget_space(d);
+        hsize_t dims[2] = {0, 1};
+        H5Sget_simple_extent_dims(space, dims, nullptr);
+        std::vector<T> out(dims[0] * cols);
+        if (!out.empty() && H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0) {
+            H5Sclose(space);
+            H5Dclose(d);
+            throw IoError(mPath + ": cannot read " + name);
+        }
+        H5Sclose(space);
+        H5Dclose(d);
+        return out;
+    }
+    std::vector<Eigen::Vector3d> readVec3(const char* name)
+    {
+        const std::vector<double> flat = read<double>(name, H5T_NATIVE_DOUBLE, 3);
+        std::vector<Eigen::Vector3d> out(flat.size() / 3);
+        for (size_t i = 0; i < out.size(); ++i) out[i] = Eigen::Vector3d(flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]);
+        return out;
+    }
+    template <typename T>
+    T attribute(const char* name, hid_t type)
+    {
+        T value{};
+        const hid_t a = H5Aopen(mFile, name, H5P_DEFAULT);
+        if (a < 0 || H5Aread(a, type, &value) < 0) throw IoError(mPath + ": missing attribute " + name + " (not a spall history?)");
+        H5Aclose(a);
+        return value;
+    }
+
+private:
+    std::string mPath;
+    hid_t mFile = -1;
+};
+
+}  // namespace
+
+History readHistory(const std::string& path)
+{
+    Reader r(path);
+    History h;
+    h.formatVersion = r.attribute<int>("format_version", H5T_NATIVE_INT);
+    h.runComplete = r.attribute<int>("run_complete", H5T_NATIVE_INT) != 0;
+    h.voxelSizeM = r.attribute<double>("voxel_size_m", H5T_NATIVE_DOUBLE);
+    h.seed = r.attribute<uint64_t>("seed", H5T_NATIVE_UINT64);
+    const hid_t d = H5T_NATIVE_DOUBLE, i64 = H5T_NATIVE_INT64, i8 = H5T_NATIVE_INT8;
+    h.timeS = r.read<double>("/frames/time_s", d);
+    h.kineticEnergyJ = r.read<double>("/frames/kinetic_energy_J", d);
+    h.minDtS = r.read<double>("/frames/min_dt_s", d);
+    h.dustMassKg = r.read<double>("/frames/dust_mass_kg", d);
+    h.bodyOffset = r.read<int64_t>("/frames/body_offset", i64);
+    h.brokenLinks = r.read<int64_t>("/frames/broken_links", i64);
+    h.steps = r.read<int64_t>("/frames/steps", i64);
+    h.bodyCount = r.read<int64_t>("/frames/body_count", i64);
+    h.voxelCount = r.read<int64_t>("/frames/voxel_count", i64);
+    h.linearMomentum = r.readVec3("/frames/linear_momentum_kg_m_s");
+    h.angularMomentum = r.readVec3("/frames/angular_momentum_kg_m2_s");
+    h.bodyId = r.read<int64_t>("/bodies/id", i64);
+    h.bodyParentId = r.read<int64_t>("/bodies/parent_id", i64);
+    h.bodyVoxelCount = r.read<int64_t>("/bodies/voxel_count", i64);
+    h.bodyMassKg = r.read<double>("/bodies/mass_kg", d);
+    h.bodyPositionM = r.readVec3("/bodies/position_m");
+    h.bodyLinearVelocityMS = r.readVec3("/bodies/linear_velocity_m_s");
+    h.bodyAsleep = r.read<int8_t>("/bodies/asleep", i8);
+    h.bodyAnchored = r.read<int8_t>("/bodies/anchored", i8);
+    h.eventTimeS = r.read<double>("/events/fracture/time_s", d);
+    h.eventParentId = r.read<int64_t>("/events/fracture/parent_id", i64);
+    h.eventChildOffset = r.read<int64_t>("/events/fracture/child_offset", i64);
+    // A run killed mid-frame may hold body rows past the last complete frame: keep what the
+    // frame rows describe.
+    const size_t frames = std::min(h.timeS.size(), h.bodyOffset.size() - 1);
+    h.timeS.resize(frames);
+    return h;
+}
+
+}  // namespace spall

@@ -88,3 +88,28 @@ private:
 };
 
 }  // namespace spall
+
+namespace spall {
+
+/// Whole-file reader for history.h5 (for `spall inspect` and tests). Throws IoError naming the
+/// file when it is missing, not HDF5, or not a spall history.
+struct History {
+    int formatVersion = 0;
+    bool runComplete = false;
+    double voxelSizeM = 0;
+    uint64_t seed = 0;
+    std::vector<double> timeS, kineticEnergyJ, minDtS, dustMassKg;
+    std::vector<int64_t> bodyOffset, brokenLinks, steps, bodyCount, voxelCount;
+    std::vector<Eigen::Vector3d> linearMomentum, angularMomentum;
+    std::vector<int64_t> bodyId, bodyParentId, bodyVoxelCount;
+    std::vector<double> bodyMassKg;
+    std::vector<Eigen::Vector3d> bodyPositionM, bodyLinearVelocityMS;
+    std::vector<int8_t> bodyAsleep, bodyAnchored;
+    std::vector<double> eventTimeS;
+    std::vector<int64_t> eventParentId, eventChildOffset;
+    size_t frameCount() const { return timeS.size(); }
+};
+
+History readHistory(const std::string& path);
+
+}  // namespace spall

@@ -1,0 +1,179 @@
+#include <spall/io/Png.h>
+
+#include <spall/core/Error.h>
+
+#include <png.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+
+namespace spall {
+
+namespace {
+
+/// 5x7 glyphs, one byte per row, bit 4 = leftmost pixel.
+const std::map<char, std::array<uint8_t, 7>>& font()
+{
+    static const std::map<char, std::array<uint8_t, 7>> glyphs = {
+        {'0', {14, 17, 19, 21, 25, 17, 14}}, {'1', {4, 12, 4, 4, 4, 4, 14}},    {'2', {14, 17, 1, 2, 4, 8, 31}},
+        {'3', {31, 2, 4, 2, 1, 17, 14}},     {'4', {2, 6, 10, 18, 31, 2, 2}},   {'5', {31, 16, 30, 1, 1, 17, 14}},
+        {'6', {6, 8, 16, 30, 17, 17, 14}},   {'7', {31, 1, 2, 4, 8, 8, 8}},     {'8', {14, 17, 17, 14, 17, 17, 14}},
+        {'9', {14, 17, 17, 15, 1, 2, 12}},   {'.', {0, 0, 0, 0, 0, 12, 12}},    {'-', {0, 0, 0, 31, 0, 0, 0}},
+        {'+', {0, 4, 4, 31, 4, 4, 0}},       {'(', {2, 4, 8, 8, 8, 4, 2}},      {')', {8, 4, 2, 2, 2, 4, 8}},
+        {'/', {1, 1, 2, 4, 8, 16, 16}},      {':', {0, 12, 12, 0, 12, 12, 0}},  {' ', {0, 0, 0, 0, 0, 0, 0}},
+        {'a', {0, 0, 14, 1, 15, 17, 15}},    {'b', {16, 16, 22, 25, 17, 17, 30}}, {'c', {0, 0, 14, 16, 16, 17, 14}},
+        {'d', {1, 1, 13, 19, 17, 17, 15}},   {'e', {0, 0, 14, 17, 31, 16, 14}}, {'f', {6, 9, 8, 28, 8, 8, 8}},
+        {'g', {0, 15, 17, 17, 15, 1, 14}},   {'h', {16, 16, 22, 25, 17, 17, 17}}, {'i', {4, 0, 12, 4, 4, 4, 14}},
+        {'k', {16, 16, 18, 20, 24, 20, 18}}, {'l', {12, 4, 4, 4, 4, 4, 14}},    {'m', {0, 0, 26, 21, 21, 17, 17}},
+        {'n', {0, 0, 22, 25, 17, 17, 17}},   {'o', {0, 0, 14, 17, 17, 17, 14}}, {'p', {0, 0, 30, 17, 30, 16, 16}},
+        {'r', {0, 0, 22, 25, 16, 16, 16}},   {'s', {0, 0, 14, 16, 14, 1, 30}},  {'t', {8, 8, 28, 8, 8, 9, 6}},
+        {'u', {0, 0, 17, 17, 17, 19, 13}},   {'v', {0, 0, 17, 17, 17, 10, 4}},  {'w', {0, 0, 17, 17, 21, 21, 10}},
+        {'x', {0, 0, 17, 10, 4, 10, 17}},    {'y', {0, 0, 17, 17, 15, 1, 14}},  {'z', {0, 0, 31, 2, 4, 8, 31}},
+        {'A', {14, 17, 17, 31, 17, 17, 17}}, {'B', {30, 17, 17, 30, 17, 17, 30}}, {'F', {31, 16, 16, 30, 16, 16, 16}},
+        {'G', {14, 17, 16, 23, 17, 17, 15}}, {'K', {17, 18, 20, 24, 20, 18, 17}}, {'P', {30, 17, 17, 30, 16, 16, 16}},
+        {'T', {31, 4, 4, 4, 4, 4, 4}},       {'W', {17, 17, 17, 21, 21, 21, 10}}, {'N', {17, 25, 21, 19, 17, 17, 17}},
+        {'R', {30, 17, 17, 30, 20, 18, 17}}, {'Z', {31, 1, 2, 4, 8, 16, 31}},
+    };
+    return glyphs;
+}
+
+std::string formatTick(double v)
+{
+    char buf[32];
+    if (v == 0) return "0";
+    const double a = std::abs(v);
+    if (a >= 1e4 || a < 1e-2)
+        std::snprintf(buf, sizeof buf, "%.1e", v);
+    else if (a >= 100)
+        std::snprintf(buf, sizeof buf, "%.0f", v);
+    else
+        std::snprintf(buf, sizeof buf, "%.3g", v);
+    return buf;
+}
+
+/// "Nice" tick step near range/target (1, 2 or 5 times a power of ten).
+double tickStep(double range, int target)
+{
+    const double raw = range / target;
+    const double p = std::pow(10.0, std::floor(std::log10(raw)));
+    for (double m : {1.0, 2.0, 5.0, 10.0})
+        if (m * p >= raw) return m * p;
+    return 10 * p;
+}
+
+}  // namespace
+
+Image::Image(int width, int height, Rgb background)
+    : mWidth(width), mHeight(height), mPixels(size_t(width) * size_t(height), background)
+{
+}
+
+void Image::line(double x0, double y0, double x1, double y1, Rgb c, int thickness)
+{
+    const int steps = static_cast<int>(std::ceil(std::max(std::abs(x1 - x0), std::abs(y1 - y0)))) + 1;
+    for (int i = 0; i <= steps; ++i) {
+        const double t = double(i) / steps;
+        const int x = static_cast<int>(std::lround(x0 + t * (x1 - x0)));
+        const int y = static_cast<int>(std::lround(y0 + t * (y1 - y0)));
+        for (int dy = 0; dy < thickness; ++dy)
+            for (int dx = 0; dx < thickness; ++dx) set(x + dx - thickness / 2, y + dy - thickness / 2, c);
+    }
+}
+
+void Image::fillRect(int x0, int y0, int x1, int y1, Rgb c)
+{
+    for (int y = std::max(0, y0); y < std::min(mHeight, y1); ++y)
+        for (int x = std::max(0, x0); x < std::min(mWidth, x1); ++x) mPixels[size_t(y) * mWidth + x] = c;
+}
+
+void Image::text(int x, int y, const std::string& s, Rgb c, int scale)
+{
+    const auto& glyphs = font();
+    for (size_t i = 0; i < s.size(); ++i) {
+        auto it = glyphs.find(s[i]);
+        if (it == glyphs.end()) continue;
+        for (int row = 0; row < 7; ++row)
+            for (int col = 0; col < 5; ++col)
+                if (it->second[row] & (16 >> col))
+                    fillRect(x + (int(i) * 6 + col) * scale, y + row * scale, x + (int(i) * 6 + col + 1) * scale, y + (row + 1) * scale, c);
+    }
+}
+
+void writePng(const std::string& path, const Image& image)
+{
+    const std::string temporary = path + ".partial";
+    FILE* file = std::fopen(temporary.c_str(), "wb");
+    if (!file) throw IoError(path + ": cannot write");
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+    png_infop info = png ? png_create_info_struct(png) : nullptr;
+    if (!png || !info || setjmp(png_jmpbuf(png))) {
+        png_destroy_write_struct(&png, &info);
+        std::fclose(file);
+        std::filesystem::remove(temporary);
+        throw IoError(path + ": PNG encoding failed");
+    }
+    png_init_io(png, file);
+    png_set_IHDR(png, info, image.width(), image.height(), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+                 PNG_FILTER_TYPE_DEFAULT);
+    png_write_info(png, info);
+    std::vector<uint8_t> row(size_t(image.width()) * 3);
+    for (int y = 0; y < image.height(); ++y) {
+        for (int x = 0; x < image.width(); ++x) {
+            const Rgb c = image.get(x, y);
+            row[3 * x] = c.r;
+            row[3 * x + 1] = c.g;
+            row[3 * x + 2] = c.b;
+        }
+        png_write_row(png, row.data());
+    }
+    png_write_end(png, nullptr);
+    png_destroy_write_struct(&png, &info);
+    const bool ok = std::fclose(file) == 0;
+    std::error_code ec;
+    if (ok) std::filesystem::rename(temporary, path, ec);
+    if (!ok || ec) {
+        std::filesystem::remove(temporary, ec);
+        throw IoError(path + ": cannot finish writing the PNG");
+    }
+}
+
+Image plotCurve(const std::vector<double>& x, const std::vector<double>& y, const std::string& xLabel, const std::string& yLabel,
+                const std::string& title, int width, int height)
+{
+    Image img(width, height);
+    const int left = 110, right = width - 30, top = 50, bottom = height - 70;
+    double x0 = *std::min_element(x.begin(), x.end()), x1 = *std::max_element(x.begin(), x.end());
+    double y0 = *std::min_element(y.begin(), y.end()), y1 = *std::max_element(y.begin(), y.end());
+    if (x1 <= x0) x1 = x0 + 1;
+    const double pad = 0.05 * (y1 - y0 > 0 ? y1 - y0 : 1);
+    y0 -= pad;
+    y1 += pad;
+    auto px = [&](double v) { return left + (v - x0) / (x1 - x0) * (right - left); };
+    auto py = [&](double v) { return bottom - (v - y0) / (y1 - y0) * (bottom - top); };
+    const Rgb grid{225, 225, 225}, axis{60, 60, 60}, curve{30, 90, 200};
+    const double xs = tickStep(x1 - x0, 8), ys = tickStep(y1 - y0, 6);
+    for (double v = std::ceil(x0 / xs) * xs; v <= x1 + 1e-12 * xs; v += xs) {
+        img.line(px(v), top, px(v), bottom, grid);
+        const std::string s = formatTick(v);
+        img.text(int(px(v)) - Image::textWidth(s) / 2, bottom + 10, s, axis);
+    }
+    for (double v = std::ceil(y0 / ys) * ys; v <= y1 + 1e-12 * ys; v += ys) {
+        img.line(left, py(v), right, py(v), grid);
+        const std::string s = formatTick(v);
+        img.text(left - 10 - Image::textWidth(s), int(py(v)) - 7, s, axis);
+    }
+    if (y0 < 0 && y1 > 0) img.line(left, py(0), right, py(0), axis);
+    img.line(left, top, left, bottom, axis);
+    img.line(left, bottom, right, bottom, axis);
+    for (size_t i = 1; i < x.size(); ++i) img.line(px(x[i - 1]), py(y[i - 1]), px(x[i]), py(y[i]), curve, 2);
+    img.text((left + right - Image::textWidth(xLabel)) / 2, height - 35, xLabel, axis);
+    img.text(10, 15, yLabel, axis);
+    img.text((left + right - Image::textWidth(title)) / 2, 15, title, axis);
+    return img;
+}
+
+}  // namespace spall
