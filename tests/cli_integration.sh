@@ -104,6 +104,12 @@ assert len(fragments) > 1, "the wall should have broken"
 p = h["frames/linear_momentum_kg_m_s"][:]
 assert np.all(np.isfinite(p))
 PY
+# an output directory that cannot be created: a clear error naming it
+if "$spall" run "$dir/scene.json" -o "$dir/cube.obj/out" --quiet > /dev/null 2> "$dir/err.txt"; then fail "unwritable output accepted"; fi
+grep -q "cube.obj/out" "$dir/err.txt" || fail "error does not name the output directory: $(cat "$dir/err.txt")"
+if "$spall" run "$dir/missing-scene.json" -o "$dir/x" --quiet > /dev/null 2> "$dir/err.txt"; then fail "missing scene accepted"; fi
+grep -q "missing-scene.json" "$dir/err.txt" || fail "error does not name the scene: $(cat "$dir/err.txt")"
+
 # inspect: text and JSON, a frame and a body; bad input named
 "$spall" inspect "$dir/out" | grep -q "7 frames" || fail "inspect summary"
 "$spall" inspect "$dir/out/history.h5" --json --frame 3 --body 0 | $py -c "import json,sys; j=json.load(sys.stdin); assert j['frame']['index']==3 and j['body']['id']==0"

@@ -305,10 +305,10 @@ double solveDecayCoefficient(double impulseFraction)
     return 0.5 * (lo + hi);
 }
 
-ScaledBlast scaledBlastDirect(BlastDataset dataset, BurstType burst, double z)
+BlastParameters scaledBlastDirect(BlastDataset dataset, BurstType burst, double z)
 {
     const ZRange range = fittedRange(dataset, burst);
-    ScaledBlast out;
+    BlastParameters out;
     CoreValues v;
     if (z < range.lo) {
         // Inside the fireball region the fits do not apply: hold their near-end values.
@@ -334,6 +334,7 @@ ScaledBlast scaledBlastDirect(BlastDataset dataset, BurstType burst, double z)
     } else {
         v = coreValues(dataset, burst, z);
     }
+    out.scaledDistanceMKg13 = z;
     out.peakOverpressurePa = v.ps;
     out.arrivalTimeS = v.ta;
     out.positiveDurationS = v.td;
@@ -368,7 +369,7 @@ BlastParameters blastParameters(BlastDataset dataset, BurstType burst, double tn
     const double z = distanceM * std::cbrt(pRatio) / w13;
     const double timeScale = w13 / std::cbrt(pRatio) * std::sqrt(tRatio);
     const double impulseScale = w13 * std::cbrt(pRatio * pRatio) * std::sqrt(tRatio);
-    const ScaledBlast s = scaledBlastDirect(dataset, burst, z);
+    const BlastParameters s = scaledBlastDirect(dataset, burst, z);
 
     BlastParameters p;
     p.scaledDistanceMKg13 = z;
@@ -432,7 +433,7 @@ BlastTable::BlastTable(BlastDataset dataset, BurstType burst, int nodesPerDecade
     mNodes.resize(count);
     double runningEnd = 0.0;
     for (size_t i = 0; i < count; ++i) {
-        const ScaledBlast s = scaledBlastDirect(dataset, burst, scaledDistanceOfNode(double(i)));
+        const BlastParameters s = scaledBlastDirect(dataset, burst, scaledDistanceOfNode(double(i)));
         runningEnd = std::max(runningEnd, s.arrivalTimeS + s.positiveDurationS + s.negativeDurationS);
         mNodes[i] = {s.arrivalTimeS, s.positiveDurationS, s.peakOverpressurePa, s.decayCoefficient, s.negativePeakPa, runningEnd};
     }

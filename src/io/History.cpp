@@ -196,8 +196,8 @@ HistoryWriter::~HistoryWriter()
     if (mImpl) mImpl->close();
 }
 
-void HistoryWriter::appendFrame(const FrameRow& f, const std::vector<BodyRow>& bodies, const std::vector<FractureEventRow>& events,
-                                const std::vector<DustRow>& dust)
+void HistoryWriter::appendFrame(const FrameRow& f, const std::vector<BodyRow>& bodies, const std::vector<FractureEvent>& events,
+                                const std::vector<DustRecord>& dust)
 {
     Impl& m = *mImpl;
     const size_t n = bodies.size();
@@ -230,14 +230,14 @@ void HistoryWriter::appendFrame(const FrameRow& f, const std::vector<BodyRow>& b
     m.asleep.append(asleep.data(), n);
     m.anchored.append(anchored.data(), n);
 
-    for (const FractureEventRow& e : events) {
+    for (const FractureEvent& e : events) {
         m.eventTime.append(&e.timeS, 1);
         m.eventParent.append(&e.parentId, 1);
         m.eventChild.append(e.childIds.data(), e.childIds.size());
         m.childRows += static_cast<int64_t>(e.childIds.size());
         m.eventChildOffset.append(&m.childRows, 1);
     }
-    for (const DustRow& d : dust) {
+    for (const DustRecord& d : dust) {
         m.dustTime.append(&d.timeS, 1);
         m.dustParent.append(&d.parentId, 1);
         m.dustVoxels.append(&d.voxelCount, 1);

@@ -83,18 +83,12 @@ RunReport runScene(const Scene& scene, const RunOptions& options, const std::fun
                                 Eigen::Vector4d(b.orientation.w(), b.orientation.x(), b.orientation.y(), b.orientation.z()),
                                 b.linearVelocityMS, b.angularVelocityRadS, b.mass.massKg, b.mass.voxelCount, b.asleep, b.anchored});
             }
-            std::vector<FractureEventRow> events;
-            for (; eventsWritten < sim.fractureEvents().size(); ++eventsWritten) {
-                const FractureEvent& e = sim.fractureEvents()[eventsWritten];
-                events.push_back({e.timeS, e.parentId, e.childIds});
-            }
-            std::vector<DustRow> dust;
-            for (; dustWritten < sim.dust().size(); ++dustWritten) {
-                const DustRecord& d = sim.dust()[dustWritten];
-                dust.push_back({d.timeS, d.parentId, d.voxelCount, d.massKg, d.linearMomentum});
-            }
-            for (const DustRecord& d : sim.dust()) row.dustMassKg += d.massKg;
-            history->appendFrame(row, rows, events, dust);
+            const auto& events = sim.fractureEvents();
+            const auto& dust = sim.dust();
+            for (const DustRecord& d : dust) row.dustMassKg += d.massKg;
+            history->appendFrame(row, rows, {events.begin() + eventsWritten, events.end()}, {dust.begin() + dustWritten, dust.end()});
+            eventsWritten = events.size();
+            dustWritten = dust.size();
         }
         report.framesWritten = f + 1;
         RunProgress progress{f, frameCount, t, sim.bodies().size(), report.totalSteps,

@@ -31,9 +31,10 @@ struct Atmosphere {
 /// Where a scaled distance lies relative to the dataset's fitted range.
 enum class RangeStatus { Inside, ClampedNear, ExtrapolatedFar };
 
-/// Blast quantities of a 1 kg sea-level charge at scaled distance Z (Hopkinson–Cranz units:
-/// times in s/kg^(1/3), impulse in Pa s/kg^(1/3)).
-struct ScaledBlast {
+/// Every blast parameter at one point, in SI units. From scaledBlastDirect they are those of a
+/// 1 kg sea-level charge (Hopkinson–Cranz units: times in s/kg^(1/3), impulse in Pa s/kg^(1/3)).
+struct BlastParameters {
+    double scaledDistanceMKg13 = 0;
     double peakOverpressurePa = 0;
     double arrivalTimeS = 0;
     double positiveDurationS = 0;
@@ -49,24 +50,10 @@ struct ScaledBlast {
 /// Direct evaluation of the dataset's fits (polynomials or closed forms) at scaled distance Z
 /// (unit: m/kg^(1/3)). Below the fitted range values are held at its near end; beyond it they
 /// are extrapolated (power laws for Ps and Is, sound speed for ta); `status` says which.
-ScaledBlast scaledBlastDirect(BlastDataset dataset, BurstType burst, double scaledDistance);
+BlastParameters scaledBlastDirect(BlastDataset dataset, BurstType burst, double scaledDistance);
 
-/// Every parameter, in SI units, of a charge of `tntKg` at `distanceM` (Sachs-scaled).
-struct BlastParameters {
-    double scaledDistanceMKg13 = 0;
-    double peakOverpressurePa = 0;
-    double arrivalTimeS = 0;
-    double positiveDurationS = 0;
-    double positiveImpulsePaS = 0;
-    double decayCoefficient = 0;
-    double negativePeakPa = 0;
-    double negativeDurationS = 0;
-    double reflectedPressurePa = 0;
-    double shockSpeedMS = 0;
-    RangeStatus status = RangeStatus::Inside;
-};
-
-/// Validates inputs (throws InputError naming the field) and evaluates the direct fits.
+/// Every parameter of a charge of `tntKg` at `distanceM` (Sachs-scaled). Validates inputs
+/// (throws InputError naming the field) and evaluates the direct fits.
 BlastParameters blastParameters(BlastDataset dataset, BurstType burst, double tntKg, double distanceM,
                                 const Atmosphere& atmosphere = {});
 

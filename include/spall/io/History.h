@@ -3,6 +3,8 @@
 // interrupted keeps every frame written so far readable. Layout: docs/file-formats.md.
 #pragma once
 
+#include <spall/fracture/Events.h>
+
 #include <Eigen/Core>
 
 #include <cstdint>
@@ -40,20 +42,6 @@ struct BodyRow {
     bool anchored = false;
 };
 
-struct FractureEventRow {
-    double timeS = 0;
-    int64_t parentId = -1;
-    std::vector<int64_t> childIds;
-};
-
-struct DustRow {
-    double timeS = 0;
-    int64_t parentId = -1;
-    int64_t voxelCount = 0;
-    double massKg = 0;
-    Eigen::Vector3d linearMomentum = Eigen::Vector3d::Zero();
-};
-
 struct ChargeRow {
     Eigen::Vector3d positionM;
     double tntKg;
@@ -77,8 +65,8 @@ public:
     HistoryWriter& operator=(const HistoryWriter&) = delete;
 
     /// Appends one frame with its bodies and the events and dust since the last frame; flushes.
-    void appendFrame(const FrameRow& frame, const std::vector<BodyRow>& bodies, const std::vector<FractureEventRow>& events,
-                     const std::vector<DustRow>& dust);
+    void appendFrame(const FrameRow& frame, const std::vector<BodyRow>& bodies, const std::vector<FractureEvent>& events,
+                     const std::vector<DustRecord>& dust);
     /// Marks the run complete (root attribute run_complete = 1) and closes the file.
     void finish();
 

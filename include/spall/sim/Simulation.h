@@ -4,6 +4,7 @@
 
 #include <spall/blast/Blast.h>
 #include <spall/dynamics/Dynamics.h>
+#include <spall/fracture/Events.h>
 #include <spall/fracture/Fracture.h>
 #include <spall/io/Scene.h>
 #include <spall/voxel/Body.h>
@@ -13,22 +14,6 @@
 #include <vector>
 
 namespace spall {
-
-struct FractureEvent {
-    double timeS = 0;
-    int64_t parentId = -1;
-    std::vector<int64_t> childIds;
-};
-
-/// A piece removed as dust (smaller than the minimum fragment size), with what it carried.
-struct DustRecord {
-    double timeS = 0;
-    int64_t parentId = -1;
-    int64_t voxelCount = 0;
-    double massKg = 0;
-    Eigen::Vector3d linearMomentum = Eigen::Vector3d::Zero();
-    Eigen::Vector3d angularMomentumAboutOrigin = Eigen::Vector3d::Zero();
-};
 
 /// Totals since the last call to takeStepStats().
 struct StepStats {
