@@ -110,6 +110,47 @@ grep -q "cube.obj/out" "$dir/err.txt" || fail "error does not name the output di
 if "$spall" run "$dir/missing-scene.json" -o "$dir/x" --quiet > /dev/null 2> "$dir/err.txt"; then fail "missing scene accepted"; fi
 grep -q "missing-scene.json" "$dir/err.txt" || fail "error does not name the scene: $(cat "$dir/err.txt")"
 
+# render: a frame, a contact sheet, the run's own preview; bad input named
+[[ -s "$dir/out/preview.png" ]] || fail "spall run wrote no preview.png"
+"$spall" render "$dir/out" --frame 2 -o "$dir/pics" --size 320x180 > /dev/null
+"$spall" render "$dir/out" --sheet -o "$dir/pics" --size 320x180 > /dev/null
+for png in "$dir/pics/frame.0002.png" "$dir/pics/sheet.png"; do
+  head -c 8 "$png" | od -c | grep -q "P   N   G" || fail "$png is not a PNG"
+done
+$py - "$dir/pics/frame.0002.png" <<'PY' || fail "the rendered frame shows no fragment colours"
+import sys, zlib, struct
+data = open(sys.argv[1], "rb").read()
+# Decode the PNG (8-bit RGB, filter per row) and look for saturated fragment colours.
+pos, idat, w, h = 8, b"", 0, 0
+while pos < len(data):
+    n, kind = struct.unpack(">I4s", data[pos:pos + 8]); chunk = data[pos + 8:pos + 8 + n]; pos += 12 + n
+    if kind == b"IHDR": w, h = struct.unpack(">II", chunk[:8])
+    if kind == b"IDAT": idat += chunk
+raw, stride, prev, coloured = zlib.decompress(idat), w * 3, bytearray(w * 3), 0
+for y in range(h):
+    f, row = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+    for i in range(stride):
+        a = row[i - 3] if i >= 3 else 0; b = prev[i]; c = prev[i - 3] if i >= 3 else 0
+        if f == 1: row[i] = (row[i] + a) & 255
+        elif f == 2: row[i] = (row[i] + b) & 255
+        elif f == 3: row[i] = (row[i] + (a + b) // 2) & 255
+        elif f == 4:
+            p = a + b - c; pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+            row[i] = (row[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+    coloured += sum(1 for x in range(w) if max(row[3*x:3*x+3]) - min(row[3*x:3*x+3]) > 60)
+    prev = row
+assert coloured > 50, coloured
+PY
+if "$spall" render "$dir/nowhere" 2> "$dir/err.txt"; then fail "render accepted a missing directory"; fi
+grep -q "nowhere" "$dir/err.txt" || fail "render error: $(cat "$dir/err.txt")"
+mkdir -p "$dir/empty"
+if "$spall" render "$dir/empty" 2> "$dir/err.txt"; then fail "render accepted an empty directory"; fi
+if "$spall" render "$dir/out" --frame 999 2> "$dir/err.txt"; then fail "render accepted a missing frame"; fi
+grep -q "frame 999 does not exist" "$dir/err.txt" || fail "render error: $(cat "$dir/err.txt")"
+mkdir -p "$dir/corrupt" && echo "garbage" > "$dir/corrupt/fragments.0000.vdb"
+if "$spall" render "$dir/corrupt" 2> "$dir/err.txt"; then fail "render accepted a corrupt frame"; fi
+grep -q "fragments.0000.vdb" "$dir/err.txt" || fail "render error: $(cat "$dir/err.txt")"
+
 # inspect: text and JSON, a frame and a body; bad input named
 "$spall" inspect "$dir/out" | grep -q "7 frames" || fail "inspect summary"
 "$spall" inspect "$dir/out/history.h5" --json --frame 3 --body 0 | $py -c "import json,sys; j=json.load(sys.stdin); assert j['frame']['index']==3 and j['body']['id']==0"

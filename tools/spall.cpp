@@ -5,6 +5,7 @@
 #include <spall/io/Png.h>
 #include <spall/io/Scene.h>
 #include <spall/io/VdbIo.h>
+#include <spall/render/Render.h>
 #include <spall/sim/Run.h>
 #include <spall/voxel/Voxelise.h>
 
@@ -288,11 +289,60 @@ int runInspect(const std::string& path, bool json, int frameArg, int64_t bodyArg
     return 0;
 }
 
+spall::RenderSettings parseSize(const std::string& size)
+{
+    spall::RenderSettings s;
+    int w = 0, h = 0;
+    char x = 0;
+    std::stringstream ss(size);
+    if (!(ss >> w >> x >> h) || x != 'x' || w < 16 || h < 16 || w > 16384 || h > 16384)
+        throw spall::InputError("--size '" + size + "' is not WIDTHxHEIGHT (16..16384 pixels each)");
+    s.width = w;
+    s.height = h;
+    return s;
+}
+
+int runRender(const std::string& outDir, int frame, bool all, bool sheet, std::string pictureDir, const std::string& size)
+{
+    const spall::RenderSettings settings = parseSize(size);
+    const std::vector<std::string> paths = spall::listFramePaths(outDir);
+    if (pictureDir.empty()) pictureDir = outDir;
+    std::filesystem::create_directories(pictureDir);
+    if (sheet) {
+        const std::string path = (std::filesystem::path(pictureDir) / "sheet.png").string();
+        const int n = spall::writeContactSheet(outDir, path, 9, settings);
+        std::printf("contact sheet of %d frames: %s\n", n, path.c_str());
+        return 0;
+    }
+    std::vector<std::string> selected;
+    if (all) {
+        selected = paths;
+    } else if (frame >= 0) {
+        const std::string path = spall::FrameWriter::framePath(outDir, frame);
+        if (std::find(paths.begin(), paths.end(), path) == paths.end())
+            throw spall::InputError(path + ": frame " + std::to_string(frame) + " does not exist (" + std::to_string(paths.size()) + " frames)");
+        selected = {path};
+    } else {
+        selected = {paths.back()};
+    }
+    const spall::FrameGrids first = spall::readFrame(paths.front()), last = spall::readFrame(paths.back());
+    const spall::Camera camera = spall::frameCamera({spall::fragmentsOf(first), spall::fragmentsOf(last)}, settings);
+    for (const std::string& path : selected) {
+        const spall::FrameGrids f = spall::readFrame(path);
+        char name[32];
+        std::snprintf(name, sizeof name, "frame.%04d.png", f.frame);
+        const std::string out = (std::filesystem::path(pictureDir) / name).string();
+        spall::writePng(out, spall::renderFragments(spall::fragmentsOf(f), camera, settings));
+        std::printf("%s\n", out.c_str());
+    }
+    return 0;
+}
+
 std::atomic<bool> gStopRequested{false};
 
 extern "C" void requestStop(int) { gStopRequested = true; }
 
-int runRun(const std::string& scenePath, const std::string& outDir, int threads, int64_t seed, int frames, bool quiet)
+int runRun(const std::string& scenePath, const std::string& outDir, int threads, int64_t seed, int frames, bool quiet, bool preview)
 {
     spall::Scene scene = scenePath.empty() ? spall::parseScene(spall::defaultSceneJson(), "<built-in default scene>", ".")
                                            : spall::loadScene(scenePath);
@@ -309,6 +359,7 @@ int runRun(const std::string& scenePath, const std::string& outDir, int threads,
     spall::RunOptions options;
     options.outputDirectory = outDir;
     options.maxFrames = frames;
+    if (preview) options.previewPath = (std::filesystem::path(outDir) / "preview.png").string();
     if (!quiet) std::fprintf(stderr, "spall run: %s -> %s\n", scene.sourceName.c_str(), outDir.c_str());
     const spall::RunReport report = spall::runScene(scene, options, [&](const spall::RunProgress& p) {
         if (!quiet) {
@@ -335,6 +386,7 @@ int runRun(const std::string& scenePath, const std::string& outDir, int threads,
         std::fprintf(stderr, "spall run: interrupted after %d frames; they are complete and readable\n", report.framesWritten);
         return 130;
     }
+    if (preview) std::printf("preview: %s\n", options.previewPath.c_str());
     return 0;
 }
 
@@ -376,13 +428,26 @@ int main(int argc, char** argv)
     std::string runScenePath, runOut = "out";
     int runThreads = 0, runFrames = -1;
     int64_t runSeed = -1;
-    bool runQuiet = false;
+    bool runQuiet = false, runNoPreview = false;
     run->add_option("scene", runScenePath, "Scene JSON (docs/scene-format.md); omit for the built-in default");
     run->add_option("-o,--output", runOut, "Output directory");
     run->add_option("--threads", runThreads, "Worker threads (0: all cores); output does not depend on it")->check(CLI::NonNegativeNumber);
     run->add_option("--seed", runSeed, "Override the scene's seed")->check(CLI::NonNegativeNumber);
     run->add_option("--frames", runFrames, "Stop after this many frames")->check(CLI::NonNegativeNumber);
     run->add_flag("--quiet", runQuiet, "No progress bar");
+    run->add_flag("--no-preview", runNoPreview, "Do not render OUTDIR/preview.png");
+
+    // render
+    auto* render = app.add_subcommand("render", "Render preview pictures (PNG) of a run's frames");
+    std::string renderDir, renderOut, renderSize = "960x540";
+    int renderFrame = -1;
+    bool renderAll = false, renderSheet = false;
+    render->add_option("outdir", renderDir, "A spall run's output directory")->required();
+    render->add_option("--frame", renderFrame, "Frame number (default: the last)");
+    render->add_flag("--all", renderAll, "Every frame");
+    render->add_flag("--sheet", renderSheet, "A contact sheet of nine frames across the run");
+    render->add_option("-o,--output", renderOut, "Where the pictures go (default: the output directory)");
+    render->add_option("--size", renderSize, "WIDTHxHEIGHT in pixels");
 
     // inspect
     auto* inspect = app.add_subcommand("inspect", "Summarise a run's history.h5");
@@ -406,12 +471,13 @@ int main(int argc, char** argv)
                 throw spall::InputError("give either a mesh file or --primitive, not both or neither");
             return runVoxelise(voxInput, voxPrimitive, voxOutput, voxSize, voxMax, voxQuiet);
         }
+        if (*render) return runRender(renderDir, renderFrame, renderAll, renderSheet, renderOut, renderSize);
         if (*inspect) {
             std::string path = inspectPath;
             if (std::filesystem::is_directory(path)) path = (std::filesystem::path(path) / "history.h5").string();
             return runInspect(path, inspectJson, inspectFrame, inspectBody);
         }
-        if (*run) return runRun(runScenePath, runOut, runThreads, runSeed, runFrames, runQuiet);
+        if (*run) return runRun(runScenePath, runOut, runThreads, runSeed, runFrames, runQuiet, !runNoPreview);
         if (*blast) return runBlast(tnt, dist, burst, dataset, blastJson, curve);
     } catch (const spall::InputError& e) {
         std::cerr << "spall: error: " << e.what() << "\n";

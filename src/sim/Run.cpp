@@ -2,8 +2,10 @@
 
 #include <spall/io/History.h>
 #include <spall/io/VdbIo.h>
+#include <spall/render/Render.h>
 #include <spall/sim/Simulation.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -59,6 +61,15 @@ RunReport runScene(const Scene& scene, const RunOptions& options, const std::fun
 
     RunReport report;
     size_t eventsWritten = 0, dustWritten = 0;
+    // Preview: the bodies of a few frames spread over the run. Copies share the grids, whose
+    // active voxels never change once a body exists.
+    std::vector<int> previewFrames;
+    std::vector<std::vector<Body>> previewBodies;
+    std::vector<double> previewTimes;
+    if (!options.previewPath.empty() && options.previewFrames > 0) {
+        const int n = std::min(options.previewFrames, frameCount);
+        for (int i = 0; i < n; ++i) previewFrames.push_back(n == 1 ? frameCount - 1 : int(std::lround(double(i) * (frameCount - 1) / (n - 1))));
+    }
     for (int f = 0; f < frameCount; ++f) {
         const double t = f / scene.frameRateHz;
         sim.advanceTo(t);
@@ -90,12 +101,23 @@ RunReport runScene(const Scene& scene, const RunOptions& options, const std::fun
             eventsWritten = events.size();
             dustWritten = dust.size();
         }
+        if (std::find(previewFrames.begin(), previewFrames.end(), f) != previewFrames.end()) {
+            previewBodies.push_back(sim.bodies());
+            previewTimes.push_back(t);
+        }
         report.framesWritten = f + 1;
         RunProgress progress{f, frameCount, t, sim.bodies().size(), report.totalSteps,
                              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};
         if (onFrame && !onFrame(progress) && f + 1 < frameCount) break;
     }
     report.complete = report.framesWritten == frameCount;
+    if (!previewBodies.empty()) {
+        RenderSettings settings{640, 360, scene.world.ground.offsetM};
+        const Camera camera = frameCamera({fragmentsOf(previewBodies.front()), fragmentsOf(previewBodies.back())}, settings);
+        std::vector<Image> images;
+        for (const auto& bodies : previewBodies) images.push_back(renderFragments(fragmentsOf(bodies), camera, settings));
+        writePng(options.previewPath, contactSheet(images, previewTimes, images.size() <= 4 ? int(images.size()) : 3));
+    }
     if (history && report.complete) history->finish();
     report.finalBodies = sim.bodies().size();
     report.fractureEvents = static_cast<int64_t>(sim.fractureEvents().size());

@@ -12,6 +12,10 @@ namespace spall {
 struct RunOptions {
     std::string outputDirectory = "out";
     int maxFrames = -1;  ///< stop after this many frames (-1: the scene's duration)
+    /// When set, a contact sheet of `previewFrames` frames spread over the run is rendered here
+    /// from the bodies in memory (no frame files are read back).
+    std::string previewPath;
+    int previewFrames = 6;
 };
 
 /// What the progress callback sees after each frame.
