@@ -178,50 +178,92 @@ void integrateBody(Body& body, double t, double dt, Integrator integrator, const
     body.angularVelocityRadS = angularVelocity(body, s.q, s.l);
 }
 
-int resolveGroundContacts(Body& body, const GroundPlane& ground, double dt, double gravityMagnitude)
+namespace {
+
+struct Contact {
+    Eigen::Vector3d arm;     ///< contact point relative to the centre of mass
+    Eigen::Vector3d normal;  ///< out of the collider
+    double depth;
+    int collider;            ///< -1: the ground; else the box index
+    double restitution, friction;
+    double normalImpulse = 0;
+};
+
+/// Corners of the body's boundary voxels inside the ground or a static box.
+std::vector<Contact> findStaticContacts(const Body& body, const WorldSettings& world)
 {
-    if (!ground.enabled || body.anchored) return 0;
-    const Eigen::Vector3d& n = ground.normal;
-    if (n.dot(body.positionM) - ground.offsetM > body.boundingRadiusM) return 0;
+    std::vector<Contact> contacts;
     const Eigen::Matrix3d rot = body.orientation.toRotationMatrix();
     const double h = body.voxelSizeM;
-    // Half extent of a voxel cube along n.
-    const double support = 0.5 * h * (std::abs(n.dot(rot.col(0))) + std::abs(n.dot(rot.col(1))) + std::abs(n.dot(rot.col(2))));
+    const double voxelRadius = 0.5 * std::sqrt(3.0) * h;
+    const GroundPlane& ground = world.ground;
+    const bool nearGround = ground.enabled && ground.normal.dot(body.positionM) - ground.offsetM <= body.boundingRadiusM;
+    std::vector<int> nearBoxes;
+    for (size_t b = 0; b < world.colliders.size(); ++b) {
+        const StaticBox& box = world.colliders[b];
+        const Eigen::Vector3d local = box.orientation.inverse() * (body.positionM - box.centreM);
+        const Eigen::Vector3d outside = (local.cwiseAbs() - box.halfExtentM).cwiseMax(0.0);
+        if (outside.norm() <= body.boundingRadiusM) nearBoxes.push_back(static_cast<int>(b));
+    }
+    if (!nearGround && nearBoxes.empty()) return contacts;
 
-    struct Contact {
-        Eigen::Vector3d arm;  ///< contact point relative to the centre of mass
-        double depth;
-        double normalImpulse = 0, tangentImpulse = 0;
-        Eigen::Vector3d tangent = Eigen::Vector3d::Zero();
-    };
-    std::vector<Contact> contacts;
-    // Contacts at the corners of boundary voxels that are below the plane: a face resting on the
-    // ground gets four points, so resting bodies do not pivot about a single point.
     const openvdb::Coord* last = nullptr;
     for (const ExposedFace& f : body.exposedFaces) {
         if (last && *last == f.voxel) continue;
         last = &f.voxel;
         const Eigen::Vector3d centreArm = rot * body.voxelOffsetM(f.voxel);
-        const double centreHeight = n.dot(body.positionM + centreArm) - ground.offsetM;
-        if (centreHeight >= support) continue;
-        for (int c = 0; c < 8; ++c) {
-            const Eigen::Vector3d corner = 0.5 * h * (rot.col(0) * (c & 1 ? 1 : -1) + rot.col(1) * (c & 2 ? 1 : -1) + rot.col(2) * (c & 4 ? 1 : -1));
-            const double separation = centreHeight + n.dot(corner);
-            if (separation < 0.0) contacts.push_back({centreArm + corner, -separation});
+        const Eigen::Vector3d centre = body.positionM + centreArm;
+        // Eight corners per voxel: a face resting on a collider gets four points, so resting
+        // bodies do not pivot about a single point.
+        auto corners = [&](auto&& visit) {
+            for (int c = 0; c < 8; ++c)
+                visit(0.5 * h * (rot.col(0) * (c & 1 ? 1 : -1) + rot.col(1) * (c & 2 ? 1 : -1) + rot.col(2) * (c & 4 ? 1 : -1)));
+        };
+        if (nearGround && ground.normal.dot(centre) - ground.offsetM < voxelRadius) {
+            corners([&](const Eigen::Vector3d& corner) {
+                const double separation = ground.normal.dot(centre + corner) - ground.offsetM;
+                if (separation < 0.0)
+                    contacts.push_back({centreArm + corner, ground.normal, -separation, -1, ground.restitution, ground.friction});
+            });
+        }
+        for (int b : nearBoxes) {
+            const StaticBox& box = world.colliders[b];
+            const Eigen::Matrix3d boxRot = box.orientation.toRotationMatrix();
+            const Eigen::Vector3d local = boxRot.transpose() * (centre - box.centreM);
+            if (((local.cwiseAbs() - box.halfExtentM).array() > voxelRadius).any()) continue;
+            corners([&](const Eigen::Vector3d& corner) {
+                const Eigen::Vector3d q = boxRot.transpose() * (centre + corner - box.centreM);
+                const Eigen::Vector3d penetration = box.halfExtentM - q.cwiseAbs();
+                if ((penetration.array() <= 0.0).any()) return;
+                int axis = 0;
+                penetration.minCoeff(&axis);
+                const Eigen::Vector3d normal = boxRot.col(axis) * (q[axis] >= 0 ? 1.0 : -1.0);
+                contacts.push_back({centreArm + corner, normal, penetration[axis], b, box.restitution, box.friction});
+            });
         }
     }
+    return contacts;
+}
+
+}  // namespace
+
+int resolveStaticContacts(Body& body, const WorldSettings& world, double dt)
+{
+    if (body.anchored) return 0;
+    std::vector<Contact> contacts = findStaticContacts(body, world);
     if (contacts.empty()) return 0;
 
+    const Eigen::Matrix3d rot = body.orientation.toRotationMatrix();
     const double invMass = 1.0 / body.mass.massKg;
     const Eigen::Matrix3d invInertia = rot * body.mass.inertiaKgM2.inverse() * rot.transpose();
     Eigen::Vector3d& v = body.linearVelocityMS;
     Eigen::Vector3d& w = body.angularVelocityRadS;
     // Bounce only above the speed gravity adds in a couple of steps, so resting contacts rest.
-    const double bounceThreshold = 2.0 * gravityMagnitude * dt + 0.05;
+    const double bounceThreshold = 2.0 * world.gravityMS2.norm() * dt + 0.05;
     std::vector<double> bounceTarget(contacts.size(), 0.0);
     for (size_t i = 0; i < contacts.size(); ++i) {
-        const double vn = n.dot(v + w.cross(contacts[i].arm));
-        if (vn < -bounceThreshold) bounceTarget[i] = -ground.restitution * vn;
+        const double vn = contacts[i].normal.dot(v + w.cross(contacts[i].arm));
+        if (vn < -bounceThreshold) bounceTarget[i] = -contacts[i].restitution * vn;
     }
     auto applyImpulse = [&](const Eigen::Vector3d& arm, const Eigen::Vector3d& impulse) {
         v += invMass * impulse;
@@ -234,29 +276,30 @@ int resolveGroundContacts(Body& body, const GroundPlane& ground, double dt, doub
     for (int iteration = 0; iteration < 12; ++iteration) {
         for (size_t i = 0; i < contacts.size(); ++i) {
             Contact& c = contacts[i];
-            // Normal: accumulated impulse stays >= 0.
-            const double vn = n.dot(v + w.cross(c.arm));
+            // Normal: the accumulated impulse stays >= 0.
+            const double vn = c.normal.dot(v + w.cross(c.arm));
             const double previous = c.normalImpulse;
-            c.normalImpulse = std::max(previous + effectiveMass(c.arm, n) * (bounceTarget[i] - vn), 0.0);
-            applyImpulse(c.arm, (c.normalImpulse - previous) * n);
+            c.normalImpulse = std::max(previous + effectiveMass(c.arm, c.normal) * (bounceTarget[i] - vn), 0.0);
+            applyImpulse(c.arm, (c.normalImpulse - previous) * c.normal);
             // Friction along the current sliding direction, bounded by mu times the normal impulse.
             const Eigen::Vector3d vc = v + w.cross(c.arm);
-            const Eigen::Vector3d vt = vc - n.dot(vc) * n;
+            const Eigen::Vector3d vt = vc - c.normal.dot(vc) * c.normal;
             const double speed = vt.norm();
             if (speed < 1e-12) continue;
             const Eigen::Vector3d t = vt / speed;
-            const double limit = ground.friction * c.normalImpulse;
-            const double delta = -effectiveMass(c.arm, t) * speed;
-            const double applied = std::clamp(delta, -limit, limit);
-            applyImpulse(c.arm, applied * t);
+            const double limit = c.friction * c.normalImpulse;
+            applyImpulse(c.arm, std::clamp(-effectiveMass(c.arm, t) * speed, -limit, limit) * t);
         }
     }
-    // Position correction: move out of the ground along n; velocities are untouched, so it adds
-    // no kinetic energy.
-    double deepest = 0.0;
-    for (const Contact& c : contacts) deepest = std::max(deepest, c.depth);
-    const double slop = 0.01 * h;
-    if (deepest > slop) body.positionM += (deepest - slop) * n;
+    // Position correction per collider along its deepest contact's normal; velocities are
+    // untouched, so it adds no kinetic energy.
+    const double slop = 0.01 * body.voxelSizeM;
+    for (int collider = -1; collider < static_cast<int>(world.colliders.size()); ++collider) {
+        const Contact* deepest = nullptr;
+        for (const Contact& c : contacts)
+            if (c.collider == collider && (!deepest || c.depth > deepest->depth)) deepest = &c;
+        if (deepest && deepest->depth > slop) body.positionM += (deepest->depth - slop) * deepest->normal;
+    }
     return static_cast<int>(contacts.size());
 }
 

@@ -160,6 +160,13 @@ const Material& Scene::material(const std::string& name) const
     return findMaterialPreset(name);
 }
 
+Eigen::Quaterniond rotationFromDegrees(const Eigen::Vector3d& deg)
+{
+    const double k = M_PI / 180.0;
+    return Eigen::AngleAxisd(deg.z() * k, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(deg.y() * k, Eigen::Vector3d::UnitY()) *
+           Eigen::AngleAxisd(deg.x() * k, Eigen::Vector3d::UnitX());
+}
+
 const char* defaultSceneJson()
 {
     return R"({
@@ -214,6 +221,19 @@ Scene parseScene(const std::string& text, const std::string& sourceName, const s
         ground.offsetM = g.number("height_m", ground.offsetM, -1e6, 1e6);
         ground.restitution = g.number("restitution", ground.restitution, 0, 1);
         ground.friction = g.number("friction", ground.friction, 0, 100);
+    });
+    r.array("colliders", [&](ObjectReader& c, size_t) {
+        StaticBox box;
+        box.centreM = c.vector3("position_m", box.centreM);
+        const Eigen::Vector3d size = c.vector3("size_m", 2.0 * box.halfExtentM);
+        if (!(size.minCoeff() > 0)) c.fail(c.keyPath("size_m"), "must be positive");
+        box.halfExtentM = 0.5 * size;
+        const Eigen::Vector3d rotation = c.vector3("rotation_deg", Eigen::Vector3d::Zero());
+        box.orientation = rotationFromDegrees(rotation);
+        box.restitution = c.number("restitution", box.restitution, 0, 1);
+        box.friction = c.number("friction", box.friction, 0, 100);
+        scene.world.colliders.push_back(box);
+        scene.colliderRotationsDeg.push_back(rotation);
     });
     r.object("materials", [&](ObjectReader& mats) {
         // Keys are material names; "base" picks a preset to start from.
@@ -347,6 +367,13 @@ nlohmann::json sceneToJson(const Scene& scene)
     const GroundPlane& g = scene.world.ground;
     j["ground"] = {{"enabled", g.enabled}, {"normal", vec(g.normal)}, {"height_m", g.offsetM},
                    {"restitution", g.restitution}, {"friction", g.friction}};
+    json colliders = json::array();
+    for (size_t i = 0; i < scene.world.colliders.size(); ++i) {
+        const StaticBox& b = scene.world.colliders[i];
+        colliders.push_back({{"position_m", vec(b.centreM)}, {"size_m", vec(2.0 * b.halfExtentM)},
+                             {"rotation_deg", vec(scene.colliderRotationsDeg[i])}, {"restitution", b.restitution}, {"friction", b.friction}});
+    }
+    j["colliders"] = colliders;
     json materials = json::object();
     for (const Material& m : scene.materials) {
         materials[m.name] = {{"density_kg_m3", m.densityKgM3},       {"mean_yield_Pa", m.meanYieldPa},

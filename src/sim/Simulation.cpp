@@ -12,13 +12,6 @@ namespace spall {
 
 namespace {
 
-Eigen::Quaterniond rotationFromDegrees(const Eigen::Vector3d& deg)
-{
-    const double k = M_PI / 180.0;
-    return Eigen::AngleAxisd(deg.z() * k, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(deg.y() * k, Eigen::Vector3d::UnitY()) *
-           Eigen::AngleAxisd(deg.x() * k, Eigen::Vector3d::UnitX());
-}
-
 /// Sets the anchor bit of voxels whose lowest point lies within a quarter voxel of the ground.
 void anchorToGround(Body& body, const GroundPlane& ground)
 {
@@ -206,7 +199,6 @@ void Simulation::fractureStep(const std::vector<OpenWindow>& windows, double dt)
 void Simulation::motionStep(const std::vector<OpenWindow>& windows, double dt)
 {
     const WorldSettings& world = mScene.world;
-    const double gravity = world.gravityMS2.norm();
     std::vector<int> contacts(mBodies.size(), 0);
     // Bodies are independent here: each task writes only its own body.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, mBodies.size()), [&](const tbb::blocked_range<size_t>& range) {
@@ -229,7 +221,7 @@ void Simulation::motionStep(const std::vector<OpenWindow>& windows, double dt)
                 return total;
             };
             integrateBody(body, mTimeS, dt, mScene.timeStep.integrator, wrench);
-            contacts[i] = resolveGroundContacts(body, world.ground, dt, gravity);
+            contacts[i] = resolveStaticContacts(body, world, dt);
             if (!loaded) updateSleep(body, mScene.sleep, dt);
         }
     });

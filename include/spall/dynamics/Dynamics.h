@@ -26,11 +26,21 @@ struct GroundPlane {
     double friction = 0.6;      ///< Coulomb coefficient (unit: 1)
 };
 
+/// A static, unbreakable oriented box that bodies rest on and bounce off.
+struct StaticBox {
+    Eigen::Vector3d centreM = Eigen::Vector3d::Zero();
+    Eigen::Vector3d halfExtentM = Eigen::Vector3d::Constant(0.5);
+    Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+    double restitution = 0.2;  ///< (unit: fraction)
+    double friction = 0.6;     ///< Coulomb coefficient (unit: 1)
+};
+
 struct WorldSettings {
     Eigen::Vector3d gravityMS2 = Eigen::Vector3d(0, 0, -9.81);  ///< (unit: m/s^2)
     double linearDragPerS = 0.0;   ///< F = -k m v (unit: 1/s)
     double angularDragPerS = 0.0;  ///< tau = -k I w (unit: 1/s)
     GroundPlane ground;
+    std::vector<StaticBox> colliders;
     /// Faces hit head-on see the reflected pressure (Rankine–Hugoniot, blended by cos^2 of the
     /// angle of incidence) instead of the paper's side-on pressure: a face that stops the flow
     /// feels the reflected wave, 2 to 8 times the side-on one (docs/architecture.md).
@@ -73,10 +83,10 @@ using WrenchFunction = std::function<Wrench(double timeS, const Eigen::Vector3d&
 /// Advances position, orientation and momenta of one body over dt. Quaternions stay unit.
 void integrateBody(Body& body, double timeS, double dtS, Integrator integrator, const WrenchFunction& wrench);
 
-/// Resolves contacts of a body's boundary voxels with the ground plane: sequential impulses with
-/// restitution and Coulomb friction, then a position correction that changes no velocity.
-/// Returns the number of contacts.
-int resolveGroundContacts(Body& body, const GroundPlane& ground, double dtS, double gravityMagnitudeMS2);
+/// Resolves contacts of a body's boundary voxels (their corners) with the ground plane and the
+/// static boxes: sequential impulses with restitution and Coulomb friction, then a position
+/// correction that changes no velocity. Returns the number of contacts.
+int resolveStaticContacts(Body& body, const WorldSettings& world, double dtS);
 
 /// Upper bound of the speed of any voxel of the body (unit: m/s).
 inline double maxVoxelSpeedMS(const Body& body)

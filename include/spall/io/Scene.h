@@ -49,11 +49,15 @@ struct Scene {
     std::vector<Material> materials;  ///< presets plus the scene's own
     std::vector<ObjectSpec> objects;
     std::vector<Charge> charges;
+    std::vector<Eigen::Vector3d> colliderRotationsDeg;  ///< as given, for writing the scene back
     OutputSettings output;
 
     int frameCount() const { return static_cast<int>(std::floor(durationS * frameRateHz + 1e-9)) + 1; }
     const Material& material(const std::string& name) const;
 };
+
+/// Rotation about the world x, then y, then z axes (degrees), as scenes give it.
+Eigen::Quaterniond rotationFromDegrees(const Eigen::Vector3d& degrees);
 
 /// The built-in default scene (also assets/scenes/default.json).
 const char* defaultSceneJson();
