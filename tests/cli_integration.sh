@@ -183,6 +183,14 @@ grep -q "frame 99 does not exist" "$dir/err.txt" || fail "inspect error: $(cat "
 if "$spall" inspect "$dir/cube.obj" 2> "$dir/err.txt"; then fail "inspect accepted a non-HDF5 file"; fi
 grep -q "not an HDF5 file" "$dir/err.txt" || fail "inspect error: $(cat "$dir/err.txt")"
 
+# Blender imports the sequence and renders a frame that is not empty (where Blender is installed)
+if command -v blender > /dev/null; then
+  blender -b --python "$(dirname "$0")/../tools/blender_import.py" -- "$dir/out" --render 3 "$dir/blender.png" > "$dir/blender.log" 2>&1 \
+    || fail "Blender import/render failed: $(tail -5 "$dir/blender.log")"
+else
+  echo "cli integration: Blender test skipped: blender is not installed (apt-get install blender)"
+fi
+
 # the h5py example of docs/file-formats.md, as written there
 docs=$(dirname "$0")/../docs/file-formats.md
 sed -n '/^```python/,/^```/p' "$docs" | sed '1d;$d' | sed "s#out/history.h5#$dir/out/history.h5#" > "$dir/example.py"
