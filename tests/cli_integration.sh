@@ -167,6 +167,9 @@ assert coloured > 50, coloured
 PY
 if "$spall" render "$dir/nowhere" 2> "$dir/err.txt"; then fail "render accepted a missing directory"; fi
 grep -q "nowhere" "$dir/err.txt" || fail "render error: $(cat "$dir/err.txt")"
+if "$spall" render "$dir/out" --size 10x 2> "$dir/err.txt"; then fail "render accepted a bad size"; fi
+grep -q "size" "$dir/err.txt" || fail "render error: $(cat "$dir/err.txt")"
+if "$spall" run "$dir/scene.json" -o "$dir/neg" --threads -1 2> /dev/null; then fail "run accepted --threads -1"; fi
 mkdir -p "$dir/empty"
 if "$spall" render "$dir/empty" 2> "$dir/err.txt"; then fail "render accepted an empty directory"; fi
 if "$spall" render "$dir/out" --frame 999 2> "$dir/err.txt"; then fail "render accepted a missing frame"; fi

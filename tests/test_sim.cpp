@@ -47,6 +47,14 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "charges": [{"tnt_kg": -2}]})").find("charges[0].tnt_kg"), std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "charges": [{"position_m": [5,0,0], "burst": "air"}]})").find("charges[0].burst"),
               std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "colliders": [{"size_m": [1, 0, 1]}]})").find("colliders[0].size_m: must be positive"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "colliders": [{"colour": 1}]})").find("colliders[0].colour: unknown key"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "solver": {"integrator": "leapfrog"}})").find("solver.integrator"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "fracture": {"small_fragments": "burn"}})").find("fracture.small_fragments"),
+              std::string::npos);
     EXPECT_EQ(errorOf(defaultSceneJson()), "");
 }
 
