@@ -61,31 +61,31 @@ struct LinkEvent {
     int16_t charge; ///< for Weaken
 };
 
-/// Loads at one point: total overpressure and the dominant charge's direction.
+/// Loads at one point: total overpressure and the charge that contributes most.
 struct PointLoad {
     double pressurePa = 0;
     int dominant = -1;
-    Eigen::Vector3d direction = Eigen::Vector3d::Zero();  ///< unit radius vector of the dominant charge
+    /// Unit radius vector from the dominant charge (computed only when a limit needs it).
+    Eigen::Vector3d direction(const BlastField& field, const Eigen::Vector3d& x) const
+    {
+        if (dominant < 0) return Eigen::Vector3d::Zero();
+        const Eigen::Vector3d r = x - field.charges()[dominant].positionM;
+        const double n = r.norm();
+        return n > 0 ? Eigen::Vector3d(r / n) : Eigen::Vector3d::Zero();
+    }
 };
 
 PointLoad pointLoad(const BlastField& field, const Eigen::Vector3d& x, double t, const std::vector<OpenWindow>& windows)
 {
     PointLoad load;
     double dominantPa = 0.0;
-    Eigen::Vector3d dominantCharge = Eigen::Vector3d::Zero();
-    field.forEachCharge(x, t, windows, [&](int charge, double p, const Eigen::Vector3d& c) {
+    field.forEachCharge(x, t, windows, [&](int charge, double p, const Eigen::Vector3d&) {
         load.pressurePa += p;
         if (p > dominantPa) {
             dominantPa = p;
             load.dominant = charge;
-            dominantCharge = c;
         }
     });
-    if (load.dominant >= 0) {
-        const Eigen::Vector3d r = x - dominantCharge;
-        const double n = r.norm();
-        if (n > 0) load.direction = r / n;
-    }
     return load;
 }
 
@@ -161,8 +161,9 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
                 // Break the intact links most aligned with the wave first (ties: face order).
                 std::array<std::pair<double, int>, kFaceCount> order;
                 int count = 0;
+                const Eigen::Vector3d direction = load.direction(field, x);
                 for (int f = 0; f < kFaceCount; ++f) {
-                    if (bits & (1 << f)) order[count++] = {-std::abs((rot * faceNormal(f)).dot(load.direction)), f};
+                    if (bits & (1 << f)) order[count++] = {-std::abs((rot * faceNormal(f)).dot(direction)), f};
                 }
                 // Insertion sort: at most six entries.
                 for (int a = 1; a < count; ++a)
@@ -175,10 +176,12 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
                 const int face = 2 * axis + 1;
                 if (!(bits & (1 << face))) continue;
                 const Eigen::Vector3d linkDir = rot.col(axis);
-                const PointLoad load = pointLoad(field, x + 0.5 * h * linkDir, timeS, windows);
-                if (load.pressurePa <= 0.0) continue;
+                const Eigen::Vector3d midpoint = x + 0.5 * h * linkDir;
+                const PointLoad load = pointLoad(field, midpoint, timeS, windows);
+                // Below the least limit any link can have, nothing can happen: skip the hash.
+                if (load.pressurePa < leastEffectivePa || load.pressurePa <= 0.0) continue;
                 double limit = baseYieldLimit(material, settings.seed, ijk, axis);
-                limit *= 1.0 - orientationFactor * std::abs(linkDir.dot(load.direction));
+                if (orientationFactor > 0) limit *= 1.0 - orientationFactor * std::abs(linkDir.dot(load.direction(field, midpoint)));
                 const int weakenedBy = weakenedByCharge(bits, axis);
                 const bool weakenedEarlier = weakening > 0 && weakenedBy >= 0 && weakenedBy != load.dominant;
                 if (load.pressurePa >= (weakenedEarlier ? (1.0 - weakening) * limit : limit)) {
