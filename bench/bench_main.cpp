@@ -6,9 +6,12 @@
 #include <spall/fracture/Fracture.h>
 #include <spall/io/VdbIo.h>
 #include <spall/voxel/Components.h>
+#include <spall/render/Render.h>
 #include <spall/voxel/Voxelise.h>
 
 #include <benchmark/benchmark.h>
+#include <openvdb/tools/RayTracer.h>
+#include <openvdb/tools/TopologyToLevelSet.h>
 #include <openvdb/tree/LeafManager.h>
 
 #include <algorithm>
@@ -169,6 +172,49 @@ void BM_Loading_Links256(benchmark::State& state)
 }
 BENCHMARK(BM_Loading_Links256)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// Previews of a 100^3 block (1 M voxels) at 960x540: spall's rasteriser of exposed faces against
+// OpenVDB's level-set ray tracer (which first needs a level set of the voxels), same camera.
+openvdb::FloatGrid::Ptr renderBlock()
+{
+    initialiseOpenVdb();
+    auto g = openvdb::FloatGrid::create(0.0f);
+    g->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
+    g->tree().denseFill(openvdb::CoordBBox(openvdb::Coord(-50, -50, 0), openvdb::Coord(49, 49, 99)), 1.0f, true);
+    g->tree().voxelizeActiveTiles();
+    return g;
+}
+
+void BM_Render_Rasteriser(benchmark::State& state)
+{
+    const auto grid = renderBlock();
+    const RenderSettings settings;
+    const std::vector<FragmentRef> fragments = {{grid.get(), grid->transform().copy(), 1}};
+    const Camera camera = frameCamera({fragments}, settings);
+    for (auto _ : state) benchmark::DoNotOptimize(renderFragments(fragments, camera, settings).pixels().data());
+    state.counters["voxels_per_s"] = benchmark::Counter(double(grid->activeVoxelCount()), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Render_Rasteriser)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Render_OpenVdbRayTracer(benchmark::State& state)
+{
+    const auto grid = renderBlock();
+    const RenderSettings settings;
+    const std::vector<FragmentRef> fragments = {{grid.get(), grid->transform().copy(), 1}};
+    const Camera camera = frameCamera({fragments}, settings);
+    for (auto _ : state) {
+        auto levelSet = openvdb::tools::topologyToLevelSet(*grid);
+        openvdb::tools::Film film(settings.width, settings.height);
+        openvdb::tools::PerspectiveCamera cam(film, openvdb::Vec3R(0.0),
+                                              openvdb::Vec3R(camera.eyeM.x(), camera.eyeM.y(), camera.eyeM.z()), 50.0, 41.2136 * 1.6);
+        cam.lookAt(openvdb::Vec3R(camera.targetM.x(), camera.targetM.y(), camera.targetM.z()), openvdb::Vec3R(0, 0, 1));
+        openvdb::tools::DiffuseShader<> shader;
+        openvdb::tools::rayTrace(*levelSet, shader, cam);
+        benchmark::DoNotOptimize(film.pixels());
+    }
+    state.counters["voxels_per_s"] = benchmark::Counter(double(grid->activeVoxelCount()), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Render_OpenVdbRayTracer)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 /// Console output plus, at the end, each benchmark's time relative to its baseline.
 class RatioReporter : public benchmark::ConsoleReporter {
 public:
@@ -191,6 +237,7 @@ public:
             {"BM_Label_Components256Whole", "BM_Label_TrivialPass256"},
             {"BM_Label_Components256Cut", "BM_Label_TrivialPass256"},
             {"BM_Loading_Links256", "BM_Label_TrivialPass256"},
+            {"BM_Render_OpenVdbRayTracer", "BM_Render_Rasteriser"},
             {"BM_Pressure_Table/16", "BM_Pressure_DirectFits"},
             {"BM_Pressure_Table/64", "BM_Pressure_DirectFits"},
             {"BM_Pressure_Table/128", "BM_Pressure_DirectFits"},
