@@ -268,9 +268,6 @@ void HistoryWriter::finish()
     mImpl->close();
 }
 
-}  // namespace spall
-
-namespace spall {
 
 namespace {
 

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <mutex>
 #include <unistd.h>
+#include <unordered_set>
 
 namespace spall {
 
@@ -94,12 +95,6 @@ LinkGrid::Ptr readLinkGrid(const std::string& path)
     throw IoError(path + ": holds no grid named 'links' (not written by spall voxelise?)");
 }
 
-}  // namespace spall
-
-#include <cstdio>
-#include <unordered_set>
-
-namespace spall {
 
 FrameWriter::FrameWriter(std::string outputDirectory, bool densityGrid)
     : mDirectory(std::move(outputDirectory)), mDensityGrid(densityGrid)

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <filesystem>
 
 namespace spall {
 
@@ -264,11 +265,6 @@ Image contactSheet(const std::vector<Image>& frames, const std::vector<double>& 
     return sheet;
 }
 
-}  // namespace spall
-
-#include <filesystem>
-
-namespace spall {
 
 std::vector<std::string> listFramePaths(const std::string& outputDirectory)
 {

@@ -75,9 +75,6 @@ private:
     std::unique_ptr<Impl> mImpl;
 };
 
-}  // namespace spall
-
-namespace spall {
 
 /// Whole-file reader for history.h5 (for `spall inspect` and tests). Throws IoError naming the
 /// file when it is missing, not HDF5, or not a spall history.

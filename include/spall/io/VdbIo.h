@@ -7,6 +7,8 @@
 #include <openvdb/openvdb.h>
 
 #include <string>
+#include <unordered_map>
+#include <vector>
 
 namespace spall {
 
@@ -27,12 +29,6 @@ void writeVoxelisedBody(const std::string& path, const LinkGrid& grid, double vo
 /// Reads the `links` grid of a voxelised body file. Throws IoError naming the file.
 LinkGrid::Ptr readLinkGrid(const std::string& path);
 
-}  // namespace spall
-
-#include <unordered_map>
-#include <vector>
-
-namespace spall {
 
 struct FrameInfo {
     int frame = 0;

@@ -57,9 +57,6 @@ Image renderFragments(const std::vector<FragmentRef>& fragments, const Camera& c
 /// Tiles frames into a contact sheet with the time of each under it.
 Image contactSheet(const std::vector<Image>& frames, const std::vector<double>& timesS, int columns);
 
-}  // namespace spall
-
-namespace spall {
 
 /// Sorted paths of OUTDIR/fragments.NNNN.vdb. Throws InputError when the directory is missing or
 /// holds no frames.
