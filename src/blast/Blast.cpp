@@ -529,7 +529,9 @@ double BlastField::shockSpeedMS(int charge, double distanceM) const
 {
     const PerCharge& c = mPerCharge[charge];
     const BlastTable::Node n = c.table->lookupLog2(std::log2(distanceM) + c.log2LengthScale);
-    return rankineHugoniotShockSpeed(n.peakOverpressurePa, kSeaLevelPressurePa) / std::sqrt(mSettings.atmosphere.temperatureK > 0 ? kSeaLevelTemperatureK / mSettings.atmosphere.temperatureK : 1.0);
+    // Sound speed, and with it the shock speed, scales with sqrt(T); T > 0 is checked on construction.
+    return rankineHugoniotShockSpeed(n.peakOverpressurePa, kSeaLevelPressurePa) *
+           std::sqrt(mSettings.atmosphere.temperatureK / kSeaLevelTemperatureK);
 }
 
 }  // namespace spall

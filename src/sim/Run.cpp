@@ -42,7 +42,8 @@ RunReport runScene(const Scene& scene, const RunOptions& options, const std::fun
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec || !fs::is_directory(dir)) throw IoError(dir.string() + ": cannot create the output directory: " + ec.message());
-    writeTextAtomically(dir / "scene.json", sceneToJson(scene).dump(2) + "\n");
+    const nlohmann::json resolvedScene = sceneToJson(scene);
+    writeTextAtomically(dir / "scene.json", resolvedScene.dump(2) + "\n");
 
     Simulation sim(scene);
     const int frameCount = options.maxFrames >= 0 ? std::min(options.maxFrames, scene.frameCount()) : scene.frameCount();
@@ -52,7 +53,7 @@ RunReport runScene(const Scene& scene, const RunOptions& options, const std::fun
         HistoryHeader header;
         header.voxelSizeM = scene.voxelSizeM;
         header.seed = scene.seed;
-        header.sceneJson = sceneToJson(scene).dump();
+        header.sceneJson = resolvedScene.dump();
         for (const Charge& c : scene.charges) header.charges.push_back({c.positionM, c.tntKg, c.detonationTimeS, toString(c.burst)});
         history = std::make_unique<HistoryWriter>((dir / "history.h5").string(), header);
     }

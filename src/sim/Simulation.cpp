@@ -154,11 +154,7 @@ void Simulation::fractureStep(const std::vector<OpenWindow>& windows, double dt)
                                        mScene.fracture);
         mStats.brokenLinks += r.brokenLinks;
         body.linkCount -= r.brokenLinks;
-        if (r.brokenAnchors > 0) {
-            bool anchored = false;
-            for (auto it = body.grid->cbeginValueOn(); it && !anchored; ++it) anchored = (*it & kAnchorBit) != 0;
-            body.anchored = anchored;
-        }
+        if (r.brokenAnchors > 0) body.anchored = hasAnchoredVoxel(*body.grid);
         changed[i] = r.brokenLinks > 0 || r.brokenAnchors > 0;
     }
     if (std::none_of(changed.begin(), changed.end(), [](char c) { return c; })) return;

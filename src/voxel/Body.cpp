@@ -185,6 +185,13 @@ std::vector<openvdb::Coord> collectBoundaryVoxels(const LinkGrid& grid)
     return voxels;
 }
 
+bool hasAnchoredVoxel(const LinkGrid& grid)
+{
+    for (auto it = grid.cbeginValueOn(); it; ++it)
+        if (*it & kAnchorBit) return true;
+    return false;
+}
+
 void refreshDerivedData(Body& body)
 {
     body.mass = computeMassProperties(*body.grid, body.voxelSizeM, body.densityKgM3);
@@ -195,9 +202,7 @@ void refreshDerivedData(Body& body)
     const double halfDiagonal = 0.5 * std::sqrt(3.0) * body.voxelSizeM;
     for (const ExposedFace& f : body.exposedFaces) r2 = std::max(r2, body.voxelOffsetM(f.voxel).squaredNorm());
     body.boundingRadiusM = std::sqrt(r2) + halfDiagonal;
-    bool anchored = false;
-    for (auto it = body.grid->cbeginValueOn(); it && !anchored; ++it) anchored = (*it & kAnchorBit) != 0;
-    body.anchored = anchored;
+    body.anchored = hasAnchoredVoxel(*body.grid);
 }
 
 Body makeBody(LinkGrid::Ptr grid, double voxelSizeM, double densityKgM3)

@@ -141,6 +141,9 @@ std::vector<ExposedFace> collectExposedFaces(const LinkGrid& grid);
 /// Voxels with at least one exposed face, in leaf order.
 std::vector<openvdb::Coord> collectBoundaryVoxels(const LinkGrid& grid);
 
+/// True when some voxel holds the anchor bit.
+bool hasAnchoredVoxel(const LinkGrid& grid);
+
 /// Fills mass properties, bounding radius, anchoring and exposed faces from the grid.
 void refreshDerivedData(Body& body);
 
