@@ -68,7 +68,7 @@ TEST(Links, SingleVoxelHasSixExposedFacesAndNoLinks)
     auto g = test::gridFromVoxels({Coord(5, -3, 2)});
     EXPECT_EQ(countLinks(*g), 0);
     EXPECT_EQ(collectExposedFaces(*g).size(), 6u);
-    EXPECT_EQ(collectBoundaryVoxels(*g).size(), 1u);
+    EXPECT_EQ(boundaryVoxelsOf(collectExposedFaces(*g)).size(), 1u);
 }
 
 TEST(Links, ExposedFacesOfBlockAreItsSurface)
@@ -76,7 +76,7 @@ TEST(Links, ExposedFacesOfBlockAreItsSurface)
     auto g = test::boxGrid(4, 5, 6);
     EXPECT_EQ(collectExposedFaces(*g).size(), size_t(2 * (4 * 5 + 5 * 6 + 4 * 6)));
     // Interior 2x3x4 voxels are not on the boundary.
-    EXPECT_EQ(collectBoundaryVoxels(*g).size(), size_t(4 * 5 * 6 - 2 * 3 * 4));
+    EXPECT_EQ(boundaryVoxelsOf(collectExposedFaces(*g)).size(), size_t(4 * 5 * 6 - 2 * 3 * 4));
 }
 
 TEST(Components, FullyLinkedBlockIsOneComponent)

@@ -332,6 +332,14 @@ Scene parseScene(const std::string& text, const std::string& sourceName, const s
         scene.sleep.angularSpeedRadS = s.number("sleep_angular_speed_rad_s", scene.sleep.angularSpeedRadS, 0, 1e3);
         scene.sleep.timeS = s.number("sleep_time_s", scene.sleep.timeS, 0, 1e5);
     });
+    r.object("collisions", [&](ObjectReader& c) {
+        CollisionSettings& cs = scene.collisions;
+        cs.method = c.checked("method", [&] { return parseCollisionMethod(c.string("method", toString(cs.method))); });
+        cs.restitution = c.number("restitution", cs.restitution, 0, 1);
+        cs.friction = c.number("friction", cs.friction, 0, 100);
+        cs.solverIterations = static_cast<int>(c.integer("solver_iterations", cs.solverIterations, 1, 1000));
+        cs.penetrationToleranceVoxels = c.number("penetration_tolerance_voxels", cs.penetrationToleranceVoxels, 0, 1, true);
+    });
     r.object("output", [&](ObjectReader& o) {
         scene.output.vdb = o.boolean("vdb", scene.output.vdb);
         scene.output.densityGrid = o.boolean("density_grid", scene.output.densityGrid);
@@ -424,6 +432,12 @@ nlohmann::json sceneToJson(const Scene& scene)
                    {"sleep_linear_speed_m_s", scene.sleep.linearSpeedMS},
                    {"sleep_angular_speed_rad_s", scene.sleep.angularSpeedRadS},
                    {"sleep_time_s", scene.sleep.timeS}};
+    const CollisionSettings& cs = scene.collisions;
+    j["collisions"] = {{"method", toString(cs.method)},
+                       {"restitution", cs.restitution},
+                       {"friction", cs.friction},
+                       {"solver_iterations", cs.solverIterations},
+                       {"penetration_tolerance_voxels", cs.penetrationToleranceVoxels}};
     j["output"] = {{"vdb", scene.output.vdb}, {"density_grid", scene.output.densityGrid}, {"history", scene.output.history}};
     return j;
 }

@@ -117,7 +117,7 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
             if (speed > 0) dt = std::min(dt, ts.speedFraction * h / speed);
         }
     }
-    return std::max(dt, ts.minTimeStepS);
+    return std::max(dt * mPenetrationStepScale, ts.minTimeStepS);
 }
 
 void Simulation::advanceTo(double target)
@@ -195,14 +195,14 @@ void Simulation::fractureStep(const std::vector<OpenWindow>& windows, double dt)
 void Simulation::motionStep(const std::vector<OpenWindow>& windows, double dt)
 {
     const WorldSettings& world = mScene.world;
-    std::vector<int> contacts(mBodies.size(), 0);
+    std::vector<char> loaded(mBodies.size(), 0);
     // Bodies are independent here: each task writes only its own body.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, mBodies.size()), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t i = range.begin(); i != range.end(); ++i) {
             Body& body = mBodies[i];
             if (body.anchored) continue;
-            const bool loaded = !windows.empty() && bodyInWindows(body, *mField, windows);
-            if (loaded) {
+            loaded[i] = !windows.empty() && bodyInWindows(body, *mField, windows);
+            if (loaded[i]) {
                 body.asleep = false;
                 body.restTimeS = 0;
             }
@@ -210,18 +210,24 @@ void Simulation::motionStep(const std::vector<OpenWindow>& windows, double dt)
             const double m = body.mass.massKg;
             auto wrench = [&](double t, const Eigen::Vector3d& x, const Eigen::Quaterniond& q, const Eigen::Vector3d& v,
                               const Eigen::Vector3d& w) {
-                Wrench total = loaded ? blastWrench(body, x, q, *mField, windows, t, world.reflectedPressure) : Wrench();
+                Wrench total = loaded[i] ? blastWrench(body, x, q, *mField, windows, t, world.reflectedPressure) : Wrench();
                 total.forceN += m * world.gravityMS2 - world.linearDragPerS * m * v;
                 const Eigen::Matrix3d r = q.toRotationMatrix();
                 total.torqueNm -= world.angularDragPerS * (r * body.mass.inertiaKgM2 * r.transpose() * w);
                 return total;
             };
             integrateBody(body, mTimeS, dt, mScene.timeStep.integrator, wrench);
-            contacts[i] = resolveStaticContacts(body, world, dt);
-            if (!loaded) updateSleep(body, mScene.sleep, dt);
         }
     });
-    for (int c : contacts) mStats.contacts += c;
+    const ContactStats contacts = resolveContacts(mBodies, world, mScene.collisions, mScene.sleep, dt);
+    mStats.contacts += contacts.staticContacts + contacts.bodyContacts;
+    // The paper's adaptive step: halve while bodies interpenetrate beyond the tolerance.
+    if (contacts.maxPenetrationM > mScene.collisions.penetrationToleranceVoxels * mScene.voxelSizeM)
+        mPenetrationStepScale = std::max(0.5 * mPenetrationStepScale, 1.0 / 64.0);
+    else
+        mPenetrationStepScale = std::min(2.0 * mPenetrationStepScale, 1.0);
+    for (size_t i = 0; i < mBodies.size(); ++i)
+        if (!loaded[i] && !mBodies[i].asleep) updateSleep(mBodies[i], mScene.sleep, dt);
 }
 
 }  // namespace spall

@@ -176,10 +176,10 @@ std::vector<ExposedFace> collectExposedFaces(const LinkGrid& grid)
     return all;
 }
 
-std::vector<openvdb::Coord> collectBoundaryVoxels(const LinkGrid& grid)
+std::vector<openvdb::Coord> boundaryVoxelsOf(const std::vector<ExposedFace>& faces)
 {
     std::vector<openvdb::Coord> voxels;
-    for (const ExposedFace& f : collectExposedFaces(grid)) {
+    for (const ExposedFace& f : faces) {
         if (voxels.empty() || voxels.back() != f.voxel) voxels.push_back(f.voxel);
     }
     return voxels;
@@ -196,11 +196,13 @@ void refreshDerivedData(Body& body)
 {
     body.mass = computeMassProperties(*body.grid, body.voxelSizeM, body.densityKgM3);
     body.exposedFaces = collectExposedFaces(*body.grid);
+    body.boundaryVoxels = boundaryVoxelsOf(body.exposedFaces);
+    body.indexBounds = body.grid->evalActiveVoxelBoundingBox();
     body.linkCount = countLinks(*body.grid);
     // Bounding radius over boundary voxels' far corners: every voxel lies inside it.
     double r2 = 0.0;
     const double halfDiagonal = 0.5 * std::sqrt(3.0) * body.voxelSizeM;
-    for (const ExposedFace& f : body.exposedFaces) r2 = std::max(r2, body.voxelOffsetM(f.voxel).squaredNorm());
+    for (const openvdb::Coord& v : body.boundaryVoxels) r2 = std::max(r2, body.voxelOffsetM(v).squaredNorm());
     body.boundingRadiusM = std::sqrt(r2) + halfDiagonal;
     body.anchored = hasAnchoredVoxel(*body.grid);
 }

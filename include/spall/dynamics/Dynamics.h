@@ -83,11 +83,6 @@ using WrenchFunction = std::function<Wrench(double timeS, const Eigen::Vector3d&
 /// Advances position, orientation and momenta of one body over dt. Quaternions stay unit.
 void integrateBody(Body& body, double timeS, double dtS, Integrator integrator, const WrenchFunction& wrench);
 
-/// Resolves contacts of a body's boundary voxels (their corners) with the ground plane and the
-/// static boxes: sequential impulses with restitution and Coulomb friction, then a position
-/// correction that changes no velocity. Returns the number of contacts.
-int resolveStaticContacts(Body& body, const WorldSettings& world, double dtS);
-
 /// Upper bound of the speed of any voxel of the body (unit: m/s).
 inline double maxVoxelSpeedMS(const Body& body)
 {

@@ -3,7 +3,7 @@
 #pragma once
 
 #include <spall/blast/Blast.h>
-#include <spall/dynamics/Dynamics.h>
+#include <spall/dynamics/Contacts.h>
 #include <spall/fracture/Fracture.h>
 #include <spall/fracture/Material.h>
 #include <spall/voxel/Voxelise.h>
@@ -46,6 +46,7 @@ struct Scene {
     BlastSettings blast;
     FractureSettings fracture;
     TimeStepSettings timeStep;
+    CollisionSettings collisions;
     std::vector<Material> materials;  ///< presets plus the scene's own
     std::vector<ObjectSpec> objects;
     std::vector<Charge> charges;

@@ -3,7 +3,7 @@
 #pragma once
 
 #include <spall/blast/Blast.h>
-#include <spall/dynamics/Dynamics.h>
+#include <spall/dynamics/Contacts.h>
 #include <spall/fracture/Events.h>
 #include <spall/fracture/Fracture.h>
 #include <spall/io/Scene.h>
@@ -46,7 +46,6 @@ public:
     double chooseTimeStep(const std::vector<OpenWindow>& windows) const;
 
 private:
-    void step(double dtS);
     void fractureStep(const std::vector<OpenWindow>& windows, double dtS);
     void motionStep(const std::vector<OpenWindow>& windows, double dtS);
 
@@ -60,6 +59,7 @@ private:
     int64_t mNextId = 0;
     int64_t mInitialVoxels = 0;
     StepStats mStats;
+    double mPenetrationStepScale = 1.0;  ///< < 1 while contacts are deeper than the tolerance
 };
 
 }  // namespace spall

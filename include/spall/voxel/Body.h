@@ -102,6 +102,10 @@ struct Body {
     double restTimeS = 0.0;  ///< how long the body has been below the sleep thresholds
 
     std::vector<ExposedFace> exposedFaces;
+    /// Voxels with an exposed face, in leaf order: the only ones that can touch another body.
+    std::vector<openvdb::Coord> boundaryVoxels;
+    /// Index-space bounds of the active voxels.
+    openvdb::CoordBBox indexBounds;
 
     /// Local (index * h) position of a voxel centre relative to the centre of mass (unit: m).
     Eigen::Vector3d voxelOffsetM(const openvdb::Coord& ijk) const
@@ -138,8 +142,8 @@ MassProperties computeMassProperties(const LinkGrid& grid, double voxelSizeM, do
 /// All exposed faces, in leaf order (deterministic).
 std::vector<ExposedFace> collectExposedFaces(const LinkGrid& grid);
 
-/// Voxels with at least one exposed face, in leaf order.
-std::vector<openvdb::Coord> collectBoundaryVoxels(const LinkGrid& grid);
+/// Voxels with at least one exposed face, in leaf order (faces as collectExposedFaces gives them).
+std::vector<openvdb::Coord> boundaryVoxelsOf(const std::vector<ExposedFace>& faces);
 
 /// True when some voxel holds the anchor bit.
 bool hasAnchoredVoxel(const LinkGrid& grid);
