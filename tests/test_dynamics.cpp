@@ -127,12 +127,15 @@ TEST(BlastForce, StressFromOneGramToOneTonne)
     }
 }
 
-/// Contacts of a body alone in the world.
-void resolveAlone(Body& b, const WorldSettings& world, double dt)
+/// Steps a body alone in the world under gravity until it sleeps or `steps` have passed.
+Body stepAlone(Body b, const WorldSettings& world, double dt, int steps, double* lowestZ = nullptr)
 {
     std::vector<Body> one{std::move(b)};
-    resolveContacts(one, world, CollisionSettings(), SleepSettings(), dt);
-    b = std::move(one[0]);
+    for (int i = 0; i < steps && !one[0].asleep; ++i) {
+        stepBodies(one, world, CollisionSettings(), SleepSettings(), Integrator::SemiImplicitEuler, i * dt, dt);
+        if (lowestZ) *lowestZ = std::min(*lowestZ, one[0].positionM.z());
+    }
+    return std::move(one[0]);
 }
 
 TEST(Ground, DroppedBoxComesToRestOnTheGroundAndSleeps)
@@ -141,18 +144,8 @@ TEST(Ground, DroppedBoxComesToRestOnTheGroundAndSleeps)
     b.positionM = Eigen::Vector3d(0, 0, 1.0);
     b.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 1, 0).normalized()));
     b.linearVelocityMS = Eigen::Vector3d(1.0, 0, 0);
-    WorldSettings world;
-    SleepSettings sleep;
-    const Eigen::Vector3d g(0, 0, -9.81);
-    const WrenchFunction f = gravityOnly(b, g);
-    const double dt = 1.0 / 480;
     double lowest = 1e300;
-    for (int i = 0; i < 480 * 6 && !b.asleep; ++i) {
-        integrateBody(b, i * dt, dt, Integrator::SemiImplicitEuler, f);
-        resolveAlone(b, world, dt);
-        updateSleep(b, sleep, dt);
-        lowest = std::min(lowest, b.positionM.z());
-    }
+    b = stepAlone(b, WorldSettings(), 1.0 / 480, 480 * 6, &lowest);
     EXPECT_TRUE(b.asleep);
     // It rests on one of its faces: the centre is half a thickness (0.1, 0.15 or 0.2 m) up.
     const double z = b.positionM.z();
@@ -172,14 +165,7 @@ TEST(Colliders, BodyComesToRestOnAStaticBox)
     world.colliders.push_back(table);
     Body b = box(3, 3, 2, 0.1, 1500.0);
     b.positionM = Eigen::Vector3d(0.05, -0.05, 1.6);
-    const WrenchFunction f = gravityOnly(b, world.gravityMS2);
-    SleepSettings sleep;
-    const double dt = 1.0 / 480;
-    for (int i = 0; i < 480 * 5 && !b.asleep; ++i) {
-        integrateBody(b, i * dt, dt, Integrator::SemiImplicitEuler, f);
-        resolveAlone(b, world, dt);
-        updateSleep(b, sleep, dt);
-    }
+    b = stepAlone(b, world, 1.0 / 480, 480 * 5);
     EXPECT_TRUE(b.asleep);
     EXPECT_NEAR(b.positionM.z(), 1.0 + 0.1, 0.01) << "resting on the table top, half its 0.2 m height up";
 }

@@ -1,4 +1,6 @@
 // spall: command-line front end. Only this file turns library errors into exit codes.
+#include "BenchCollisions.h"
+
 #include <spall/blast/Blast.h>
 #include <spall/core/Error.h>
 #include <spall/io/History.h>
@@ -460,6 +462,15 @@ int main(int argc, char** argv)
     inspect->add_option("--frame", inspectFrame, "Frame to summarise (default: the last)");
     inspect->add_option("--body", inspectBody, "Follow one body through the run");
 
+    // bench
+    auto* bench = app.add_subcommand("bench", "Benchmarks that print tables (the micro-benchmarks are in spall_bench)");
+    auto* benchCollisionsCmd = bench->add_subcommand("collisions", "Table 5-1: steps per second against boundary voxels, per method");
+    bench->require_subcommand(1);
+    bool benchJson = false;
+    long benchMaxVoxels = 1'000'000;
+    benchCollisionsCmd->add_flag("--json", benchJson, "One JSON row per method and size");
+    benchCollisionsCmd->add_option("--max-boundary-voxels", benchMaxVoxels, "Largest size to run")->check(CLI::PositiveNumber);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -479,6 +490,7 @@ int main(int argc, char** argv)
         }
         if (*run) return runRun(runScenePath, runOut, runThreads, runSeed, runFrames, runQuiet, !runNoPreview);
         if (*blast) return runBlast(tnt, dist, burst, dataset, blastJson, curve);
+        if (*benchCollisionsCmd) return spall::benchCollisions(benchJson, benchMaxVoxels);
     } catch (const spall::InputError& e) {
         std::cerr << "spall: error: " << e.what() << "\n";
         return 2;

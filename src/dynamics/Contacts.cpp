@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 namespace spall {
 
@@ -34,6 +35,15 @@ namespace {
 
 bool movable(const Body& body) { return !body.anchored && !body.asleep; }
 
+/// Contacts are found this far (in voxels) before they touch and solved speculatively (the
+/// approach may only close the gap), so a resting contact does not flicker on and off.
+constexpr double kContactMarginVoxels = 0.1;
+/// Voxel pairs closer than this (in voxels) are tested as cubes. The paper's one voxel misses
+/// turned cubes touching corner to edge, which then sink into each other unseen; sqrt(2) plus
+/// the margin catches every pair turned about one axis, and what it misses across a body
+/// diagonal overlaps by under a quarter voxel.
+constexpr double kReach = 1.4143 + kContactMarginVoxels;
+
 /// Runs f(block) for blocks [0, count) in parallel; each block writes only its own slot.
 template <typename F>
 void forEachBlock(size_t count, const F& f)
@@ -41,10 +51,84 @@ void forEachBlock(size_t count, const F& f)
     tbb::parallel_for(size_t(0), count, [&](size_t block) { f(block); });
 }
 
+// ---- the contact between two voxels ----------------------------------------------------------
+
+/// Not registered with the tree (registration costs a locked hash-map insert per pair).
+using ConstLinkAccessor = openvdb::tree::ValueAccessor<const LinkTree, false>;
+
+/// Contact of a voxel of body a with one of body b (rotations ra, rb), given the world vector from
+/// b's voxel centre to a's. The voxels are cubes: the normal is the axis along which they overlap
+/// least (separating-axis test over the six face axes and nine edge-edge axes), the depth that
+/// overlap (negative: a gap). The paper's line between centres tilts whenever two faces meet
+/// offset by a fraction of a voxel, and tilted normals make resting debris slide and rattle.
+/// Returns false when the cubes are separated by more than the speculative margin.
+bool makeVoxelContact(const Eigen::Matrix3d& ra, const Eigen::Matrix3d& rb, double h, const Eigen::Vector3d& centreA,
+                      const Eigen::Vector3d& bToA, VoxelContact& out)
+{
+    // c(i, j) = a's axis i . b's axis j; every projected radius follows from it.
+    const Eigen::Matrix3d c = ra.transpose() * rb;
+    const Eigen::Matrix3d absC = c.cwiseAbs();
+    const double half = 0.5 * h;
+    double best = std::numeric_limits<double>::infinity();
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+    auto consider = [&](const Eigen::Vector3d& unitAxis, double radii) {
+        const double along = unitAxis.dot(bToA);
+        const double overlap = radii - std::abs(along);
+        if (overlap < best) {
+            best = overlap;
+            normal = along >= 0 ? unitAxis : Eigen::Vector3d(-unitAxis);
+        }
+    };
+    for (int i = 0; i < 3; ++i) consider(ra.col(i), half * (1.0 + absC.row(i).sum()));
+    for (int j = 0; j < 3; ++j) consider(rb.col(j), half * (1.0 + absC.col(j).sum()));
+    if (best <= -kContactMarginVoxels * h) return false;  // a face axis already separates them
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            const double sine2 = 1.0 - c(i, j) * c(i, j);
+            if (sine2 < 1e-6) continue;  // parallel edges: a face axis covers it
+            const int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+            const double radii = half * (absC(i1, j) + absC(i2, j) + absC(i, j1) + absC(i, j2));
+            const double norm = std::sqrt(sine2);
+            consider(ra.col(i).cross(rb.col(j)) / norm, radii / norm);
+        }
+    if (best <= -kContactMarginVoxels * h) return false;
+    out = {centreA - 0.5 * bToA, normal, best};
+    return true;
+}
+
+/// At most four of the contacts: the deepest, the farthest from it, and the farthest from their
+/// line on each side; a quadrilateral spanning the patch resists tipping as well as all of them,
+/// and fewer, distinct points let the solver converge faster.
+std::vector<size_t> spanningPoints(const std::vector<VoxelContact>& contacts, const Eigen::Vector3d& normal, size_t deepest)
+{
+    if (contacts.size() <= 4) {
+        std::vector<size_t> all(contacts.size());
+        for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+        return all;
+    }
+    const Eigen::Vector3d p0 = contacts[deepest].pointM;
+    size_t i1 = deepest;
+    for (size_t i = 0; i < contacts.size(); ++i)
+        if ((contacts[i].pointM - p0).squaredNorm() > (contacts[i1].pointM - p0).squaredNorm()) i1 = i;
+    const Eigen::Vector3d edge = contacts[i1].pointM - p0;
+    auto side = [&](size_t i) { return normal.dot(edge.cross(contacts[i].pointM - p0)); };
+    size_t i2 = deepest, i3 = deepest;
+    for (size_t i = 0; i < contacts.size(); ++i) {
+        if (side(i) > side(i2)) i2 = i;
+        if (side(i) < side(i3)) i3 = i;
+    }
+    std::vector<size_t> chosen;
+    for (size_t i : {deepest, i1, i2, i3}) {
+        const bool seen = std::any_of(chosen.begin(), chosen.end(), [&](size_t j) { return contacts[j].pointM == contacts[i].pointM; });
+        if (!seen) chosen.push_back(i);
+    }
+    return chosen;
+}
+
 // ---- narrow phase: spall's tree lookup -------------------------------------------------------
 
 /// Boundary voxels of the body with fewer of them, moved into the other's index space and looked
-/// up in its tree: the eight voxels around the moved centre are the only ones within one voxel.
+/// up in its tree: only the few voxels around the moved centre can be within reach.
 std::vector<VoxelContact> treeLookupContacts(const Body& a, const Body& b)
 {
     std::vector<VoxelContact> out;
@@ -59,29 +143,29 @@ std::vector<VoxelContact> treeLookupContacts(const Body& a, const Body& b)
     const Eigen::Vector3d t =
         (rt.transpose() * (probe.positionM - target.positionM - rp * probe.mass.centreOfMassLocalM) + target.mass.centreOfMassLocalM) / h;
     const openvdb::CoordBBox& box = target.indexBounds;
-    const Eigen::Vector3d lo(box.min().x() - 1.0, box.min().y() - 1.0, box.min().z() - 1.0);
-    const Eigen::Vector3d hi(box.max().x() + 1.0, box.max().y() + 1.0, box.max().z() + 1.0);
-    auto acc = target.grid->getConstAccessor();
+    const Eigen::Vector3d lo = Eigen::Vector3d(box.min().x(), box.min().y(), box.min().z()).array() - kReach;
+    const Eigen::Vector3d hi = Eigen::Vector3d(box.max().x(), box.max().y(), box.max().z()).array() + kReach;
+    const ConstLinkAccessor targetAcc(target.grid->constTree());
+    const Eigen::Matrix3d ra = a.orientation.toRotationMatrix(), rb = b.orientation.toRotationMatrix();
+    VoxelContact contact;
     for (const openvdb::Coord& ijk : probe.boundaryVoxels) {
         const Eigen::Vector3d u = m * Eigen::Vector3d(ijk.x(), ijk.y(), ijk.z()) + t;
         if ((u.array() <= lo.array()).any() || (u.array() >= hi.array()).any()) continue;
-        const openvdb::Coord base(static_cast<int>(std::floor(u.x())), static_cast<int>(std::floor(u.y())),
-                                  static_cast<int>(std::floor(u.z())));
-        for (int corner = 0; corner < 8; ++corner) {
-            const openvdb::Coord k = base.offsetBy(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-            if (!acc.isValueOn(k)) continue;
-            const Eigen::Vector3d d = u - Eigen::Vector3d(k.x(), k.y(), k.z());
-            const double d2 = d.squaredNorm();
-            if (d2 >= 1.0) continue;
-            const double dist = std::sqrt(d2);
-            // From the target's voxel to the probe's; coincident centres fall back to the centres' line.
-            Eigen::Vector3d n = dist > 1e-9 ? Eigen::Vector3d(rt * (d / dist)) : Eigen::Vector3d(probe.positionM - target.positionM);
-            if (n.squaredNorm() < 1e-24) n = Eigen::Vector3d::UnitZ();
-            n.normalize();
-            const Eigen::Vector3d probeCentre = probe.voxelWorldM(ijk);
-            VoxelContact c{probeCentre - 0.5 * dist * h * n, probeIsA ? n : Eigen::Vector3d(-n), (1.0 - dist) * h};
-            out.push_back(c);
-        }
+        const openvdb::Coord first(static_cast<int>(std::ceil(u.x() - kReach)), static_cast<int>(std::ceil(u.y() - kReach)),
+                                   static_cast<int>(std::ceil(u.z() - kReach)));
+        const openvdb::Coord last(static_cast<int>(std::floor(u.x() + kReach)), static_cast<int>(std::floor(u.y() + kReach)),
+                                  static_cast<int>(std::floor(u.z() + kReach)));
+        for (openvdb::Coord k = first; k.x() <= last.x(); ++k.x())
+            for (k.y() = first.y(); k.y() <= last.y(); ++k.y())
+                for (k.z() = first.z(); k.z() <= last.z(); ++k.z()) {
+                    const Eigen::Vector3d d = u - Eigen::Vector3d(k.x(), k.y(), k.z());
+                    if (d.squaredNorm() >= kReach * kReach || !targetAcc.isValueOn(k)) continue;
+                    const Eigen::Vector3d targetToProbe = rt * d * h;
+                    const Eigen::Vector3d probeCentre = probe.voxelWorldM(ijk);
+                    const bool touching = probeIsA ? makeVoxelContact(ra, rb, h, probeCentre, targetToProbe, contact)
+                                                   : makeVoxelContact(ra, rb, h, probeCentre - targetToProbe, -targetToProbe, contact);
+                    if (touching) out.push_back(contact);
+                }
     }
     return out;
 }
@@ -100,36 +184,32 @@ std::vector<WorldVoxel> worldBoundaryVoxels(const std::vector<Body>& bodies)
     for (size_t i = 0; i < bodies.size(); ++i) offset[i + 1] = offset[i] + bodies[i].boundaryVoxels.size();
     std::vector<WorldVoxel> voxels(offset.back());
     forEachBlock(bodies.size(), [&](size_t i) {
-        for (size_t k = 0; k < bodies[i].boundaryVoxels.size(); ++k)
+        for (size_t k = 0; k < bodies[i].boundaryVoxels.size(); ++k) {
             voxels[offset[i] + k] = {bodies[i].voxelWorldM(bodies[i].boundaryVoxels[k]), static_cast<int>(i)};
+        }
     });
     return voxels;
 }
 
-struct PairContact {
+/// Two voxels of different bodies within reach: (pair, voxel in a, voxel in b).
+struct VoxelPair {
     BodyPair pair;
-    VoxelContact contact;
+    uint32_t voxelA, voxelB;  ///< indices into the world voxel list
 };
 
-/// Contact between two world voxels closer than h, oriented from the higher body index to the lower.
-bool voxelContact(const WorldVoxel& p, const WorldVoxel& q, double h, PairContact& out)
+/// The manifolds that hold a contact (voxels within reach can still be apart as cubes).
+std::vector<ContactManifold> withoutEmpty(std::vector<ContactManifold> manifolds)
 {
-    const Eigen::Vector3d d = p.centreM - q.centreM;
-    const double d2 = d.squaredNorm();
-    if (d2 >= h * h) return false;
-    const double dist = std::sqrt(d2);
-    const bool pFirst = p.body < q.body;
-    Eigen::Vector3d n = dist > 1e-9 * h ? Eigen::Vector3d(d / dist) : Eigen::Vector3d::UnitZ();
-    if (!pFirst) n = -n;
-    out.pair = {std::min(p.body, q.body), std::max(p.body, q.body)};
-    out.contact = {0.5 * (p.centreM + q.centreM), n, h - dist};
-    return true;
+    manifolds.erase(std::remove_if(manifolds.begin(), manifolds.end(), [](const ContactManifold& m) { return m.points.empty(); }),
+                    manifolds.end());
+    return manifolds;
 }
 
-/// Groups pair contacts (already in a deterministic order) by pair and reduces each group.
-std::vector<ContactManifold> manifoldsFromPairContacts(std::vector<PairContact>& all)
+/// Groups voxel pairs (already in a deterministic order) by body pair and reduces each group.
+std::vector<ContactManifold> manifoldsFromVoxelPairs(const std::vector<Body>& bodies, const std::vector<WorldVoxel>& voxels,
+                                                     std::vector<VoxelPair>& all)
 {
-    std::stable_sort(all.begin(), all.end(), [](const PairContact& x, const PairContact& y) { return x.pair < y.pair; });
+    std::stable_sort(all.begin(), all.end(), [](const VoxelPair& x, const VoxelPair& y) { return x.pair < y.pair; });
     std::vector<std::pair<size_t, size_t>> groups;
     for (size_t i = 0; i < all.size();) {
         size_t j = i;
@@ -139,22 +219,52 @@ std::vector<ContactManifold> manifoldsFromPairContacts(std::vector<PairContact>&
     }
     std::vector<ContactManifold> manifolds(groups.size());
     forEachBlock(groups.size(), [&](size_t g) {
+        const Body& a = bodies[all[groups[g].first].pair.a];
+        const Body& b = bodies[all[groups[g].first].pair.b];
+        const Eigen::Matrix3d ra = a.orientation.toRotationMatrix(), rb = b.orientation.toRotationMatrix();
         std::vector<VoxelContact> contacts;
-        for (size_t k = groups[g].first; k < groups[g].second; ++k) contacts.push_back(all[k].contact);
-        manifolds[g] = reduceManifold(all[groups[g].first].pair.a, all[groups[g].first].pair.b, contacts);
+        VoxelContact contact;
+        for (size_t k = groups[g].first; k < groups[g].second; ++k) {
+            const Eigen::Vector3d& ca = voxels[all[k].voxelA].centreM;
+            if (makeVoxelContact(ra, rb, a.voxelSizeM, ca, ca - voxels[all[k].voxelB].centreM, contact)) contacts.push_back(contact);
+        }
+        manifolds[g] = reduceManifold(all[groups[g].first].pair.a, all[groups[g].first].pair.b, contacts, a.voxelSizeM);
     });
-    return manifolds;
+    return withoutEmpty(std::move(manifolds));
 }
 
+/// Runs perBlock(begin, end, out) over fixed blocks in parallel and joins the outputs in block order.
 template <typename PerBlock>
-std::vector<PairContact> collectInBlocks(size_t count, size_t blockSize, const PerBlock& perBlock)
+std::vector<VoxelPair> collectInBlocks(size_t count, size_t blockSize, const PerBlock& perBlock)
 {
     const size_t blocks = (count + blockSize - 1) / blockSize;
-    std::vector<std::vector<PairContact>> found(blocks);
+    std::vector<std::vector<VoxelPair>> found(blocks);
     forEachBlock(blocks, [&](size_t blk) { perBlock(blk * blockSize, std::min(count, (blk + 1) * blockSize), found[blk]); });
-    std::vector<PairContact> all;
+    std::vector<VoxelPair> all;
     for (auto& f : found) all.insert(all.end(), f.begin(), f.end());
     return all;
+}
+
+/// Appends the pair (i, j) when the voxels belong to different bodies that can interact and lie
+/// within reach; the lower body index goes first.
+void testVoxelPair(const std::vector<WorldVoxel>& voxels, const std::vector<char>& moves, size_t i, size_t j, double reach2,
+                   std::vector<VoxelPair>& out)
+{
+    const WorldVoxel& p = voxels[i];
+    const WorldVoxel& q = voxels[j];
+    if (p.body == q.body || (!moves[p.body] && !moves[q.body])) return;
+    if ((p.centreM - q.centreM).squaredNorm() >= reach2) return;
+    if (p.body < q.body)
+        out.push_back({{p.body, q.body}, static_cast<uint32_t>(i), static_cast<uint32_t>(j)});
+    else
+        out.push_back({{q.body, p.body}, static_cast<uint32_t>(j), static_cast<uint32_t>(i)});
+}
+
+std::vector<char> movableFlags(const std::vector<Body>& bodies)
+{
+    std::vector<char> moves(bodies.size());
+    for (size_t i = 0; i < bodies.size(); ++i) moves[i] = movable(bodies[i]);
+    return moves;
 }
 
 /// The paper's first scheme: every boundary voxel against every boundary voxel of other bodies.
@@ -163,29 +273,25 @@ std::vector<ContactManifold> pairwiseContacts(const std::vector<Body>& bodies)
     const std::vector<WorldVoxel> voxels = worldBoundaryVoxels(bodies);
     if (voxels.empty()) return {};
     const double h = bodies.front().voxelSizeM;
-    std::vector<char> moves(bodies.size());
-    for (size_t i = 0; i < bodies.size(); ++i) moves[i] = movable(bodies[i]);
-    std::vector<PairContact> all = collectInBlocks(voxels.size(), 256, [&](size_t begin, size_t end, std::vector<PairContact>& out) {
-        PairContact pc;
+    const std::vector<char> moves = movableFlags(bodies);
+    std::vector<VoxelPair> all = collectInBlocks(voxels.size(), 256, [&](size_t begin, size_t end, std::vector<VoxelPair>& out) {
         for (size_t i = begin; i < end; ++i)
-            for (size_t j = i + 1; j < voxels.size(); ++j)
-                if (voxels[i].body != voxels[j].body && (moves[voxels[i].body] || moves[voxels[j].body]) &&
-                    voxelContact(voxels[i], voxels[j], h, pc))
-                    out.push_back(pc);
+            for (size_t j = i + 1; j < voxels.size(); ++j) testVoxelPair(voxels, moves, i, j, kReach * kReach * h * h, out);
     });
-    return manifoldsFromPairContacts(all);
+    return manifoldsFromVoxelPairs(bodies, voxels, all);
 }
 
-/// The paper's second scheme: boundary voxels sorted into buckets of one voxel; each voxel is
-/// tested against the voxels of its own and the 26 adjacent buckets.
+/// The paper's second scheme: boundary voxels sorted into buckets as wide as the contact reach;
+/// each voxel is tested against the voxels of its own and the 26 adjacent buckets.
 std::vector<ContactManifold> bucketContacts(const std::vector<Body>& bodies)
 {
     const std::vector<WorldVoxel> voxels = worldBoundaryVoxels(bodies);
     if (voxels.empty()) return {};
     const double h = bodies.front().voxelSizeM;
+    const double bucket = kReach * h;
     auto cellOf = [&](const Eigen::Vector3d& x) {
-        return openvdb::Coord(static_cast<int>(std::floor(x.x() / h)), static_cast<int>(std::floor(x.y() / h)),
-                              static_cast<int>(std::floor(x.z() / h)));
+        return openvdb::Coord(static_cast<int>(std::floor(x.x() / bucket)), static_cast<int>(std::floor(x.y() / bucket)),
+                              static_cast<int>(std::floor(x.z() / bucket)));
     };
     auto key = [](const openvdb::Coord& c) {
         // 21 bits per axis: buckets one voxel wide over +-10^6 voxels.
@@ -194,10 +300,8 @@ std::vector<ContactManifold> bucketContacts(const std::vector<Body>& bodies)
     std::vector<std::pair<uint64_t, uint32_t>> table(voxels.size());
     for (size_t i = 0; i < voxels.size(); ++i) table[i] = {key(cellOf(voxels[i].centreM)), static_cast<uint32_t>(i)};
     std::sort(table.begin(), table.end());
-    std::vector<char> moves(bodies.size());
-    for (size_t i = 0; i < bodies.size(); ++i) moves[i] = movable(bodies[i]);
-    std::vector<PairContact> all = collectInBlocks(voxels.size(), 1024, [&](size_t begin, size_t end, std::vector<PairContact>& out) {
-        PairContact pc;
+    const std::vector<char> moves = movableFlags(bodies);
+    std::vector<VoxelPair> all = collectInBlocks(voxels.size(), 1024, [&](size_t begin, size_t end, std::vector<VoxelPair>& out) {
         for (size_t i = begin; i < end; ++i) {
             const openvdb::Coord cell = cellOf(voxels[i].centreM);
             for (int dx = -1; dx <= 1; ++dx)
@@ -205,27 +309,25 @@ std::vector<ContactManifold> bucketContacts(const std::vector<Body>& bodies)
                     for (int dz = -1; dz <= 1; ++dz) {
                         const uint64_t k = key(cell.offsetBy(dx, dy, dz));
                         auto it = std::lower_bound(table.begin(), table.end(), std::make_pair(k, uint32_t(0)));
-                        for (; it != table.end() && it->first == k; ++it) {
-                            const size_t j = it->second;
-                            if (j <= i || voxels[i].body == voxels[j].body) continue;
-                            if (!moves[voxels[i].body] && !moves[voxels[j].body]) continue;
-                            if (voxelContact(voxels[i], voxels[j], h, pc)) out.push_back(pc);
-                        }
+                        for (; it != table.end() && it->first == k; ++it)
+                            if (it->second > i) testVoxelPair(voxels, moves, i, it->second, kReach * kReach * h * h, out);
                     }
         }
     });
-    return manifoldsFromPairContacts(all);
+    return manifoldsFromVoxelPairs(bodies, voxels, all);
 }
 
 // ---- contacts with the ground and static boxes -----------------------------------------------
 
 struct SolverContact {
     int a, b;                  ///< b = -1: the world (ground or a static box)
+    std::pair<int64_t, int64_t> cacheKey;  ///< body ids, or body id and -2 - collider
     Eigen::Vector3d armA, armB;  ///< contact point relative to each centre of mass
     Eigen::Vector3d normal;      ///< pushes a away from b
     double bounceTarget = 0;
     double friction = 0;
     double normalImpulse = 0;
+    Eigen::Vector3d frictionImpulse = Eigen::Vector3d::Zero();  ///< accumulated, in the tangent plane
 };
 
 struct StaticContact {
@@ -242,15 +344,16 @@ std::vector<StaticContact> findStaticContacts(const Body& body, const WorldSetti
     std::vector<StaticContact> contacts;
     const Eigen::Matrix3d rot = body.orientation.toRotationMatrix();
     const double h = body.voxelSizeM;
-    const double voxelRadius = 0.5 * std::sqrt(3.0) * h;
+    const double margin = kContactMarginVoxels * h;
+    const double voxelRadius = 0.5 * std::sqrt(3.0) * h + margin;
     const GroundPlane& ground = world.ground;
-    const bool nearGround = ground.enabled && ground.normal.dot(body.positionM) - ground.offsetM <= body.boundingRadiusM;
+    const bool nearGround = ground.enabled && ground.normal.dot(body.positionM) - ground.offsetM <= body.boundingRadiusM + margin;
     std::vector<int> nearBoxes;
     for (size_t b = 0; b < world.colliders.size(); ++b) {
         const StaticBox& box = world.colliders[b];
         const Eigen::Vector3d local = box.orientation.inverse() * (body.positionM - box.centreM);
         const Eigen::Vector3d outside = (local.cwiseAbs() - box.halfExtentM).cwiseMax(0.0);
-        if (outside.norm() <= body.boundingRadiusM) nearBoxes.push_back(static_cast<int>(b));
+        if (outside.norm() <= body.boundingRadiusM + margin) nearBoxes.push_back(static_cast<int>(b));
     }
     if (!nearGround && nearBoxes.empty()) return contacts;
 
@@ -266,7 +369,7 @@ std::vector<StaticContact> findStaticContacts(const Body& body, const WorldSetti
         if (nearGround && ground.normal.dot(centre) - ground.offsetM < voxelRadius) {
             corners([&](const Eigen::Vector3d& corner) {
                 const double separation = ground.normal.dot(centre + corner) - ground.offsetM;
-                if (separation < 0.0)
+                if (separation < margin)
                     contacts.push_back({centreArm + corner, ground.normal, -separation, -1, ground.restitution, ground.friction});
             });
         }
@@ -278,7 +381,7 @@ std::vector<StaticContact> findStaticContacts(const Body& body, const WorldSetti
             corners([&](const Eigen::Vector3d& corner) {
                 const Eigen::Vector3d q = boxRot.transpose() * (centre + corner - box.centreM);
                 const Eigen::Vector3d penetration = box.halfExtentM - q.cwiseAbs();
-                if ((penetration.array() <= 0.0).any()) return;
+                if ((penetration.array() <= -margin).any() || (penetration.array() <= 0.0).count() > 1) return;
                 int axis = 0;
                 penetration.minCoeff(&axis);
                 const Eigen::Vector3d normal = boxRot.col(axis) * (q[axis] >= 0 ? 1.0 : -1.0);
@@ -289,11 +392,113 @@ std::vector<StaticContact> findStaticContacts(const Body& body, const WorldSetti
     return contacts;
 }
 
+/// Per collider and normal, the corners reduced to at most four spanning points.
+std::vector<StaticContact> reduceStaticContacts(const std::vector<StaticContact>& all)
+{
+    std::vector<StaticContact> reduced;
+    std::vector<char> done(all.size(), 0);
+    for (size_t i = 0; i < all.size(); ++i) {
+        if (done[i]) continue;
+        std::vector<size_t> group;
+        std::vector<VoxelContact> points;
+        size_t deepest = 0;
+        for (size_t j = i; j < all.size(); ++j)
+            if (!done[j] && all[j].collider == all[i].collider && all[j].normal == all[i].normal) {
+                done[j] = 1;
+                if (all[j].depth > all[group.empty() ? j : group[deepest]].depth) deepest = group.size();
+                group.push_back(j);
+                points.push_back({all[j].arm, all[j].normal, all[j].depth});
+            }
+        for (size_t k : spanningPoints(points, all[i].normal, deepest)) reduced.push_back(all[group[k]]);
+    }
+    return reduced;
+}
+
 struct SolverBody {
     Eigen::Vector3d v = Eigen::Vector3d::Zero(), w = Eigen::Vector3d::Zero();
     double invMass = 0;
     Eigen::Matrix3d invInertia = Eigen::Matrix3d::Zero();
 };
+
+/// Warm starting applies this much of last step's impulse: a little less than all of it, so a
+/// contact that is opening does not get pushed.
+constexpr double kWarmStartFraction = 1.0;
+
+/// Removes penetration by moving positions only (velocities untouched: no kinetic energy is
+/// added). Constraints: per body and static collider its deepest contact, per touching pair its
+/// manifold, split by inverse mass; a few Gauss–Seidel passes from the bottom up, each seeing
+/// the depth that earlier moves left.
+void correctPositions(std::vector<Body>& bodies, const std::vector<SolverBody>& state,
+                      const std::vector<std::vector<StaticContact>>& statics, const std::vector<ContactManifold>& manifolds,
+                      const Eigen::Vector3d& up, size_t colliderCount)
+{
+    if (bodies.empty()) return;
+    struct Constraint {
+        int a, b;  ///< b = -1: static
+        Eigen::Vector3d normal;
+        double depth, height;
+    };
+    std::vector<Constraint> constraints;
+    for (size_t i = 0; i < bodies.size(); ++i) {
+        for (int collider = -1; collider < static_cast<int>(colliderCount); ++collider) {
+            const StaticContact* deepest = nullptr;
+            for (const StaticContact& c : statics[i])
+                if (c.collider == collider && (!deepest || c.depth > deepest->depth)) deepest = &c;
+            if (deepest) constraints.push_back({static_cast<int>(i), -1, deepest->normal, deepest->depth, up.dot(bodies[i].positionM)});
+        }
+    }
+    for (const ContactManifold& m : manifolds)
+        if (state[m.a].invMass + state[m.b].invMass > 0)
+            constraints.push_back({m.a, m.b, m.normal, m.maxDepthM, up.dot(bodies[m.a].positionM + bodies[m.b].positionM) / 2});
+    std::stable_sort(constraints.begin(), constraints.end(), [](const Constraint& x, const Constraint& y) { return x.height < y.height; });
+    const double slop = 0.01 * bodies.front().voxelSizeM;
+    std::vector<Eigen::Vector3d> shift(bodies.size(), Eigen::Vector3d::Zero());
+    for (int pass = 0; pass < 4; ++pass) {
+        for (const Constraint& c : constraints) {
+            const double moved = c.normal.dot(shift[c.a] - (c.b >= 0 ? shift[c.b] : Eigen::Vector3d::Zero()));
+            const double depth = c.depth - moved;
+            if (depth <= slop) continue;
+            const double ia = state[c.a].invMass, ib = c.b >= 0 ? state[c.b].invMass : 0.0;
+            shift[c.a] += (depth - slop) * ia / (ia + ib) * c.normal;
+            if (c.b >= 0) shift[c.b] -= (depth - slop) * ib / (ia + ib) * c.normal;
+        }
+    }
+    for (size_t i = 0; i < bodies.size(); ++i) bodies[i].positionM += shift[i];
+}
+
+/// Rest times per body, then islands of touching bodies (anchored bodies join none) by union-find;
+/// an island sleeps when all its awake bodies have rested long enough. Sleeping body by body
+/// instead lets settling neighbours knock each other awake again and again.
+void putRestingIslandsToSleep(std::vector<Body>& bodies, const std::vector<BodyPair>& touching, const std::vector<char>& loaded,
+                              const SleepSettings& sleep, double dt)
+{
+    for (size_t i = 0; i < bodies.size(); ++i) {
+        Body& b = bodies[i];
+        if (b.anchored || b.asleep) continue;
+        b.restTimeS = (!loaded[i] && maxVoxelSpeedMS(b) < sleep.speedMS) ? b.restTimeS + dt : 0.0;
+    }
+    std::vector<int> parent(bodies.size());
+    for (size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
+    auto root = [&](int i) {
+        while (parent[i] != i) i = parent[i] = parent[parent[i]];
+        return i;
+    };
+    for (const BodyPair& p : touching)
+        if (!bodies[p.a].anchored && !bodies[p.b].anchored) {
+            const int ra = root(p.a), rb = root(p.b);
+            parent[std::max(ra, rb)] = std::min(ra, rb);
+        }
+    std::vector<char> restless(bodies.size(), 0);
+    for (size_t i = 0; i < bodies.size(); ++i)
+        if (!bodies[i].anchored && !bodies[i].asleep && bodies[i].restTimeS < sleep.timeS) restless[root(static_cast<int>(i))] = 1;
+    for (size_t i = 0; i < bodies.size(); ++i) {
+        Body& b = bodies[i];
+        if (b.anchored || b.asleep || restless[root(static_cast<int>(i))]) continue;
+        b.asleep = true;
+        b.linearVelocityMS.setZero();
+        b.angularVelocityRadS.setZero();
+    }
+}
 
 }  // namespace
 
@@ -328,7 +533,7 @@ std::vector<BodyPair> findCandidatePairs(const std::vector<Body>& bodies)
     return pairs;
 }
 
-ContactManifold reduceManifold(int a, int b, const std::vector<VoxelContact>& contacts)
+ContactManifold reduceManifold(int a, int b, const std::vector<VoxelContact>& contacts, double voxelSizeM)
 {
     ContactManifold m;
     m.a = a;
@@ -338,33 +543,13 @@ ContactManifold reduceManifold(int a, int b, const std::vector<VoxelContact>& co
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     size_t deepest = 0;
     for (size_t i = 0; i < contacts.size(); ++i) {
-        sum += contacts[i].depthM * contacts[i].normal;
+        // Weight by how far inside the reach the pair is (depth may be negative: a gap).
+        sum += (contacts[i].depthM + kContactMarginVoxels * voxelSizeM) * contacts[i].normal;
         if (contacts[i].depthM > contacts[deepest].depthM) deepest = i;
     }
     m.maxDepthM = contacts[deepest].depthM;
-    m.normal = sum.norm() > 1e-12 * m.maxDepthM ? Eigen::Vector3d(sum.normalized()) : contacts[deepest].normal;
-    if (contacts.size() <= 4) {
-        m.points = contacts;
-        return m;
-    }
-    // Deepest, the farthest from it, the farthest from their line on each side: a quadrilateral
-    // spanning the patch, as four points resist tipping as well as all of them.
-    const Eigen::Vector3d p0 = contacts[deepest].pointM;
-    size_t i1 = deepest;
-    for (size_t i = 0; i < contacts.size(); ++i)
-        if ((contacts[i].pointM - p0).squaredNorm() > (contacts[i1].pointM - p0).squaredNorm()) i1 = i;
-    const Eigen::Vector3d edge = contacts[i1].pointM - p0;
-    auto side = [&](size_t i) { return m.normal.dot(edge.cross(contacts[i].pointM - p0)); };
-    size_t i2 = deepest, i3 = deepest;
-    for (size_t i = 0; i < contacts.size(); ++i) {
-        if (side(i) > side(i2)) i2 = i;
-        if (side(i) < side(i3)) i3 = i;
-    }
-    for (size_t i : {deepest, i1, i2, i3}) {
-        const bool seen = std::any_of(m.points.begin(), m.points.end(),
-                                      [&](const VoxelContact& c) { return c.pointM == contacts[i].pointM; });
-        if (!seen) m.points.push_back(contacts[i]);
-    }
+    m.normal = sum.norm() > 1e-12 * voxelSizeM ? Eigen::Vector3d(sum.normalized()) : contacts[deepest].normal;
+    for (size_t i : spanningPoints(contacts, m.normal, deepest)) m.points.push_back(contacts[i]);
     return m;
 }
 
@@ -379,16 +564,14 @@ std::vector<ContactManifold> findBodyContacts(const std::vector<Body>& bodies, C
     const std::vector<BodyPair> pairs = findCandidatePairs(bodies);
     std::vector<ContactManifold> found(pairs.size());
     forEachBlock(pairs.size(), [&](size_t i) {
-        found[i] = reduceManifold(pairs[i].a, pairs[i].b, treeLookupContacts(bodies[pairs[i].a], bodies[pairs[i].b]));
+        found[i] = reduceManifold(pairs[i].a, pairs[i].b, treeLookupContacts(bodies[pairs[i].a], bodies[pairs[i].b]),
+                                  bodies[pairs[i].a].voxelSizeM);
     });
-    std::vector<ContactManifold> manifolds;
-    for (ContactManifold& m : found)
-        if (!m.points.empty()) manifolds.push_back(std::move(m));
-    return manifolds;
+    return withoutEmpty(std::move(found));
 }
 
 ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& world, const CollisionSettings& collisions,
-                             const SleepSettings& sleep, double dt)
+                             const SleepSettings& sleep, double dt, ContactCache* cache)
 {
     ContactStats stats;
     const std::vector<ContactManifold> manifolds = findBodyContacts(bodies, collisions.method);
@@ -396,7 +579,7 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
     for (const ContactManifold& m : manifolds) {
         Body& a = bodies[m.a];
         Body& b = bodies[m.b];
-        auto wakes = [&](const Body& mover) { return movable(mover) && maxVoxelSpeedMS(mover) > sleep.linearSpeedMS; };
+        auto wakes = [&](const Body& mover) { return movable(mover) && maxVoxelSpeedMS(mover) > sleep.speedMS; };
         for (auto [sleeper, other] : {std::pair<Body*, Body*>{&a, &b}, std::pair<Body*, Body*>{&b, &a}})
             if (sleeper->asleep && !sleeper->anchored && wakes(*other)) {
                 sleeper->asleep = false;
@@ -406,7 +589,7 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
 
     std::vector<std::vector<StaticContact>> statics(bodies.size());
     forEachBlock(bodies.size(), [&](size_t i) {
-        if (movable(bodies[i])) statics[i] = findStaticContacts(bodies[i], world);
+        if (movable(bodies[i])) statics[i] = reduceStaticContacts(findStaticContacts(bodies[i], world));
     });
 
     std::vector<SolverBody> state(bodies.size());
@@ -423,28 +606,45 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
     // Bounce only above the speed gravity adds in a couple of steps, so resting contacts rest.
     const double bounceThreshold = 2.0 * world.gravityMS2.norm() * dt + 0.05;
     std::vector<SolverContact> contacts;
-    auto addContact = [&](int a, int b, const Eigen::Vector3d& armA, const Eigen::Vector3d& armB, const Eigen::Vector3d& n,
-                          double restitution, double friction) {
-        SolverContact c{a, b, armA, armB, n};
+    std::vector<double> height;  // of each contact point, to solve from the bottom of a stack up
+    const Eigen::Vector3d up = world.gravityMS2.squaredNorm() > 0 ? Eigen::Vector3d(-world.gravityMS2.normalized()) : world.ground.normal;
+    auto addContact = [&](int a, int b, std::pair<int64_t, int64_t> key, const Eigen::Vector3d& armA, const Eigen::Vector3d& armB,
+                          const Eigen::Vector3d& n, double depth, double restitution, double friction) {
+        SolverContact c{a, b, key, armA, armB, n};
         const double vn = n.dot(velocityAt(a, armA) - velocityAt(b, armB));
-        if (vn < -bounceThreshold) c.bounceTarget = -restitution * vn;
+        const double gap = std::max(-depth, 0.0);
+        if (vn < -bounceThreshold && -vn * dt >= gap)
+            c.bounceTarget = -restitution * vn;  // touches within this step: bounce
+        else
+            c.bounceTarget = -gap / dt;  // speculative: the approach may only close the gap
         c.friction = friction;
         contacts.push_back(c);
+        height.push_back(up.dot(bodies[a].positionM + armA));
     };
     for (size_t i = 0; i < bodies.size(); ++i) {
         stats.staticContacts += static_cast<int64_t>(statics[i].size());
         for (const StaticContact& s : statics[i])
-            addContact(static_cast<int>(i), -1, s.arm, Eigen::Vector3d::Zero(), s.normal, s.restitution, s.friction);
+            addContact(static_cast<int>(i), -1, {bodies[i].id, -2 - s.collider}, s.arm, Eigen::Vector3d::Zero(), s.normal, s.depth,
+                       s.restitution, s.friction);
     }
     for (const ContactManifold& m : manifolds) {
         stats.bodyContacts += m.voxelContacts;
         stats.maxPenetrationM = std::max(stats.maxPenetrationM, m.maxDepthM);
         for (const VoxelContact& p : m.points)
-            addContact(m.a, m.b, p.pointM - bodies[m.a].positionM, p.pointM - bodies[m.b].positionM, m.normal,
-                       collisions.restitution, collisions.friction);
+            addContact(m.a, m.b, {bodies[m.a].id, bodies[m.b].id}, p.pointM - bodies[m.a].positionM, p.pointM - bodies[m.b].positionM,
+                       m.normal, p.depthM, collisions.restitution, collisions.friction);
     }
     stats.touchingPairs = static_cast<int64_t>(manifolds.size());
-    if (contacts.empty()) return stats;
+    for (const ContactManifold& m : manifolds) stats.touching.push_back({m.a, m.b});
+    if (contacts.empty()) {
+        if (cache) cache->points.clear();
+        return stats;
+    }
+
+    // Gauss–Seidel converges fastest up a stack when the lowest contacts come first.
+    std::vector<size_t> order(contacts.size());
+    for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) { return height[x] < height[y]; });
 
     auto inverseMassAlong = [&](int i, const Eigen::Vector3d& arm, const Eigen::Vector3d& dir) {
         if (i < 0) return 0.0;
@@ -465,51 +665,130 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
         const double inv = inverseMassAlong(c.a, c.armA, c.normal) + inverseMassAlong(c.b, c.armB, c.normal);
         normalMass[k] = inv > 0 ? 1.0 / inv : 0.0;
     }
-    for (int iteration = 0; iteration < collisions.solverIterations; ++iteration) {
+    std::vector<Eigen::Matrix3d> rotation(bodies.size());
+    for (size_t i = 0; i < bodies.size(); ++i) rotation[i] = bodies[i].orientation.toRotationMatrix();
+    if (cache) {
+        // Warm start from the old point within a quarter voxel of each new one.
         for (size_t k = 0; k < contacts.size(); ++k) {
             SolverContact& c = contacts[k];
-            if (normalMass[k] == 0) continue;
-            // Normal: the accumulated impulse stays >= 0.
-            const double vn = c.normal.dot(velocityAt(c.a, c.armA) - velocityAt(c.b, c.armB));
-            const double previous = c.normalImpulse;
-            c.normalImpulse = std::max(previous + normalMass[k] * (c.bounceTarget - vn), 0.0);
-            applyImpulse(c, (c.normalImpulse - previous) * c.normal);
-            // Friction along the current sliding direction, bounded by mu times the normal impulse.
-            const Eigen::Vector3d vr = velocityAt(c.a, c.armA) - velocityAt(c.b, c.armB);
-            const Eigen::Vector3d vt = vr - c.normal.dot(vr) * c.normal;
-            const double speed = vt.norm();
-            if (speed < 1e-12) continue;
-            const Eigen::Vector3d t = vt / speed;
-            const double inv = inverseMassAlong(c.a, c.armA, t) + inverseMassAlong(c.b, c.armB, t);
-            const double limit = c.friction * c.normalImpulse;
-            applyImpulse(c, std::clamp(-speed / inv, -limit, limit) * t);
+            auto it = cache->points.find(c.cacheKey);
+            if (it == cache->points.end() || normalMass[k] == 0) continue;
+            const Eigen::Vector3d local = rotation[c.a].transpose() * c.armA;
+            const double near = 0.25 * bodies[c.a].voxelSizeM;
+            const ContactCache::Point* best = nullptr;
+            for (const ContactCache::Point& p : it->second)
+                if ((p.localM - local).norm() < near && (!best || (p.localM - local).norm() < (best->localM - local).norm())) best = &p;
+            if (!best) continue;
+            c.normalImpulse = kWarmStartFraction * best->normalNs;
+            const Eigen::Vector3d f = kWarmStartFraction * (rotation[c.a] * best->frictionNs);
+            c.frictionImpulse = f - c.normal.dot(f) * c.normal;
+            applyImpulse(c, c.normalImpulse * c.normal + c.frictionImpulse);
         }
     }
+    // Jacobian rows per contact (normal, then two fixed tangents, so friction converges like the
+    // normal does), with each body's velocity response to a unit impulse precomputed. The world
+    // is one extra, immovable entry of `state`.
+    struct Row {
+        Eigen::Vector3d dir, angularA, angularB, responseA, responseB;
+        double mass = 0;
+    };
+    const int worldIndex = static_cast<int>(bodies.size());
+    state.push_back(SolverBody());
+    std::vector<std::array<Row, 3>> rows(contacts.size());
+    std::vector<std::array<int, 2>> ends(contacts.size());
+    for (size_t k = 0; k < contacts.size(); ++k) {
+        const SolverContact& c = contacts[k];
+        const int b = c.b >= 0 ? c.b : worldIndex;
+        ends[k] = {c.a, b};
+        const Eigen::Vector3d t1 = (std::abs(c.normal.x()) < 0.6 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(c.normal).normalized();
+        const Eigen::Vector3d dirs[3] = {c.normal, t1, c.normal.cross(t1)};
+        for (int d = 0; d < 3; ++d) {
+            Row& r = rows[k][d];
+            r.dir = dirs[d];
+            r.angularA = c.armA.cross(r.dir);
+            r.angularB = c.armB.cross(r.dir);
+            r.responseA = state[c.a].invInertia * r.angularA;
+            r.responseB = state[b].invInertia * r.angularB;
+            const double inv = state[c.a].invMass + state[b].invMass + r.angularA.dot(r.responseA) + r.angularB.dot(r.responseB);
+            r.mass = inv > 0 ? 1.0 / inv : 0.0;
+        }
+    }
+    auto relativeSpeed = [&](const Row& r, int a, int b) {
+        return r.dir.dot(state[a].v - state[b].v) + r.angularA.dot(state[a].w) - r.angularB.dot(state[b].w);
+    };
+    auto push = [&](const Row& r, int a, int b, double impulse) {
+        state[a].v += state[a].invMass * impulse * r.dir;
+        state[a].w += impulse * r.responseA;
+        state[b].v -= state[b].invMass * impulse * r.dir;
+        state[b].w -= impulse * r.responseB;
+    };
+    std::vector<Eigen::Vector2d> friction(contacts.size());
+    for (size_t k = 0; k < contacts.size(); ++k)
+        friction[k] = Eigen::Vector2d(rows[k][1].dir.dot(contacts[k].frictionImpulse), rows[k][2].dir.dot(contacts[k].frictionImpulse));
+    for (int iteration = 0; iteration < collisions.solverIterations; ++iteration) {
+        for (size_t k : order) {
+            SolverContact& c = contacts[k];
+            if (rows[k][0].mass == 0) continue;
+            const auto [a, b] = ends[k];
+            // Friction first (from the current normal impulse), then the normal, which matters
+            // more: the accumulated tangential impulse stays in the Coulomb cone |f| <= mu N.
+            Eigen::Vector2d accumulated = friction[k];
+            for (int d = 1; d <= 2; ++d) accumulated[d - 1] -= rows[k][d].mass * relativeSpeed(rows[k][d], a, b);
+            const double limit = c.friction * c.normalImpulse;
+            if (accumulated.norm() > limit) accumulated *= limit / accumulated.norm();
+            for (int d = 1; d <= 2; ++d) push(rows[k][d], a, b, accumulated[d - 1] - friction[k][d - 1]);
+            friction[k] = accumulated;
+            // Normal: the accumulated impulse stays >= 0.
+            const double previous = c.normalImpulse;
+            c.normalImpulse = std::max(previous + rows[k][0].mass * (c.bounceTarget - relativeSpeed(rows[k][0], a, b)), 0.0);
+            push(rows[k][0], a, b, c.normalImpulse - previous);
+        }
+    }
+    for (size_t k = 0; k < contacts.size(); ++k) contacts[k].frictionImpulse = friction[k][0] * rows[k][1].dir + friction[k][1] * rows[k][2].dir;
+    state.pop_back();
     for (size_t i = 0; i < bodies.size(); ++i) {
         if (!movable(bodies[i])) continue;
         bodies[i].linearVelocityMS = state[i].v;
         bodies[i].angularVelocityRadS = state[i].w;
     }
+    if (cache) {
+        cache->points.clear();
+        for (const SolverContact& c : contacts)
+            cache->points[c.cacheKey].push_back({rotation[c.a].transpose() * c.armA, c.normalImpulse,
+                                                 rotation[c.a].transpose() * c.frictionImpulse});
+    }
+    correctPositions(bodies, state, statics, manifolds, up, world.colliders.size());
+    return stats;
+}
 
-    // Position correction (velocities untouched, so no kinetic energy is added): per body and
-    // static collider along its deepest contact's normal, then per pair of bodies split by
-    // inverse mass along the manifold normal.
-    const double slop = 0.01 * (bodies.empty() ? 0.0 : bodies.front().voxelSizeM);
-    for (size_t i = 0; i < bodies.size(); ++i) {
-        for (int collider = -1; collider < static_cast<int>(world.colliders.size()); ++collider) {
-            const StaticContact* deepest = nullptr;
-            for (const StaticContact& c : statics[i])
-                if (c.collider == collider && (!deepest || c.depth > deepest->depth)) deepest = &c;
-            if (deepest && deepest->depth > slop) bodies[i].positionM += (deepest->depth - slop) * deepest->normal;
+ContactStats stepBodies(std::vector<Body>& bodies, const WorldSettings& world, const CollisionSettings& collisions,
+                        const SleepSettings& sleep, Integrator integrator, double timeS, double dt, ContactCache* cache,
+                        const ExternalLoad* load)
+{
+    std::vector<char> loaded(bodies.size(), 0);
+    // Bodies are independent here: each task writes only its own body.
+    forEachBlock(bodies.size(), [&](size_t i) {
+        Body& body = bodies[i];
+        if (body.anchored) return;
+        loaded[i] = load && load->loaded(body);
+        if (loaded[i]) {
+            body.asleep = false;
+            body.restTimeS = 0;
         }
-    }
-    for (const ContactManifold& m : manifolds) {
-        const double total = state[m.a].invMass + state[m.b].invMass;
-        if (m.maxDepthM <= slop || total == 0) continue;
-        const double correction = m.maxDepthM - slop;
-        bodies[m.a].positionM += correction * state[m.a].invMass / total * m.normal;
-        bodies[m.b].positionM -= correction * state[m.b].invMass / total * m.normal;
-    }
+        if (body.asleep) return;
+        const double m = body.mass.massKg;
+        auto wrench = [&](double t, const Eigen::Vector3d& x, const Eigen::Quaterniond& q, const Eigen::Vector3d& v,
+                          const Eigen::Vector3d& w) {
+            Wrench total = loaded[i] ? load->wrench(body, t, x, q) : Wrench();
+            total.forceN += m * world.gravityMS2 - world.linearDragPerS * m * v;
+            const Eigen::Matrix3d r = q.toRotationMatrix();
+            total.torqueNm -= world.angularDragPerS * (r * body.mass.inertiaKgM2 * r.transpose() * w);
+            return total;
+        };
+        integrateBody(body, timeS, dt, integrator, wrench);
+    });
+    const ContactStats stats = resolveContacts(bodies, world, collisions, sleep, dt, cache);
+    if (sleep.enabled) putRestingIslandsToSleep(bodies, stats.touching, loaded, sleep, dt);
     return stats;
 }
 

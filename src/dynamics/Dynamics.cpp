@@ -178,21 +178,6 @@ void integrateBody(Body& body, double t, double dt, Integrator integrator, const
     body.angularVelocityRadS = angularVelocity(body, s.q, s.l);
 }
 
-void updateSleep(Body& body, const SleepSettings& settings, double dt)
-{
-    if (!settings.enabled || body.anchored) return;
-    if (body.linearVelocityMS.norm() < settings.linearSpeedMS && body.angularVelocityRadS.norm() < settings.angularSpeedRadS) {
-        body.restTimeS += dt;
-        if (body.restTimeS >= settings.timeS) {
-            body.asleep = true;
-            body.linearVelocityMS.setZero();
-            body.angularVelocityRadS.setZero();
-        }
-    } else {
-        body.restTimeS = 0.0;
-    }
-}
-
 double kineticEnergyJ(const Body& body)
 {
     return 0.5 * body.mass.massKg * body.linearVelocityMS.squaredNorm() +

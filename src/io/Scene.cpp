@@ -328,8 +328,7 @@ Scene parseScene(const std::string& text, const std::string& sourceName, const s
         scene.world.angularDragPerS = s.number("angular_drag_per_s", scene.world.angularDragPerS, 0, 1e6);
         scene.world.reflectedPressure = s.boolean("reflected_pressure", scene.world.reflectedPressure);
         scene.sleep.enabled = s.boolean("sleep", scene.sleep.enabled);
-        scene.sleep.linearSpeedMS = s.number("sleep_linear_speed_m_s", scene.sleep.linearSpeedMS, 0, 1e3);
-        scene.sleep.angularSpeedRadS = s.number("sleep_angular_speed_rad_s", scene.sleep.angularSpeedRadS, 0, 1e3);
+        scene.sleep.speedMS = s.number("sleep_speed_m_s", scene.sleep.speedMS, 0, 1e3);
         scene.sleep.timeS = s.number("sleep_time_s", scene.sleep.timeS, 0, 1e5);
     });
     r.object("collisions", [&](ObjectReader& c) {
@@ -429,8 +428,7 @@ nlohmann::json sceneToJson(const Scene& scene)
                    {"angular_drag_per_s", scene.world.angularDragPerS},
                    {"reflected_pressure", scene.world.reflectedPressure},
                    {"sleep", scene.sleep.enabled},
-                   {"sleep_linear_speed_m_s", scene.sleep.linearSpeedMS},
-                   {"sleep_angular_speed_rad_s", scene.sleep.angularSpeedRadS},
+                   {"sleep_speed_m_s", scene.sleep.speedMS},
                    {"sleep_time_s", scene.sleep.timeS}};
     const CollisionSettings& cs = scene.collisions;
     j["collisions"] = {{"method", toString(cs.method)},

@@ -2,8 +2,6 @@
 
 #include <spall/io/VdbIo.h>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -194,40 +192,19 @@ void Simulation::fractureStep(const std::vector<OpenWindow>& windows, double dt)
 
 void Simulation::motionStep(const std::vector<OpenWindow>& windows, double dt)
 {
-    const WorldSettings& world = mScene.world;
-    std::vector<char> loaded(mBodies.size(), 0);
-    // Bodies are independent here: each task writes only its own body.
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, mBodies.size()), [&](const tbb::blocked_range<size_t>& range) {
-        for (size_t i = range.begin(); i != range.end(); ++i) {
-            Body& body = mBodies[i];
-            if (body.anchored) continue;
-            loaded[i] = !windows.empty() && bodyInWindows(body, *mField, windows);
-            if (loaded[i]) {
-                body.asleep = false;
-                body.restTimeS = 0;
-            }
-            if (body.asleep) continue;
-            const double m = body.mass.massKg;
-            auto wrench = [&](double t, const Eigen::Vector3d& x, const Eigen::Quaterniond& q, const Eigen::Vector3d& v,
-                              const Eigen::Vector3d& w) {
-                Wrench total = loaded[i] ? blastWrench(body, x, q, *mField, windows, t, world.reflectedPressure) : Wrench();
-                total.forceN += m * world.gravityMS2 - world.linearDragPerS * m * v;
-                const Eigen::Matrix3d r = q.toRotationMatrix();
-                total.torqueNm -= world.angularDragPerS * (r * body.mass.inertiaKgM2 * r.transpose() * w);
-                return total;
-            };
-            integrateBody(body, mTimeS, dt, mScene.timeStep.integrator, wrench);
-        }
-    });
-    const ContactStats contacts = resolveContacts(mBodies, world, mScene.collisions, mScene.sleep, dt);
+    ExternalLoad blast;
+    blast.loaded = [&](const Body& body) { return !windows.empty() && bodyInWindows(body, *mField, windows); };
+    blast.wrench = [&](const Body& body, double t, const Eigen::Vector3d& x, const Eigen::Quaterniond& q) {
+        return blastWrench(body, x, q, *mField, windows, t, mScene.world.reflectedPressure);
+    };
+    const ContactStats contacts = stepBodies(mBodies, mScene.world, mScene.collisions, mScene.sleep,
+                                             mScene.timeStep.integrator, mTimeS, dt, &mContactCache, &blast);
     mStats.contacts += contacts.staticContacts + contacts.bodyContacts;
     // The paper's adaptive step: halve while bodies interpenetrate beyond the tolerance.
     if (contacts.maxPenetrationM > mScene.collisions.penetrationToleranceVoxels * mScene.voxelSizeM)
         mPenetrationStepScale = std::max(0.5 * mPenetrationStepScale, 1.0 / 64.0);
     else
         mPenetrationStepScale = std::min(2.0 * mPenetrationStepScale, 1.0);
-    for (size_t i = 0; i < mBodies.size(); ++i)
-        if (!loaded[i] && !mBodies[i].asleep) updateSleep(mBodies[i], mScene.sleep, dt);
 }
 
 }  // namespace spall

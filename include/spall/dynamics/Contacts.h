@@ -1,7 +1,8 @@
 // Contacts (paper section 4.2): voxel-against-voxel detection between bodies, contacts with the
 // ground and static boxes, and one sequential-impulse solver for all of them.
 //
-// Voxels collide as spheres of diameter h (the paper: centres closer than the voxel size). Three
+// Voxels collide as spheres of diameter h (the paper: centres closer than the voxel size); pairs a
+// tenth of a voxel further apart are kept as speculative contacts. Three
 // narrow phases find the same voxel pairs: the paper's pairwise test of every boundary voxel
 // against every other, its buckets (a spatial hash of boundary voxels), and spall's own, which
 // moves each boundary voxel of one body into the other body's index space and looks it up in that
@@ -10,7 +11,9 @@
 
 #include <spall/dynamics/Dynamics.h>
 
+#include <functional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace spall {
@@ -33,7 +36,9 @@ struct CollisionSettings {
 struct VoxelContact {
     Eigen::Vector3d pointM;   ///< midpoint of the two centres
     Eigen::Vector3d normal;   ///< unit, from body b's voxel to body a's
-    double depthM;            ///< h minus the distance between the centres
+    /// h minus the distance between the centres; negative for a gap (contacts are found a tenth
+    /// of a voxel early so that resting contacts do not flicker on and off)
+    double depthM;
 };
 
 /// The contacts of a pair of bodies reduced to at most four points sharing one normal.
@@ -66,13 +71,33 @@ std::vector<ContactManifold> findBodyContacts(const std::vector<Body>& bodies, C
 /// Reduces a pair's voxel contacts to a manifold: the normal is the depth-weighted mean of the
 /// centre-line normals (their tangential parts cancel across a flat contact, which is what keeps
 /// stacked debris from sliding), the points the deepest one and three that span the patch.
-ContactManifold reduceManifold(int a, int b, const std::vector<VoxelContact>& contacts);
+ContactManifold reduceManifold(int a, int b, const std::vector<VoxelContact>& contacts, double voxelSizeM);
 
 struct ContactStats {
     int64_t staticContacts = 0;   ///< voxel corners in the ground or a static box
     int64_t bodyContacts = 0;     ///< voxel pairs between bodies
     int64_t touchingPairs = 0;
     double maxPenetrationM = 0;   ///< deepest body-body contact before correction
+    std::vector<BodyPair> touching;  ///< pairs with contacts, sorted
+};
+
+/// The last step's contact points with their normal and friction impulses, per touching pair
+/// and per body and static collider (keyed by body ids); the next step's solver starts each new
+/// point from the old point nearest to it in the first body's frame (warm starting), so a stack
+/// holds its weight and a body on a slope its grip from the first iteration.
+struct ContactCache {
+    struct Point {
+        Eigen::Vector3d localM;  ///< in the first body's frame, relative to its centre of mass
+        double normalNs = 0;
+        Eigen::Vector3d frictionNs = Eigen::Vector3d::Zero();
+    };
+    struct KeyHash {
+        size_t operator()(const std::pair<int64_t, int64_t>& k) const
+        {
+            return std::hash<int64_t>()(k.first * 1000003 + k.second);
+        }
+    };
+    std::unordered_map<std::pair<int64_t, int64_t>, std::vector<Point>, KeyHash> points;
 };
 
 /// Finds every contact of the bodies' current poses (ground, static boxes, other bodies), wakes
@@ -80,6 +105,21 @@ struct ContactStats {
 /// (restitution, Coulomb friction; accumulated normal impulses stay non-negative), then removes
 /// penetration by moving positions only, which adds no kinetic energy. Deterministic.
 ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& world, const CollisionSettings& collisions,
-                             const SleepSettings& sleep, double dtS);
+                             const SleepSettings& sleep, double dtS, ContactCache* cache = nullptr);
+
+/// Loads besides gravity and drag (the blast) on one body at a trial pose; `loaded` says
+/// whether the body feels any this step (a loaded body does not sleep).
+struct ExternalLoad {
+    std::function<bool(const Body& body)> loaded;
+    std::function<Wrench(const Body& body, double timeS, const Eigen::Vector3d& positionM, const Eigen::Quaterniond& q)> wrench;
+};
+
+/// One step of every body: integrate (in parallel; gravity, drag and `load`), resolve contacts,
+/// then sleep: bodies touching each other form islands, and an island sleeps when every body in
+/// it has rested (fastest voxel below the sleep speed) for the sleep time. Deterministic for any
+/// thread count.
+ContactStats stepBodies(std::vector<Body>& bodies, const WorldSettings& world, const CollisionSettings& collisions,
+                        const SleepSettings& sleep, Integrator integrator, double timeS, double dtS,
+                        ContactCache* cache = nullptr, const ExternalLoad* load = nullptr);
 
 }  // namespace spall

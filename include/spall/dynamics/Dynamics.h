@@ -49,9 +49,10 @@ struct WorldSettings {
 
 struct SleepSettings {
     bool enabled = true;
-    double linearSpeedMS = 0.05;     ///< (unit: m/s)
-    double angularSpeedRadS = 0.1;   ///< (unit: rad/s)
-    double timeS = 0.5;              ///< below both thresholds this long to sleep (unit: s)
+    /// Speed of the body's fastest voxel (linear plus angular times radius) below which it
+    /// rests: one number for large and small bodies alike (unit: m/s).
+    double speedMS = 0.05;
+    double timeS = 0.5;  ///< resting this long puts it to sleep (unit: s)
 };
 
 /// Adaptive time step (docs/architecture.md, "Time step").
@@ -88,9 +89,6 @@ inline double maxVoxelSpeedMS(const Body& body)
 {
     return body.linearVelocityMS.norm() + body.angularVelocityRadS.norm() * body.boundingRadiusM;
 }
-
-/// Updates rest time and puts the body to sleep (velocities zeroed) when it has rested long enough.
-void updateSleep(Body& body, const SleepSettings& settings, double dtS);
 
 /// Kinetic energy (J), linear momentum (kg m/s) and angular momentum about the origin (kg m^2/s).
 double kineticEnergyJ(const Body& body);

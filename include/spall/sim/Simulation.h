@@ -59,6 +59,7 @@ private:
     int64_t mNextId = 0;
     int64_t mInitialVoxels = 0;
     StepStats mStats;
+    ContactCache mContactCache;
     double mPenetrationStepScale = 1.0;  ///< < 1 while contacts are deeper than the tolerance
 };
 
