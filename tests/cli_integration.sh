@@ -228,4 +228,17 @@ assert n >= 10 and abs(n - len(frames)) <= 1, (n, len(frames))
 assert len(h["frames/body_offset"]) >= n + 1
 PY
 done
+# collision benchmark, smallest sizes: one JSON row per method and size, every method present
+"$spall" bench collisions --json --max-boundary-voxels 200 > "$dir/bench.json"
+$py - "$dir/bench.json" <<'PY'
+import json, sys
+rows = json.load(open(sys.argv[1]))
+methods = {r["method"] for r in rows}
+assert {"none", "pairwise", "buckets", "tree-lookup"} <= methods, methods
+for r in rows:
+    assert set(r) == {"scene", "method", "boundary_voxels", "steps_per_s"}, r
+    assert r["steps_per_s"] is None or r["steps_per_s"] > 0, r
+assert {r["scene"] for r in rows} == {"pile", "explosion"}
+PY
+
 echo "cli integration: ok"

@@ -74,7 +74,8 @@ DebrisScene makeExplosionCloud(int fragments, int edge, double h, double speedMS
         const Eigen::Vector3d out = body.positionM - centre;
         const double radius = 0.5 * std::sqrt(3.0) * side * pitch;
         body.linearVelocityMS = speedMS * out / radius + 0.1 * speedMS * Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
-        body.angularVelocityRadS = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * (speedMS / (edge * h));
+        // Spin that moves corners at up to a quarter of the flight speed.
+        body.angularVelocityRadS = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * (0.25 * speedMS / (edge * h));
         scene.boundaryVoxels += static_cast<int64_t>(body.boundaryVoxels.size());
         scene.bodies.push_back(std::move(body));
     }

@@ -21,7 +21,7 @@ struct DebrisScene {
 DebrisScene makeDebrisPile(int fragments, int edgeVoxels, double voxelSizeM, uint64_t seed);
 
 /// The same fragments packed into a cube in the air, flying out from its centre at up to
-/// `speedMS`, spinning, above an open ground.
+/// `speedMS` (plus a tenth of it at random), spinning, above an open ground.
 DebrisScene makeExplosionCloud(int fragments, int edgeVoxels, double voxelSizeM, double speedMS, uint64_t seed);
 
 }  // namespace spall
