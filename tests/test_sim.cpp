@@ -55,7 +55,16 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "fracture": {"small_fragments": "burn"}})").find("fracture.small_fragments"),
               std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "collisions": {"method": "sweep"}})").find("collisions.method"),
+              std::string::npos);
     EXPECT_EQ(errorOf(defaultSceneJson()), "");
+}
+
+TEST(Scene, NumberBeyondADoubleIsAnInputError)
+{
+    // Found by fuzz/fuzz_scene: nlohmann::json throws out_of_range, not parse_error, here.
+    EXPECT_NE(errorOf(R"({"voxel_size_m": 1E400})").find("not valid JSON"), std::string::npos);
+    EXPECT_NE(errorOf(R"({"x": 111111111111111111E1111111111111111})").find("not valid JSON"), std::string::npos);
 }
 
 TEST(Scene, ShippedScenesParseAndTheDefaultMatchesItsAsset)

@@ -195,7 +195,8 @@ Scene parseScene(const std::string& text, const std::string& sourceName, const s
     json root;
     try {
         root = json::parse(text);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {
+        // parse_error, and out_of_range for numbers beyond a double (found by fuzz/fuzz_scene).
         throw InputError(sourceName + ": not valid JSON: " + e.what());
     }
     Scene scene;
