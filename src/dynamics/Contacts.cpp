@@ -320,14 +320,14 @@ std::vector<ContactManifold> bucketContacts(const std::vector<Body>& bodies)
 // ---- contacts with the ground and static boxes -----------------------------------------------
 
 struct SolverContact {
-    int a, b;                  ///< b = -1: the world (ground or a static box)
+    int a, b;                  ///< indices into the solver state; the world (ground, boxes) is its last entry
     std::pair<int64_t, int64_t> cacheKey;  ///< body ids, or body id and -2 - collider
     Eigen::Vector3d armA, armB;  ///< contact point relative to each centre of mass
     Eigen::Vector3d normal;      ///< pushes a away from b
     double bounceTarget = 0;
     double friction = 0;
-    double normalImpulse = 0;
-    Eigen::Vector3d frictionImpulse = Eigen::Vector3d::Zero();  ///< accumulated, in the tangent plane
+    double normalImpulse = 0;     ///< accumulated
+    Eigen::Vector2d frictionImpulse = Eigen::Vector2d::Zero();  ///< accumulated, along the two tangent rows
 };
 
 struct StaticContact {
@@ -427,24 +427,26 @@ constexpr double kWarmStartFraction = 1.0;
 /// Removes penetration by moving positions only (velocities untouched: no kinetic energy is
 /// added). Constraints: per body and static collider its deepest contact, per touching pair its
 /// manifold, split by inverse mass; a few Gauss–Seidel passes from the bottom up, each seeing
-/// the depth that earlier moves left.
+/// the depth that earlier moves left. `state` ends with the world's immovable entry.
 void correctPositions(std::vector<Body>& bodies, const std::vector<SolverBody>& state,
                       const std::vector<std::vector<StaticContact>>& statics, const std::vector<ContactManifold>& manifolds,
                       const Eigen::Vector3d& up, size_t colliderCount)
 {
     if (bodies.empty()) return;
     struct Constraint {
-        int a, b;  ///< b = -1: static
+        int a, b;  ///< indices into `state`; its last entry is the immovable world
         Eigen::Vector3d normal;
         double depth, height;
     };
+    const int worldIndex = static_cast<int>(state.size()) - 1;
     std::vector<Constraint> constraints;
     for (size_t i = 0; i < bodies.size(); ++i) {
         for (int collider = -1; collider < static_cast<int>(colliderCount); ++collider) {
             const StaticContact* deepest = nullptr;
             for (const StaticContact& c : statics[i])
                 if (c.collider == collider && (!deepest || c.depth > deepest->depth)) deepest = &c;
-            if (deepest) constraints.push_back({static_cast<int>(i), -1, deepest->normal, deepest->depth, up.dot(bodies[i].positionM)});
+            if (deepest)
+                constraints.push_back({static_cast<int>(i), worldIndex, deepest->normal, deepest->depth, up.dot(bodies[i].positionM)});
         }
     }
     for (const ContactManifold& m : manifolds)
@@ -452,15 +454,14 @@ void correctPositions(std::vector<Body>& bodies, const std::vector<SolverBody>& 
             constraints.push_back({m.a, m.b, m.normal, m.maxDepthM, up.dot(bodies[m.a].positionM + bodies[m.b].positionM) / 2});
     std::stable_sort(constraints.begin(), constraints.end(), [](const Constraint& x, const Constraint& y) { return x.height < y.height; });
     const double slop = 0.01 * bodies.front().voxelSizeM;
-    std::vector<Eigen::Vector3d> shift(bodies.size(), Eigen::Vector3d::Zero());
+    std::vector<Eigen::Vector3d> shift(state.size(), Eigen::Vector3d::Zero());
     for (int pass = 0; pass < 4; ++pass) {
         for (const Constraint& c : constraints) {
-            const double moved = c.normal.dot(shift[c.a] - (c.b >= 0 ? shift[c.b] : Eigen::Vector3d::Zero()));
-            const double depth = c.depth - moved;
+            const double depth = c.depth - c.normal.dot(shift[c.a] - shift[c.b]);
             if (depth <= slop) continue;
-            const double ia = state[c.a].invMass, ib = c.b >= 0 ? state[c.b].invMass : 0.0;
+            const double ia = state[c.a].invMass, ib = state[c.b].invMass;
             shift[c.a] += (depth - slop) * ia / (ia + ib) * c.normal;
-            if (c.b >= 0) shift[c.b] -= (depth - slop) * ib / (ia + ib) * c.normal;
+            shift[c.b] -= (depth - slop) * ib / (ia + ib) * c.normal;
         }
     }
     for (size_t i = 0; i < bodies.size(); ++i) bodies[i].positionM += shift[i];
@@ -592,17 +593,18 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
         if (movable(bodies[i])) statics[i] = reduceStaticContacts(findStaticContacts(bodies[i], world));
     });
 
-    std::vector<SolverBody> state(bodies.size());
+    // Solver state per body; the world (ground and boxes) is one extra, immovable entry.
+    const int worldIndex = static_cast<int>(bodies.size());
+    std::vector<SolverBody> state(bodies.size() + 1);
+    std::vector<Eigen::Matrix3d> rotation(bodies.size());
     for (size_t i = 0; i < bodies.size(); ++i) {
         const Body& body = bodies[i];
+        rotation[i] = body.orientation.toRotationMatrix();
         if (!movable(body)) continue;
-        const Eigen::Matrix3d rot = body.orientation.toRotationMatrix();
         state[i] = {body.linearVelocityMS, body.angularVelocityRadS, 1.0 / body.mass.massKg,
-                    rot * body.mass.inertiaKgM2.inverse() * rot.transpose()};
+                    rotation[i] * body.mass.inertiaKgM2.inverse() * rotation[i].transpose()};
     }
-    auto velocityAt = [&](int i, const Eigen::Vector3d& arm) -> Eigen::Vector3d {
-        return i < 0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(state[i].v + state[i].w.cross(arm));
-    };
+    auto velocityAt = [&](int i, const Eigen::Vector3d& arm) -> Eigen::Vector3d { return state[i].v + state[i].w.cross(arm); };
     // Bounce only above the speed gravity adds in a couple of steps, so resting contacts rest.
     const double bounceThreshold = 2.0 * world.gravityMS2.norm() * dt + 0.05;
     std::vector<SolverContact> contacts;
@@ -624,8 +626,8 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
     for (size_t i = 0; i < bodies.size(); ++i) {
         stats.staticContacts += static_cast<int64_t>(statics[i].size());
         for (const StaticContact& s : statics[i])
-            addContact(static_cast<int>(i), -1, {bodies[i].id, -2 - s.collider}, s.arm, Eigen::Vector3d::Zero(), s.normal, s.depth,
-                       s.restitution, s.friction);
+            addContact(static_cast<int>(i), worldIndex, {bodies[i].id, -2 - s.collider}, s.arm, Eigen::Vector3d::Zero(), s.normal,
+                       s.depth, s.restitution, s.friction);
     }
     for (const ContactManifold& m : manifolds) {
         stats.bodyContacts += m.voxelContacts;
@@ -633,73 +635,22 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
         for (const VoxelContact& p : m.points)
             addContact(m.a, m.b, {bodies[m.a].id, bodies[m.b].id}, p.pointM - bodies[m.a].positionM, p.pointM - bodies[m.b].positionM,
                        m.normal, p.depthM, collisions.restitution, collisions.friction);
+        stats.touching.push_back({m.a, m.b});
     }
-    stats.touchingPairs = static_cast<int64_t>(manifolds.size());
-    for (const ContactManifold& m : manifolds) stats.touching.push_back({m.a, m.b});
     if (contacts.empty()) {
         if (cache) cache->points.clear();
         return stats;
     }
 
-    // Gauss–Seidel converges fastest up a stack when the lowest contacts come first.
-    std::vector<size_t> order(contacts.size());
-    for (size_t k = 0; k < order.size(); ++k) order[k] = k;
-    std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) { return height[x] < height[y]; });
-
-    auto inverseMassAlong = [&](int i, const Eigen::Vector3d& arm, const Eigen::Vector3d& dir) {
-        if (i < 0) return 0.0;
-        const Eigen::Vector3d rn = arm.cross(dir);
-        return state[i].invMass + rn.dot(state[i].invInertia * rn);
-    };
-    auto applyImpulse = [&](const SolverContact& c, const Eigen::Vector3d& impulse) {
-        state[c.a].v += state[c.a].invMass * impulse;
-        state[c.a].w += state[c.a].invInertia * c.armA.cross(impulse);
-        if (c.b >= 0) {
-            state[c.b].v -= state[c.b].invMass * impulse;
-            state[c.b].w -= state[c.b].invInertia * c.armB.cross(impulse);
-        }
-    };
-    std::vector<double> normalMass(contacts.size());
-    for (size_t k = 0; k < contacts.size(); ++k) {
-        const SolverContact& c = contacts[k];
-        const double inv = inverseMassAlong(c.a, c.armA, c.normal) + inverseMassAlong(c.b, c.armB, c.normal);
-        normalMass[k] = inv > 0 ? 1.0 / inv : 0.0;
-    }
-    std::vector<Eigen::Matrix3d> rotation(bodies.size());
-    for (size_t i = 0; i < bodies.size(); ++i) rotation[i] = bodies[i].orientation.toRotationMatrix();
-    if (cache) {
-        // Warm start from the old point within a quarter voxel of each new one.
-        for (size_t k = 0; k < contacts.size(); ++k) {
-            SolverContact& c = contacts[k];
-            auto it = cache->points.find(c.cacheKey);
-            if (it == cache->points.end() || normalMass[k] == 0) continue;
-            const Eigen::Vector3d local = rotation[c.a].transpose() * c.armA;
-            const double near = 0.25 * bodies[c.a].voxelSizeM;
-            const ContactCache::Point* best = nullptr;
-            for (const ContactCache::Point& p : it->second)
-                if ((p.localM - local).norm() < near && (!best || (p.localM - local).norm() < (best->localM - local).norm())) best = &p;
-            if (!best) continue;
-            c.normalImpulse = kWarmStartFraction * best->normalNs;
-            const Eigen::Vector3d f = kWarmStartFraction * (rotation[c.a] * best->frictionNs);
-            c.frictionImpulse = f - c.normal.dot(f) * c.normal;
-            applyImpulse(c, c.normalImpulse * c.normal + c.frictionImpulse);
-        }
-    }
     // Jacobian rows per contact (normal, then two fixed tangents, so friction converges like the
-    // normal does), with each body's velocity response to a unit impulse precomputed. The world
-    // is one extra, immovable entry of `state`.
+    // normal does), with each body's velocity response to a unit impulse precomputed.
     struct Row {
         Eigen::Vector3d dir, angularA, angularB, responseA, responseB;
         double mass = 0;
     };
-    const int worldIndex = static_cast<int>(bodies.size());
-    state.push_back(SolverBody());
     std::vector<std::array<Row, 3>> rows(contacts.size());
-    std::vector<std::array<int, 2>> ends(contacts.size());
     for (size_t k = 0; k < contacts.size(); ++k) {
         const SolverContact& c = contacts[k];
-        const int b = c.b >= 0 ? c.b : worldIndex;
-        ends[k] = {c.a, b};
         const Eigen::Vector3d t1 = (std::abs(c.normal.x()) < 0.6 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(c.normal).normalized();
         const Eigen::Vector3d dirs[3] = {c.normal, t1, c.normal.cross(t1)};
         for (int d = 0; d < 3; ++d) {
@@ -708,44 +659,61 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
             r.angularA = c.armA.cross(r.dir);
             r.angularB = c.armB.cross(r.dir);
             r.responseA = state[c.a].invInertia * r.angularA;
-            r.responseB = state[b].invInertia * r.angularB;
-            const double inv = state[c.a].invMass + state[b].invMass + r.angularA.dot(r.responseA) + r.angularB.dot(r.responseB);
+            r.responseB = state[c.b].invInertia * r.angularB;
+            const double inv = state[c.a].invMass + state[c.b].invMass + r.angularA.dot(r.responseA) + r.angularB.dot(r.responseB);
             r.mass = inv > 0 ? 1.0 / inv : 0.0;
         }
     }
-    auto relativeSpeed = [&](const Row& r, int a, int b) {
-        return r.dir.dot(state[a].v - state[b].v) + r.angularA.dot(state[a].w) - r.angularB.dot(state[b].w);
+    auto relativeSpeed = [&](const Row& r, const SolverContact& c) {
+        return r.dir.dot(state[c.a].v - state[c.b].v) + r.angularA.dot(state[c.a].w) - r.angularB.dot(state[c.b].w);
     };
-    auto push = [&](const Row& r, int a, int b, double impulse) {
-        state[a].v += state[a].invMass * impulse * r.dir;
-        state[a].w += impulse * r.responseA;
-        state[b].v -= state[b].invMass * impulse * r.dir;
-        state[b].w -= impulse * r.responseB;
+    auto push = [&](const Row& r, const SolverContact& c, double impulse) {
+        state[c.a].v += state[c.a].invMass * impulse * r.dir;
+        state[c.a].w += impulse * r.responseA;
+        state[c.b].v -= state[c.b].invMass * impulse * r.dir;
+        state[c.b].w -= impulse * r.responseB;
     };
-    std::vector<Eigen::Vector2d> friction(contacts.size());
-    for (size_t k = 0; k < contacts.size(); ++k)
-        friction[k] = Eigen::Vector2d(rows[k][1].dir.dot(contacts[k].frictionImpulse), rows[k][2].dir.dot(contacts[k].frictionImpulse));
+    if (cache) {
+        // Warm start from the old point within a quarter voxel of each new one.
+        for (size_t k = 0; k < contacts.size(); ++k) {
+            SolverContact& c = contacts[k];
+            auto it = cache->points.find(c.cacheKey);
+            if (it == cache->points.end() || rows[k][0].mass == 0) continue;
+            const Eigen::Vector3d local = rotation[c.a].transpose() * c.armA;
+            const double near = 0.25 * bodies[c.a].voxelSizeM;
+            const ContactCache::Point* best = nullptr;
+            for (const ContactCache::Point& p : it->second)
+                if ((p.localM - local).norm() < near && (!best || (p.localM - local).norm() < (best->localM - local).norm())) best = &p;
+            if (!best) continue;
+            c.normalImpulse = kWarmStartFraction * best->normalNs;
+            const Eigen::Vector3d f = kWarmStartFraction * (rotation[c.a] * best->frictionNs);
+            c.frictionImpulse = Eigen::Vector2d(rows[k][1].dir.dot(f), rows[k][2].dir.dot(f));
+            push(rows[k][0], c, c.normalImpulse);
+            for (int d = 1; d <= 2; ++d) push(rows[k][d], c, c.frictionImpulse[d - 1]);
+        }
+    }
+    // Gauss–Seidel converges fastest up a stack when the lowest contacts come first.
+    std::vector<size_t> order(contacts.size());
+    for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) { return height[x] < height[y]; });
     for (int iteration = 0; iteration < collisions.solverIterations; ++iteration) {
         for (size_t k : order) {
             SolverContact& c = contacts[k];
             if (rows[k][0].mass == 0) continue;
-            const auto [a, b] = ends[k];
             // Friction first (from the current normal impulse), then the normal, which matters
             // more: the accumulated tangential impulse stays in the Coulomb cone |f| <= mu N.
-            Eigen::Vector2d accumulated = friction[k];
-            for (int d = 1; d <= 2; ++d) accumulated[d - 1] -= rows[k][d].mass * relativeSpeed(rows[k][d], a, b);
+            Eigen::Vector2d accumulated = c.frictionImpulse;
+            for (int d = 1; d <= 2; ++d) accumulated[d - 1] -= rows[k][d].mass * relativeSpeed(rows[k][d], c);
             const double limit = c.friction * c.normalImpulse;
             if (accumulated.norm() > limit) accumulated *= limit / accumulated.norm();
-            for (int d = 1; d <= 2; ++d) push(rows[k][d], a, b, accumulated[d - 1] - friction[k][d - 1]);
-            friction[k] = accumulated;
+            for (int d = 1; d <= 2; ++d) push(rows[k][d], c, accumulated[d - 1] - c.frictionImpulse[d - 1]);
+            c.frictionImpulse = accumulated;
             // Normal: the accumulated impulse stays >= 0.
             const double previous = c.normalImpulse;
-            c.normalImpulse = std::max(previous + rows[k][0].mass * (c.bounceTarget - relativeSpeed(rows[k][0], a, b)), 0.0);
-            push(rows[k][0], a, b, c.normalImpulse - previous);
+            c.normalImpulse = std::max(previous + rows[k][0].mass * (c.bounceTarget - relativeSpeed(rows[k][0], c)), 0.0);
+            push(rows[k][0], c, c.normalImpulse - previous);
         }
     }
-    for (size_t k = 0; k < contacts.size(); ++k) contacts[k].frictionImpulse = friction[k][0] * rows[k][1].dir + friction[k][1] * rows[k][2].dir;
-    state.pop_back();
     for (size_t i = 0; i < bodies.size(); ++i) {
         if (!movable(bodies[i])) continue;
         bodies[i].linearVelocityMS = state[i].v;
@@ -753,9 +721,12 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
     }
     if (cache) {
         cache->points.clear();
-        for (const SolverContact& c : contacts)
-            cache->points[c.cacheKey].push_back({rotation[c.a].transpose() * c.armA, c.normalImpulse,
-                                                 rotation[c.a].transpose() * c.frictionImpulse});
+        for (size_t k = 0; k < contacts.size(); ++k) {
+            const SolverContact& c = contacts[k];
+            const Eigen::Vector3d friction = c.frictionImpulse[0] * rows[k][1].dir + c.frictionImpulse[1] * rows[k][2].dir;
+            cache->points[c.cacheKey].push_back(
+                {rotation[c.a].transpose() * c.armA, c.normalImpulse, rotation[c.a].transpose() * friction});
+        }
     }
     correctPositions(bodies, state, statics, manifolds, up, world.colliders.size());
     return stats;

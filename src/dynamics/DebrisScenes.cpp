@@ -17,7 +17,7 @@ Body cubeFragment(int edge, double h)
     return makeBody(grid, h, 2000.0);
 }
 
-/// Lattice positions: `perSide`^2 columns, as many layers as needed.
+/// Fragments along each side of the lattice: side^2 columns, as many layers as needed.
 int latticeSide(int fragments) { return std::max(1, static_cast<int>(std::ceil(std::cbrt(static_cast<double>(fragments))))); }
 
 }  // namespace
