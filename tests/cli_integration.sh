@@ -229,6 +229,8 @@ assert len(h["frames/body_offset"]) >= n + 1
 PY
 done
 # collision benchmark, smallest sizes: one JSON row per method and size, every method present
+if "$spall" bench collisions --max-boundary-voxels 0 2> "$dir/bench.err"; then echo "bench accepted a size of 0"; exit 1; fi
+grep -q "max-boundary-voxels" "$dir/bench.err"
 "$spall" bench collisions --json --max-boundary-voxels 200 > "$dir/bench.json"
 $py - "$dir/bench.json" <<'PY'
 import json, sys
