@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 using namespace spall;
 
 namespace {
@@ -232,4 +234,47 @@ TEST(BlastField, WindowsContainEveryNonzeroPressure)
             }
         }
     }
+}
+
+TEST(PressureSnapshot, MatchesTheFieldAndBoundsItsShells)
+{
+    // One small and one large charge, 3 ms apart, at times from just after detonation to late.
+    BlastSettings settings;
+    const BlastField field({Charge{Eigen::Vector3d(0, 0, 0), 0.5, 0.0, BurstType::Surface},
+                            Charge{Eigen::Vector3d(4, 1, 0), 50.0, 0.003, BurstType::FreeAir}},
+                           settings);
+    std::mt19937_64 rng(7);
+    int compared = 0;
+    for (double t = 1e-5; t < 0.3; t *= 1.6) {
+        const PressureSnapshot snapshot(field, t);
+        const auto& windows = snapshot.windows();
+        double scalePa = 1.0;  // the sum of the windows' largest pressures
+        for (size_t w = 0; w < windows.size(); ++w) {
+            double largest = 0.0;
+            for (int i = 0; i < 64; ++i)
+                largest = std::max(largest, std::abs(snapshot.overpressurePa(w, snapshot.innerM(w) + (snapshot.frontM(w) - snapshot.innerM(w)) * i / 63.0)));
+            scalePa += largest;
+            std::uniform_real_distribution<double> radius(windows[w].minDistanceM, windows[w].maxDistanceM);
+            for (int i = 0; i < 200; ++i) {
+                const double r = radius(rng);
+                const double direct = field.chargeOverpressurePa(windows[w].charge, r, t);
+                const double tabulated = snapshot.overpressurePa(w, r);
+                EXPECT_NEAR(tabulated, direct, 1e-3 * largest + 1e-9) << "t " << t << " r " << r;
+                if (r > snapshot.frontM(w)) {
+                    EXPECT_EQ(tabulated, 0.0) << "nothing ahead of the front";
+                }
+                ++compared;
+            }
+            // The shell bound holds for every point of the shell.
+            for (int i = 0; i < 50; ++i) {
+                const double a = radius(rng), b = a + 0.05 * radius(rng);
+                const double bound = snapshot.maxOverShellPa(w, a, b);
+                for (int k = 0; k <= 40; ++k) EXPECT_LE(snapshot.overpressurePa(w, a + (b - a) * k / 40.0), bound);
+            }
+        }
+        // Summed over charges, the snapshot's sample agrees with the field's.
+        const Eigen::Vector3d x(2.0, 0.5, 0.3);
+        EXPECT_NEAR(snapshot.sample(x).overpressurePa, field.sample(x, t, windows).overpressurePa, 1e-3 * scalePa) << t;
+    }
+    EXPECT_GT(compared, 2000);
 }

@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <initializer_list>
+#include <limits>
 #include <sstream>
 
 namespace spall {
@@ -532,6 +533,63 @@ double BlastField::shockSpeedMS(int charge, double distanceM) const
     // Sound speed, and with it the shock speed, scales with sqrt(T); T > 0 is checked on construction.
     return rankineHugoniotShockSpeed(n.peakOverpressurePa, kSeaLevelPressurePa) *
            std::sqrt(mSettings.atmosphere.temperatureK / kSeaLevelTemperatureK);
+}
+
+}  // namespace spall
+
+namespace spall {
+
+PressureSnapshot::PressureSnapshot(const BlastField& field, double timeS) : mTimeS(timeS), mWindows(field.openWindows(timeS))
+{
+    constexpr double kNearestM = 1e-6;  // the fits are clamped there anyway; keeps log(0) out
+    mProfiles.resize(mWindows.size());
+    for (size_t w = 0; w < mWindows.size(); ++w) {
+        const OpenWindow& window = mWindows[w];
+        const Charge& charge = field.charges()[window.charge];
+        Profile& profile = mProfiles[w];
+        profile.centreM = charge.positionM;
+        profile.innerM = std::max(window.minDistanceM, kNearestM);
+        const auto arrived = [&](double r) {
+            return charge.detonationTimeS + field.tableParameters(window.charge, r).arrivalTimeS <= timeS;
+        };
+        // The front: the farthest distance the shock has reached (arrival time grows with distance).
+        double front = -1.0;
+        if (arrived(profile.innerM)) {
+            double lo = profile.innerM, hi = std::max(window.maxDistanceM, lo);
+            if (arrived(hi)) {
+                lo = hi;
+            } else {
+                for (int i = 0; i < 64 && hi - lo > 1e-12 * hi; ++i) {
+                    const double mid = 0.5 * (lo + hi);
+                    (arrived(mid) ? lo : hi) = mid;
+                }
+            }
+            front = lo;
+        }
+        profile.frontM = front;
+        profile.overpressurePa.assign(kNodesPerWindow, 0.0);
+        if (front < profile.innerM) continue;  // nothing has arrived inside the window yet
+        const double step = (front - profile.innerM) / (kNodesPerWindow - 1);
+        profile.nodesPerM = step > 0 ? 1.0 / step : 0.0;
+        for (int i = 0; i < kNodesPerWindow; ++i) {
+            const double r = i + 1 == kNodesPerWindow ? front : profile.innerM + i * step;
+            profile.overpressurePa[i] = field.chargeOverpressurePa(window.charge, r, timeS);
+        }
+    }
+}
+
+double PressureSnapshot::maxOverShellPa(size_t window, double rMinM, double rMaxM) const
+{
+    const Profile& p = mProfiles[window];
+    const double lo = std::max(rMinM, p.innerM), hi = std::min(rMaxM, p.frontM);
+    if (!(lo <= hi)) return 0.0;
+    // Outside [inner, front] the pressure is zero, which bounds it too.
+    double most = rMinM < p.innerM || rMaxM > p.frontM ? 0.0 : -std::numeric_limits<double>::infinity();
+    const size_t last = p.overpressurePa.size() - 1;
+    const size_t first = std::min(static_cast<size_t>((lo - p.innerM) * p.nodesPerM), last);
+    const size_t end = std::min(static_cast<size_t>(std::ceil((hi - p.innerM) * p.nodesPerM)), last);
+    for (size_t i = first; i <= end; ++i) most = std::max(most, p.overpressurePa[i]);
+    return most;
 }
 
 }  // namespace spall

@@ -41,11 +41,12 @@ double linkRandom(uint64_t seed, const openvdb::Coord& ijk, int axis)
     return double(z >> 11) * (1.0 / 9007199254740992.0);
 }
 
-bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows)
+bool bodyInWindows(const Body& body, const PressureSnapshot& pressure)
 {
-    for (const OpenWindow& w : windows) {
-        const double d = (body.positionM - field.charges()[w.charge].positionM).norm();
-        if (d + body.boundingRadiusM >= w.minDistanceM && d - body.boundingRadiusM <= w.maxDistanceM) return true;
+    for (size_t w = 0; w < pressure.windows().size(); ++w) {
+        const double d = (body.positionM - pressure.chargePositionM(w)).norm();
+        const OpenWindow& window = pressure.windows()[w];
+        if (d + body.boundingRadiusM >= window.minDistanceM && d - body.boundingRadiusM <= window.maxDistanceM) return true;
     }
     return false;
 }
@@ -65,39 +66,43 @@ struct LinkEvent {
 struct PointLoad {
     double pressurePa = 0;
     int dominant = -1;
+    size_t dominantWindow = 0;
     /// Unit radius vector from the dominant charge (computed only when a limit needs it).
-    Eigen::Vector3d direction(const BlastField& field, const Eigen::Vector3d& x) const
+    Eigen::Vector3d direction(const PressureSnapshot& pressure, const Eigen::Vector3d& x) const
     {
         if (dominant < 0) return Eigen::Vector3d::Zero();
-        const Eigen::Vector3d r = x - field.charges()[dominant].positionM;
+        const Eigen::Vector3d r = x - pressure.chargePositionM(dominantWindow);
         const double n = r.norm();
         return n > 0 ? Eigen::Vector3d(r / n) : Eigen::Vector3d::Zero();
     }
 };
 
-PointLoad pointLoad(const BlastField& field, const Eigen::Vector3d& x, double t, const std::vector<OpenWindow>& windows)
+PointLoad pointLoad(const PressureSnapshot& pressure, const Eigen::Vector3d& x)
 {
     PointLoad load;
     double dominantPa = 0.0;
-    field.forEachCharge(x, t, windows, [&](int charge, double p, const Eigen::Vector3d&) {
+    for (size_t w = 0; w < pressure.windows().size(); ++w) {
+        const double p = pressure.overpressurePa(w, (x - pressure.chargePositionM(w)).norm());
         load.pressurePa += p;
         if (p > dominantPa) {
             dominantPa = p;
-            load.dominant = charge;
+            load.dominant = pressure.windows()[w].charge;
+            load.dominantWindow = w;
         }
-    });
+    }
     return load;
 }
 
 }  // namespace
 
-LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, const BlastField& field,
-                     const std::vector<OpenWindow>& windows, double timeS, double dtS, const FractureSettings& settings)
+LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, const PressureSnapshot& pressure, double dtS,
+                     const FractureSettings& settings)
 {
     LoadResult result;
-    if (settings.algorithm == FractureAlgorithm::None || windows.empty()) return result;
+    if (settings.algorithm == FractureAlgorithm::None || pressure.empty()) return result;
     const double h = body.voxelSizeM;
     const Eigen::Matrix3d rot = body.orientation.toRotationMatrix();
+    const Eigen::Matrix3d rotH = rot * h;  // world displacement per index step
     const double leafRadius = 0.5 * std::sqrt(3.0) * LinkLeaf::DIM * h;
     const bool davisonStevens = settings.algorithm == FractureAlgorithm::DavisonStevens;
     const double orientationFactor = settings.orientation ? material.orientationFactor : 0.0;
@@ -118,19 +123,19 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
     // Generate: a pure pass over leaves; each task writes only its own event list (and, for
     // Davison–Stevens, its own leaf of the damage grid).
     leaves.foreach ([&](const LinkLeaf& leaf, size_t n) {
-        const openvdb::Coord centreIjk = leaf.origin() + openvdb::Coord(LinkLeaf::DIM / 2);
-        const Eigen::Vector3d leafCentre = body.voxelWorldM(centreIjk) - rot * Eigen::Vector3d::Constant(0.5 * h);
-        // Skip the leaf when no window reaches it, or when even the peak overpressure at its
-        // nearest point (peaks fall with distance) cannot reach the least effective limit.
+        const Eigen::Vector3d originM = body.voxelWorldM(leaf.origin());
+        const Eigen::Vector3d leafCentre = originM + rotH * Eigen::Vector3d::Constant(0.5 * (LinkLeaf::DIM - 1));
+        // Skip the leaf when the pressure now, anywhere within its bounding sphere, stays below
+        // the least effective limit: most of a body is either not reached yet or long passed.
         bool inside = false;
-        double peakBoundPa = 0.0;
-        for (const OpenWindow& w : windows) {
-            const double d = (leafCentre - field.charges()[w.charge].positionM).norm();
-            if (d + leafRadius < w.minDistanceM || d - leafRadius > w.maxDistanceM) continue;
+        double boundPa = 0.0;
+        for (size_t w = 0; w < pressure.windows().size(); ++w) {
+            const double d = (leafCentre - pressure.chargePositionM(w)).norm();
+            if (d + leafRadius < pressure.innerM(w) || d - leafRadius > pressure.frontM(w)) continue;
             inside = true;
-            peakBoundPa += field.tableParameters(w.charge, std::max(d - leafRadius, 1e-3)).peakOverpressurePa;
+            boundPa += pressure.maxOverShellPa(w, d - leafRadius, d + leafRadius);
         }
-        if (!inside || peakBoundPa < leastEffectivePa) {
+        if (!inside || boundPa < leastEffectivePa) {
             skipped[n] = 1;
             return;
         }
@@ -139,9 +144,10 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
         for (auto it = leaf.cbeginValueOn(); it; ++it) {
             const openvdb::Coord ijk = it.getCoord();
             const int32_t bits = it.getValue();
-            const Eigen::Vector3d x = body.voxelWorldM(ijk);
+            const openvdb::Coord local = ijk - leaf.origin();
+            const Eigen::Vector3d x = originM + rotH * Eigen::Vector3d(local.x(), local.y(), local.z());
             if (bits & kAnchorBit) {
-                const PointLoad load = pointLoad(field, x, timeS, windows);
+                const PointLoad load = pointLoad(pressure, x);
                 if (load.pressurePa >= baseYieldLimit(material, settings.seed, ijk, 3))
                     out.push_back({ijk, EventKind::BreakAnchor, 0, 0});
             }
@@ -149,7 +155,7 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
                 // Rate form of Davison–Stevens (paper eq. 2.2, 3.2): dD/dt = B D* (exp(C s) - 1),
                 // s = max(p - mean yield, 0); the paper's per-step B equals B dt here.
                 if (!(bits & kAllLinks) || !damageLeaf) continue;
-                const PointLoad load = pointLoad(field, x, timeS, windows);
+                const PointLoad load = pointLoad(pressure, x);
                 const double sigma = std::max(load.pressurePa - material.meanYieldPa, 0.0);
                 if (sigma <= 0.0) continue;
                 const double before = damageLeaf->getValue(it.pos());
@@ -161,7 +167,7 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
                 // Break the intact links most aligned with the wave first (ties: face order).
                 std::array<std::pair<double, int>, kFaceCount> order;
                 int count = 0;
-                const Eigen::Vector3d direction = load.direction(field, x);
+                const Eigen::Vector3d direction = load.direction(pressure, x);
                 for (int f = 0; f < kFaceCount; ++f) {
                     if (bits & (1 << f)) order[count++] = {-std::abs((rot * faceNormal(f)).dot(direction)), f};
                 }
@@ -175,13 +181,12 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
             for (int axis = 0; axis < 3; ++axis) {
                 const int face = 2 * axis + 1;
                 if (!(bits & (1 << face))) continue;
-                const Eigen::Vector3d linkDir = rot.col(axis);
-                const Eigen::Vector3d midpoint = x + 0.5 * h * linkDir;
-                const PointLoad load = pointLoad(field, midpoint, timeS, windows);
+                const Eigen::Vector3d midpoint = x + 0.5 * rotH.col(axis);
+                const PointLoad load = pointLoad(pressure, midpoint);
                 // Below the least limit any link can have, nothing can happen: skip the hash.
                 if (load.pressurePa < leastEffectivePa || load.pressurePa <= 0.0) continue;
                 double limit = baseYieldLimit(material, settings.seed, ijk, axis);
-                if (orientationFactor > 0) limit *= 1.0 - orientationFactor * std::abs(linkDir.dot(load.direction(field, midpoint)));
+                if (orientationFactor > 0) limit *= 1.0 - orientationFactor * std::abs(rot.col(axis).dot(load.direction(pressure, midpoint)));
                 const int weakenedBy = weakenedByCharge(bits, axis);
                 const bool weakenedEarlier = weakening > 0 && weakenedBy >= 0 && weakenedBy != load.dominant;
                 if (load.pressurePa >= (weakenedEarlier ? (1.0 - weakening) * limit : limit)) {

@@ -121,35 +121,34 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
 void Simulation::advanceTo(double target)
 {
     while (mTimeS < target) {
-        const std::vector<OpenWindow> windows = mField->openWindows(mTimeS);
+        const PressureSnapshot pressure(*mField, mTimeS);
         const double remaining = target - mTimeS;
-        double dt = chooseTimeStep(windows);
+        double dt = chooseTimeStep(pressure.windows());
         // Land exactly on the target without a sliver of a step just before it.
         const bool last = dt >= remaining;
         if (last)
             dt = remaining;
         else if (remaining < 2.0 * dt)
             dt = 0.5 * remaining;
-        fractureStep(windows, dt);
-        motionStep(windows, dt);
+        fractureStep(pressure, dt);
+        motionStep(pressure, dt);
         mTimeS = last ? target : mTimeS + dt;
         ++mStats.steps;
         mStats.minDtS = std::min(mStats.minDtS, dt);
     }
 }
 
-void Simulation::fractureStep(const std::vector<OpenWindow>& windows, double dt)
+void Simulation::fractureStep(const PressureSnapshot& pressure, double dt)
 {
-    if (windows.empty() || mScene.fracture.algorithm == FractureAlgorithm::None) return;
+    if (pressure.empty() || mScene.fracture.algorithm == FractureAlgorithm::None) return;
     std::vector<char> changed(mBodies.size(), 0);
     for (size_t i = 0; i < mBodies.size(); ++i) {
         Body& body = mBodies[i];
         if (body.linkCount == 0 && !body.anchored) continue;
-        if (!bodyInWindows(body, *mField, windows)) continue;
+        if (!bodyInWindows(body, pressure)) continue;
         body.asleep = false;
         body.restTimeS = 0;
-        const LoadResult r = loadLinks(body, mDamage[i].get(), mScene.materials[body.materialIndex], *mField, windows, mTimeS, dt,
-                                       mScene.fracture);
+        const LoadResult r = loadLinks(body, mDamage[i].get(), mScene.materials[body.materialIndex], pressure, dt, mScene.fracture);
         mStats.brokenLinks += r.brokenLinks;
         body.linkCount -= r.brokenLinks;
         if (r.brokenAnchors > 0) body.anchored = hasAnchoredVoxel(*body.grid);
@@ -190,10 +189,12 @@ void Simulation::fractureStep(const std::vector<OpenWindow>& windows, double dt)
     mDamage = std::move(nextDamage);
 }
 
-void Simulation::motionStep(const std::vector<OpenWindow>& windows, double dt)
+void Simulation::motionStep(const PressureSnapshot& pressure, double dt)
 {
+    // The wrench is evaluated at each integrator stage's own time, from the field directly.
+    const std::vector<OpenWindow>& windows = pressure.windows();
     ExternalLoad blast;
-    blast.loaded = [&](const Body& body) { return !windows.empty() && bodyInWindows(body, *mField, windows); };
+    blast.loaded = [&](const Body& body) { return bodyInWindows(body, pressure); };
     blast.wrench = [&](const Body& body, double t, const Eigen::Vector3d& x, const Eigen::Quaterniond& q) {
         return blastWrench(body, x, q, *mField, windows, t, mScene.world.reflectedPressure);
     };

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -210,6 +211,12 @@ public:
         return sample(pointM, timeS, openWindows(timeS)).overpressurePa;
     }
 
+    /// Overpressure of one charge at a distance (unit: Pa), whether or not its window is open.
+    double chargeOverpressurePa(int charge, double distanceM, double timeS) const
+    {
+        return chargeOverpressure(mPerCharge[charge], distanceM * distanceM, timeS);
+    }
+
     /// Shock front speed (unit: m/s) of a charge at a distance; for time-step control.
     double shockSpeedMS(int charge, double distanceM) const;
 
@@ -244,6 +251,80 @@ private:
     std::vector<BlastTable> mTables;  ///< [0] free air, [1] surface
     std::vector<PerCharge> mPerCharge;
     double mNegativeDurationScaledS;
+};
+
+/// The pressure field frozen at one instant, for the many points a step queries at the same
+/// time (every link of every loaded body). Per open window, the charge's overpressure p(r) is
+/// tabulated uniformly in distance from the window's inner edge to the shock front, which is
+/// itself the last node, so the jump at the front is exact and nothing is smeared across it.
+/// A point then costs one square root and one linear interpolation per charge instead of a
+/// log, a table lookup and an exp; tests/test_blast.cpp bounds the difference to the field.
+class PressureSnapshot {
+public:
+    /// Nodes per window: the window spans the pulse, a few decay lengths, so this resolves it.
+    static constexpr int kNodesPerWindow = 2048;
+
+    PressureSnapshot(const BlastField& field, double timeS);
+
+    double timeS() const { return mTimeS; }
+    const std::vector<OpenWindow>& windows() const { return mWindows; }
+    bool empty() const { return mWindows.empty(); }
+    const Eigen::Vector3d& chargePositionM(size_t window) const { return mProfiles[window].centreM; }
+    /// Distance range (unit: m) of window w where its pressure is non-zero: [inner edge, front].
+    double innerM(size_t window) const { return mProfiles[window].innerM; }
+    double frontM(size_t window) const { return mProfiles[window].frontM; }
+
+    /// Overpressure of window w's charge at distance r (unit: Pa).
+    double overpressurePa(size_t window, double distanceM) const { return mProfiles[window].at(distanceM); }
+
+    /// Calls f(windowIndex, chargeIndex, overpressurePa) for every window whose pressure at the
+    /// point is non-zero.
+    template <typename F>
+    void forEachCharge(const Eigen::Vector3d& pointM, F&& f) const
+    {
+        for (size_t w = 0; w < mProfiles.size(); ++w) {
+            const double p = mProfiles[w].at((pointM - mProfiles[w].centreM).norm());
+            if (p != 0.0) f(w, mWindows[w].charge, p);
+        }
+    }
+
+    /// Total overpressure at a point (unit: Pa) and the charge that contributes most.
+    PressureSample sample(const Eigen::Vector3d& pointM) const
+    {
+        PressureSample out;
+        forEachCharge(pointM, [&](size_t, int charge, double p) {
+            out.overpressurePa += p;
+            if (std::abs(p) > std::abs(out.dominantOverpressurePa)) {
+                out.dominantOverpressurePa = p;
+                out.dominantCharge = charge;
+            }
+        });
+        return out;
+    }
+
+    /// An upper bound of window w's overpressure anywhere at distances [rMin, rMax] (unit: Pa),
+    /// exact for the tabulated profile (its maximum over a cell lies on a node).
+    double maxOverShellPa(size_t window, double rMinM, double rMaxM) const;
+
+private:
+    struct Profile {
+        Eigen::Vector3d centreM;
+        double innerM = 0;    ///< distance of node 0
+        double frontM = 0;    ///< distance of the last node: the shock front
+        double nodesPerM = 0;
+        std::vector<double> overpressurePa;
+        double at(double r) const
+        {
+            if (!(r >= innerM && r <= frontM)) return 0.0;
+            const double u = (r - innerM) * nodesPerM;
+            const size_t i = std::min(static_cast<size_t>(u), overpressurePa.size() - 2);
+            const double w = u - static_cast<double>(i);
+            return overpressurePa[i] + w * (overpressurePa[i + 1] - overpressurePa[i]);
+        }
+    };
+    double mTimeS = 0;
+    std::vector<OpenWindow> mWindows;
+    std::vector<Profile> mProfiles;
 };
 
 }  // namespace spall

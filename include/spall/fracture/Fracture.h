@@ -54,14 +54,15 @@ struct LoadResult {
     int64_t skippedLeaves = 0;
 };
 
-/// Loads every intact link of `body` inside an open window at time t and breaks or weakens it
-/// (generate in parallel over leaves, apply in leaf order). `damage` is the per-voxel
-/// Davison–Stevens damage grid (same topology as the body; only for that algorithm).
-LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, const BlastField& field,
-                     const std::vector<OpenWindow>& windows, double timeS, double dtS, const FractureSettings& settings);
+/// Loads every intact link of `body` where the blast is now (`pressure`, a snapshot at the
+/// step's start) and breaks or weakens it (generate in parallel over leaves, apply in leaf
+/// order). `damage` is the per-voxel Davison–Stevens damage grid (same topology as the body;
+/// only for that algorithm); `dtS` is the step it accumulates over.
+LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, const PressureSnapshot& pressure, double dtS,
+                     const FractureSettings& settings);
 
-/// True when the body's bounding sphere meets some window's distance range.
-bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows);
+/// True when the body's bounding sphere meets some open window's distance range.
+bool bodyInWindows(const Body& body, const PressureSnapshot& pressure);
 
 /// A piece that left its parent.
 struct SplitPart {

@@ -46,8 +46,8 @@ public:
     double chooseTimeStep(const std::vector<OpenWindow>& windows) const;
 
 private:
-    void fractureStep(const std::vector<OpenWindow>& windows, double dtS);
-    void motionStep(const std::vector<OpenWindow>& windows, double dtS);
+    void fractureStep(const PressureSnapshot& pressure, double dtS);
+    void motionStep(const PressureSnapshot& pressure, double dtS);
 
     Scene mScene;
     std::unique_ptr<BlastField> mField;
