@@ -110,29 +110,75 @@ grep -q "cube.obj/out" "$dir/err.txt" || fail "error does not name the output di
 if "$spall" run "$dir/missing-scene.json" -o "$dir/x" --quiet > /dev/null 2> "$dir/err.txt"; then fail "missing scene accepted"; fi
 grep -q "missing-scene.json" "$dir/err.txt" || fail "error does not name the scene: $(cat "$dir/err.txt")"
 
-# determinism: 1 and 2 threads, and a repeated run, give identical frames and history content
-"$spall" run "$dir/scene.json" -o "$dir/t1" --threads 1 --quiet --no-preview > /dev/null
-"$spall" run "$dir/scene.json" -o "$dir/t2" --threads 2 --quiet --no-preview > /dev/null
-$py - "$dir/t1" "$dir/t2" "$dir/out" <<'PY' || fail "runs differ between thread counts or repeats"
+# Frames (every fragment grid's voxel count, centre of mass and velocity) and history content
+# (every dataset, every root attribute) of output directories: identical or not.
+cat > "$dir/same.py" <<'PY'
 import glob, sys, h5py, numpy as np, pyopenvdb as vdb
 def content(out):
     h = h5py.File(out + "/history.h5", "r")
     arrays = {}
     h.visititems(lambda name, obj: arrays.__setitem__(name, obj[()]) if isinstance(obj, h5py.Dataset) else None)
+    attrs = {k: str(h.attrs[k]) for k in h.attrs}
     frames = []
     for path in sorted(glob.glob(out + "/fragments.*.vdb")):
         metas = vdb.readAllGridMetadata(path)
         frames.append(sorted((m.name, m.metadata["voxel_count"], tuple(m.metadata["centre_of_mass_m"]),
                               tuple(m.metadata["linear_velocity_m_s"])) for m in metas if m.name.startswith("fragment_")))
-    return arrays, frames
-a, fa = content(sys.argv[1])
+    return arrays, frames, attrs
+a, fa, ta = content(sys.argv[1])
 for other in sys.argv[2:]:
-    b, fb = content(other)
+    b, fb, tb = content(other)
     assert a.keys() == b.keys()
     for k in a:
         assert np.array_equal(a[k], b[k]), k
     assert fa == fb
+    assert ta == tb
 PY
+
+# determinism: 1 and 2 threads, and a repeated run, give identical frames and history content
+"$spall" run "$dir/scene.json" -o "$dir/t1" --threads 1 --quiet --no-preview > /dev/null
+"$spall" run "$dir/scene.json" -o "$dir/t2" --threads 2 --quiet --no-preview > /dev/null
+$py "$dir/same.py" "$dir/t1" "$dir/t2" "$dir/out" || fail "runs differ between thread counts or repeats"
+[[ ! -e "$dir/out/checkpoint.spall" ]] || fail "a complete run left its checkpoint behind"
+
+# interruption: a run killed (SIGKILL) part-way, and one stopped by Ctrl-C (SIGINT), each resumed
+# with --resume, end exactly as the uninterrupted run
+sed 's/"duration_s": 0.25/"duration_s": 0.5/' "$dir/scene.json" > "$dir/long.json"
+"$spall" run "$dir/long.json" -o "$dir/whole" --quiet --no-preview > /dev/null
+for signal in KILL INT; do
+  out="$dir/cut-$signal"
+  "$spall" run "$dir/long.json" -o "$out" --quiet > /dev/null 2> "$dir/err.txt" &
+  pid=$!
+  for _ in $(seq 600); do [[ -e "$out/fragments.0004.vdb" ]] && break; sleep 0.05; done
+  kill -s "$signal" "$pid"
+  status=0; wait "$pid" || status=$?
+  [[ $status -ne 0 ]] || fail "SIG$signal: the run finished before it could be interrupted"
+  [[ -e "$out/checkpoint.spall" ]] || fail "SIG$signal: no checkpoint"
+  if [[ $signal == INT ]]; then
+    [[ $status -eq 130 ]] || fail "SIGINT: exit status $status, expected 130"
+    grep -q -- "--resume $out" "$dir/err.txt" || fail "SIGINT: no hint to resume: $(cat "$dir/err.txt")"
+  fi
+  "$spall" run --resume "$out" --quiet > /dev/null || fail "SIG$signal: --resume failed"
+  [[ -s "$out/preview.png" ]] || fail "SIG$signal: the resumed run wrote no preview"
+  $py "$dir/same.py" "$dir/whole" "$out" || fail "SIG$signal: the resumed run differs from the uninterrupted one"
+done
+# a full disk, simulated by a file-size limit (frame 1 is larger than 2 MB): a clear error naming
+# the file, no truncated frame left looking whole, and --resume finishes the run once there is room
+out="$dir/full-disk"
+if (ulimit -f 2000; trap '' XFSZ; "$spall" run "$dir/long.json" -o "$out" --quiet --no-preview) > /dev/null 2> "$dir/err.txt"; then
+  fail "a run on a full disk reported success"
+fi
+grep -q "fragments.0001.vdb: cannot write (disk full" "$dir/err.txt" || fail "full disk: $(cat "$dir/err.txt")"
+! ls "$out" | grep -q partial || fail "full disk: a partial file was left behind: $(ls "$out")"
+for f in "$out"/fragments.*.vdb; do vdb_print "$f" > /dev/null || fail "full disk: $f does not read"; done
+"$spall" run --resume "$out" --quiet --no-preview > /dev/null || fail "full disk: --resume failed"
+$py "$dir/same.py" "$dir/whole" "$out" || fail "full disk: the resumed run differs from the uninterrupted one"
+
+if "$spall" run --resume "$dir/whole" 2> "$dir/err.txt"; then fail "--resume of a complete run accepted"; fi
+grep -q "nothing to resume" "$dir/err.txt" || fail "--resume of a complete run: $(cat "$dir/err.txt")"
+if "$spall" run --resume "$dir/nowhere" 2> "$dir/err.txt"; then fail "--resume of a missing directory accepted"; fi
+grep -q "nowhere/checkpoint.spall" "$dir/err.txt" || fail "--resume of a missing directory: $(cat "$dir/err.txt")"
+if "$spall" run "$dir/long.json" --resume "$dir/whole" 2> /dev/null; then fail "--resume with a scene accepted"; fi
 
 # render: a frame, a contact sheet, the run's own preview; bad input named
 [[ -s "$dir/out/preview.png" ]] || fail "spall run wrote no preview.png"

@@ -1,10 +1,13 @@
 #include "TestUtil.h"
 
 #include <spall/io/Scene.h>
+#include <spall/sim/Checkpoint.h>
 #include <spall/sim/Simulation.h>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+
+#include <filesystem>
 
 using namespace spall;
 
@@ -125,4 +128,83 @@ TEST(Simulation, TimeStepIsFineWhileTheFrontCrossesAndCoarseLater)
     EXPECT_LE(during * sim.field().shockSpeedMS(0, 2.0), 0.5 * scene.voxelSizeM * 1.0001);
     sim.advanceTo(0.4);
     EXPECT_GT(sim.chooseTimeStep(sim.field().openWindows(sim.timeS())), 50 * during);
+}
+
+namespace {
+
+/// Every number of every body, bit for bit, plus the link values of every voxel.
+void expectSameBodies(const std::vector<Body>& a, const std::vector<Body>& b)
+{
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i) {
+        EXPECT_EQ(a[i].id, b[i].id);
+        EXPECT_EQ(a[i].positionM, b[i].positionM) << i;
+        EXPECT_EQ(a[i].orientation.coeffs(), b[i].orientation.coeffs()) << i;
+        EXPECT_EQ(a[i].linearVelocityMS, b[i].linearVelocityMS) << i;
+        EXPECT_EQ(a[i].angularVelocityRadS, b[i].angularVelocityRadS) << i;
+        EXPECT_EQ(a[i].asleep, b[i].asleep) << i;
+        EXPECT_EQ(a[i].linkCount, b[i].linkCount) << i;
+        ASSERT_EQ(a[i].grid->activeVoxelCount(), b[i].grid->activeVoxelCount()) << i;
+        auto acc = b[i].grid->getConstAccessor();
+        for (auto it = a[i].grid->cbeginValueOn(); it; ++it) ASSERT_EQ(*it, acc.getValue(it.getCoord())) << i;
+    }
+}
+
+}  // namespace
+
+TEST(Checkpoint, ResumedSimulationEndsBitForBitAsTheUninterruptedOne)
+{
+    // Davison–Stevens (damage grids), dust, contacts against a static box and the ground.
+    nlohmann::json j = nlohmann::json::parse(kSmallScene);
+    j["fracture"] = {{"algorithm", "davison-stevens"}, {"min_fragment_voxels", 2}, {"small_fragments", "dust"}};
+    j["materials"] = {{"soft", {{"base", "brick-masonry"}, {"mean_yield_Pa", 20000.0}, {"damage_rate_per_s", 500.0}}}};
+    j["objects"][0]["material"] = "soft";
+    const Scene scene = parseScene(j.dump(), "small", ".");
+    const std::string path = testing::TempDir() + "/spall-test.checkpoint";
+
+    Simulation straight(scene), interrupted(scene);
+    straight.advanceTo(0.1);
+    interrupted.advanceTo(0.1);
+    EXPECT_GT(interrupted.fractureEvents().size(), 0u);
+    EXPECT_GT(interrupted.dust().size(), 0u);
+    writeCheckpoint(path, {3, 12, 77, sceneToJson(interrupted.scene()).dump(), interrupted.state()});
+    Checkpoint back = readCheckpoint(path);
+    EXPECT_EQ(back.framesDone, 3);
+    EXPECT_EQ(back.frameCount, 12);
+    EXPECT_EQ(back.totalSteps, 77);
+    Simulation resumed(parseScene(back.sceneJson, "checkpoint", "."), std::move(back.state));
+    expectSameBodies(interrupted.bodies(), resumed.bodies());
+
+    straight.advanceTo(0.4);
+    resumed.advanceTo(0.4);
+    expectSameBodies(straight.bodies(), resumed.bodies());
+    ASSERT_EQ(straight.fractureEvents().size(), resumed.fractureEvents().size());
+    ASSERT_EQ(straight.dust().size(), resumed.dust().size());
+    for (size_t i = 0; i < straight.dust().size(); ++i) EXPECT_EQ(straight.dust()[i].linearMomentum, resumed.dust()[i].linearMomentum);
+}
+
+TEST(Checkpoint, DamagedFilesAreRefusedNamingTheFile)
+{
+    const Scene scene = parseScene(kSmallScene, "small", ".");
+    Simulation sim(scene);
+    sim.advanceTo(0.004);
+    const std::string path = testing::TempDir() + "/spall-test-damaged.checkpoint";
+    writeCheckpoint(path, {1, 12, 5, sceneToJson(sim.scene()).dump(), sim.state()});
+    const auto size = std::filesystem::file_size(path);
+    const auto messageOf = [&]() -> std::string {
+        try {
+            readCheckpoint(path);
+        } catch (const IoError& e) {
+            return e.what();
+        }
+        return "";
+    };
+    for (auto cut : {size - 1, size / 2, uintmax_t(20), uintmax_t(3)}) {
+        std::filesystem::resize_file(path, cut);
+        const std::string message = messageOf();
+        EXPECT_NE(message.find(path), std::string::npos) << cut << ": " << message;
+        writeCheckpoint(path, {1, 12, 5, sceneToJson(sim.scene()).dump(), sim.state()});
+    }
+    std::filesystem::remove(path);
+    EXPECT_NE(messageOf().find("no checkpoint"), std::string::npos);
 }

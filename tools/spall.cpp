@@ -344,14 +344,9 @@ std::atomic<bool> gStopRequested{false};
 
 extern "C" void requestStop(int) { gStopRequested = true; }
 
-int runRun(const std::string& scenePath, const std::string& outDir, int threads, int64_t seed, int frames, bool quiet, bool preview)
+int runRun(const std::string& scenePath, const std::string& outDir, bool resume, int threads, int64_t seed, int frames, bool quiet,
+           bool preview)
 {
-    spall::Scene scene = scenePath.empty() ? spall::parseScene(spall::defaultSceneJson(), "<built-in default scene>", ".")
-                                           : spall::loadScene(scenePath);
-    if (seed >= 0) {
-        scene.seed = static_cast<uint64_t>(seed);
-        scene.fracture.seed = scene.seed;
-    }
     std::unique_ptr<tbb::global_control> threadLimit;
     if (threads > 0) threadLimit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
     // Ctrl-C finishes the current frame, so everything written stays readable.
@@ -362,12 +357,12 @@ int runRun(const std::string& scenePath, const std::string& outDir, int threads,
     options.outputDirectory = outDir;
     options.maxFrames = frames;
     if (preview) options.previewPath = (std::filesystem::path(outDir) / "preview.png").string();
-    if (!quiet) std::fprintf(stderr, "spall run: %s -> %s\n", scene.sourceName.c_str(), outDir.c_str());
-    const spall::RunReport report = spall::runScene(scene, options, [&](const spall::RunProgress& p) {
+    const auto onFrame = [&, firstFrame = -1](const spall::RunProgress& p) mutable {
+        if (firstFrame < 0) firstFrame = p.frame;
         if (!quiet) {
             const int width = 30;
             const int filled = p.frameCount > 0 ? width * (p.frame + 1) / p.frameCount : width;
-            const double perFrame = p.elapsedS / (p.frame + 1);
+            const double perFrame = p.elapsedS / (p.frame + 1 - firstFrame);
             const double left = perFrame * (p.frameCount - p.frame - 1);
             std::fprintf(stderr, "\r[%-*s] frame %d/%d  t=%.3f s  bodies %zu  steps %lld  %.0f s left ", width,
                          std::string(filled, '#').c_str(), p.frame + 1, p.frameCount, p.timeS, p.bodies,
@@ -375,7 +370,21 @@ int runRun(const std::string& scenePath, const std::string& outDir, int threads,
             std::fflush(stderr);
         }
         return !gStopRequested.load();
-    });
+    };
+    spall::RunReport report;
+    if (resume) {
+        if (!quiet) std::fprintf(stderr, "spall run: resuming %s\n", outDir.c_str());
+        report = spall::resumeRun(options, onFrame);
+    } else {
+        spall::Scene scene = scenePath.empty() ? spall::parseScene(spall::defaultSceneJson(), "<built-in default scene>", ".")
+                                               : spall::loadScene(scenePath);
+        if (seed >= 0) {
+            scene.seed = static_cast<uint64_t>(seed);
+            scene.fracture.seed = scene.seed;
+        }
+        if (!quiet) std::fprintf(stderr, "spall run: %s -> %s\n", scene.sourceName.c_str(), outDir.c_str());
+        report = spall::runScene(scene, options, onFrame);
+    }
     if (!quiet) std::fprintf(stderr, "\n");
     std::printf("%s: %d frames, %zu bodies at the end, %lld fracture events, %lld steps, %.1f s\n",
                 report.complete ? "finished" : "interrupted", report.framesWritten, report.finalBodies,
@@ -385,7 +394,8 @@ int runRun(const std::string& scenePath, const std::string& outDir, int threads,
     std::printf("open: Blender: File > Import > OpenVDB (the sequence); Houdini: File SOP on fragments.$F4.vdb;\n"
                 "      Python: h5py.File('%s/history.h5') (see docs/file-formats.md)\n", outDir.c_str());
     if (!report.complete) {
-        std::fprintf(stderr, "spall run: interrupted after %d frames; they are complete and readable\n", report.framesWritten);
+        std::fprintf(stderr, "spall run: interrupted after %d frames; they are complete and readable; continue with: spall run --resume %s\n",
+                     report.framesWritten, outDir.c_str());
         return 130;
     }
     if (preview) std::printf("preview: %s\n", options.previewPath.c_str());
@@ -438,6 +448,9 @@ int main(int argc, char** argv)
     run->add_option("--frames", runFrames, "Stop after this many frames")->check(CLI::NonNegativeNumber);
     run->add_flag("--quiet", runQuiet, "No progress bar");
     run->add_flag("--no-preview", runNoPreview, "Do not render OUTDIR/preview.png");
+    std::string runResume;
+    auto* resumeOption = run->add_option("--resume", runResume, "Continue the interrupted run in this output directory from its checkpoint");
+    resumeOption->excludes(run->get_option("scene"))->excludes("--seed")->excludes("--frames")->excludes("--output");
 
     // render
     auto* render = app.add_subcommand("render", "Render preview pictures (PNG) of a run's frames");
@@ -488,7 +501,10 @@ int main(int argc, char** argv)
             if (std::filesystem::is_directory(path)) path = (std::filesystem::path(path) / "history.h5").string();
             return runInspect(path, inspectJson, inspectFrame, inspectBody);
         }
-        if (*run) return runRun(runScenePath, runOut, runThreads, runSeed, runFrames, runQuiet, !runNoPreview);
+        if (*run) {
+            const bool resume = !runResume.empty();
+            return runRun(runScenePath, resume ? runResume : runOut, resume, runThreads, runSeed, runFrames, runQuiet, !runNoPreview);
+        }
         if (*blast) return runBlast(tnt, dist, burst, dataset, blastJson, curve);
         if (*benchCollisionsCmd) return spall::benchCollisions(benchJson, benchMaxVoxels);
     } catch (const spall::InputError& e) {

@@ -21,7 +21,11 @@ hid_t checkId(hid_t id, const std::string& what)
     return id;
 }
 
-/// One extensible, chunked, compressed dataset of rows x cols.
+/// One extensible, chunked dataset of rows x cols. Uncompressed on purpose: an uncompressed chunk
+/// keeps its place in the file, so appending rewrites the old rows with the same bytes and a run
+/// killed in the middle of a write cannot damage the frames before it. (A compressed chunk
+/// moves when it grows, and its old place can be handed to another dataset's chunk before the
+/// index is updated: a kill then leaves earlier rows unreadable. It was seen in testing.)
 class Series {
 public:
     Series() = default;
@@ -32,11 +36,39 @@ public:
         const hid_t space = checkId(H5Screate_simple(rank, dims, maxDims), "dataspace");
         const hid_t plist = checkId(H5Pcreate(H5P_DATASET_CREATE), "property list");
         check(H5Pset_chunk(plist, rank, chunk), "chunking");
-        check(H5Pset_shuffle(plist), "shuffle filter");
-        check(H5Pset_deflate(plist, 4), "deflate filter");
         mId = checkId(H5Dcreate2(parent, name, type, space, H5P_DEFAULT, plist, H5P_DEFAULT), std::string("creating ") + name);
         H5Pclose(plist);
         H5Sclose(space);
+    }
+    /// Opens an existing dataset and cuts it to its first `rows` rows.
+    static Series open(hid_t parent, const char* name, hid_t type, hsize_t cols, hsize_t rows)
+    {
+        Series s;
+        s.mType = type;
+        s.mCols = cols;
+        s.mId = checkId(H5Dopen2(parent, name, H5P_DEFAULT), std::string("opening ") + name);
+        const hid_t space = H5Dget_space(s.mId);
+        hsize_t dims[2] = {0, cols};
+        H5Sget_simple_extent_dims(space, dims, nullptr);
+        H5Sclose(space);
+        if (dims[0] < rows) throw IoError(std::string("history.h5: ") + name + " has " + std::to_string(dims[0]) + " rows, fewer than the checkpoint's " + std::to_string(rows));
+        hsize_t newDims[2] = {rows, cols};
+        check(H5Dset_extent(s.mId, newDims), std::string("cutting ") + name);
+        s.mRows = rows;
+        return s;
+    }
+    /// One value of a one-column int64 dataset.
+    int64_t int64At(hsize_t row) const
+    {
+        const hid_t file = H5Dget_space(mId);
+        hsize_t start[1] = {row}, count[1] = {1};
+        check(H5Sselect_hyperslab(file, H5S_SELECT_SET, start, nullptr, count, nullptr), "selecting a row");
+        const hid_t memory = H5Screate_simple(1, count, nullptr);
+        int64_t value = 0;
+        check(H5Dread(mId, H5T_NATIVE_INT64, memory, file, H5P_DEFAULT, &value), "reading a row");
+        H5Sclose(memory);
+        H5Sclose(file);
+        return value;
     }
     void append(const void* data, hsize_t rows)
     {
@@ -117,6 +149,62 @@ struct HistoryWriter::Impl {
     }
 };
 
+namespace {
+
+enum Group { kFrames, kBodies, kFracture, kDust };
+
+/// Every growing dataset of the history: where it lives, its type and shape.
+struct SeriesSpec {
+    Series HistoryWriter::Impl::*member;
+    Group group;
+    const char* name;
+    hid_t type;
+    hsize_t cols;
+    hsize_t chunkRows;
+};
+
+std::vector<SeriesSpec> seriesSpecs()
+{
+    using I = HistoryWriter::Impl;
+    const hid_t d = H5T_NATIVE_DOUBLE, i64 = H5T_NATIVE_INT64, i8 = H5T_NATIVE_INT8;
+    return {
+        {&I::time, kFrames, "time_s", d, 1, 256},
+        {&I::bodyOffset, kFrames, "body_offset", i64, 1, 256},
+        {&I::kinetic, kFrames, "kinetic_energy_J", d, 1, 256},
+        {&I::linear, kFrames, "linear_momentum_kg_m_s", d, 3, 256},
+        {&I::angular, kFrames, "angular_momentum_kg_m2_s", d, 3, 256},
+        {&I::broken, kFrames, "broken_links", i64, 1, 256},
+        {&I::steps, kFrames, "steps", i64, 1, 256},
+        {&I::minDt, kFrames, "min_dt_s", d, 1, 256},
+        {&I::bodyCount, kFrames, "body_count", i64, 1, 256},
+        {&I::voxelCount, kFrames, "voxel_count", i64, 1, 256},
+        {&I::dustMass, kFrames, "dust_mass_kg", d, 1, 256},
+        {&I::id, kBodies, "id", i64, 1, 1024},
+        {&I::parent, kBodies, "parent_id", i64, 1, 1024},
+        {&I::position, kBodies, "position_m", d, 3, 1024},
+        {&I::orientation, kBodies, "orientation_wxyz", d, 4, 1024},
+        {&I::linVel, kBodies, "linear_velocity_m_s", d, 3, 1024},
+        {&I::angVel, kBodies, "angular_velocity_rad_s", d, 3, 1024},
+        {&I::mass, kBodies, "mass_kg", d, 1, 1024},
+        {&I::voxels, kBodies, "voxel_count", i64, 1, 1024},
+        {&I::asleep, kBodies, "asleep", i8, 1, 1024},
+        {&I::anchored, kBodies, "anchored", i8, 1, 1024},
+        {&I::eventTime, kFracture, "time_s", d, 1, 256},
+        {&I::eventParent, kFracture, "parent_id", i64, 1, 256},
+        {&I::eventChildOffset, kFracture, "child_offset", i64, 1, 256},
+        {&I::eventChild, kFracture, "child_id", i64, 1, 1024},
+        {&I::dustTime, kDust, "time_s", d, 1, 256},
+        {&I::dustParent, kDust, "parent_id", i64, 1, 256},
+        {&I::dustVoxels, kDust, "voxel_count", i64, 1, 256},
+        {&I::dustMassRows, kDust, "mass_kg", d, 1, 256},
+        {&I::dustMomentum, kDust, "linear_momentum_kg_m_s", d, 3, 256},
+    };
+}
+
+const char* const kGroupPaths[] = {"frames", "bodies", "events/fracture", "dust"};
+
+}  // namespace
+
 HistoryWriter::HistoryWriter(const std::string& path, const HistoryHeader& header) : mImpl(std::make_unique<Impl>())
 {
     Impl& m = *mImpl;
@@ -138,41 +226,13 @@ HistoryWriter::HistoryWriter(const std::string& path, const HistoryHeader& heade
         const hid_t fracture = m.groups[3] = checkId(H5Gcreate2(events, "fracture", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "fracture");
         const hid_t dust = m.groups[4] = checkId(H5Gcreate2(m.file, "dust", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "dust");
         const hid_t charges = m.groups[5] = checkId(H5Gcreate2(m.file, "charges", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "charges");
-        const hid_t d = H5T_NATIVE_DOUBLE, i64 = H5T_NATIVE_INT64, i8 = H5T_NATIVE_INT8;
-        m.time = Series(frames, "time_s", d, 1, 256);
-        m.bodyOffset = Series(frames, "body_offset", i64, 1, 256);
-        m.kinetic = Series(frames, "kinetic_energy_J", d, 1, 256);
-        m.linear = Series(frames, "linear_momentum_kg_m_s", d, 3, 256);
-        m.angular = Series(frames, "angular_momentum_kg_m2_s", d, 3, 256);
-        m.broken = Series(frames, "broken_links", i64, 1, 256);
-        m.steps = Series(frames, "steps", i64, 1, 256);
-        m.minDt = Series(frames, "min_dt_s", d, 1, 256);
-        m.bodyCount = Series(frames, "body_count", i64, 1, 256);
-        m.voxelCount = Series(frames, "voxel_count", i64, 1, 256);
-        m.dustMass = Series(frames, "dust_mass_kg", d, 1, 256);
-        m.id = Series(bodies, "id", i64, 1);
-        m.parent = Series(bodies, "parent_id", i64, 1);
-        m.position = Series(bodies, "position_m", d, 3);
-        m.orientation = Series(bodies, "orientation_wxyz", d, 4);
-        m.linVel = Series(bodies, "linear_velocity_m_s", d, 3);
-        m.angVel = Series(bodies, "angular_velocity_rad_s", d, 3);
-        m.mass = Series(bodies, "mass_kg", d, 1);
-        m.voxels = Series(bodies, "voxel_count", i64, 1);
-        m.asleep = Series(bodies, "asleep", i8, 1);
-        m.anchored = Series(bodies, "anchored", i8, 1);
-        m.eventTime = Series(fracture, "time_s", d, 1, 256);
-        m.eventParent = Series(fracture, "parent_id", i64, 1, 256);
-        m.eventChildOffset = Series(fracture, "child_offset", i64, 1, 256);
-        m.eventChild = Series(fracture, "child_id", i64, 1, 1024);
-        m.dustTime = Series(dust, "time_s", d, 1, 256);
-        m.dustParent = Series(dust, "parent_id", i64, 1, 256);
-        m.dustVoxels = Series(dust, "voxel_count", i64, 1, 256);
-        m.dustMassRows = Series(dust, "mass_kg", d, 1, 256);
-        m.dustMomentum = Series(dust, "linear_momentum_kg_m_s", d, 3, 256);
+        const hid_t parents[] = {frames, bodies, fracture, dust};
+        for (const SeriesSpec& spec : seriesSpecs()) m.*spec.member = Series(parents[spec.group], spec.name, spec.type, spec.cols, spec.chunkRows);
         const int64_t zero = 0;
         m.bodyOffset.append(&zero, 1);
         m.eventChildOffset.append(&zero, 1);
 
+        const hid_t d = H5T_NATIVE_DOUBLE, i8 = H5T_NATIVE_INT8;
         Series chargePos(charges, "position_m", d, 3, 16), chargeMass(charges, "tnt_kg", d, 1, 16),
             chargeTime(charges, "detonation_time_s", d, 1, 16);
         Series chargeBurst(charges, "surface_burst", i8, 1, 16);
@@ -184,6 +244,43 @@ HistoryWriter::HistoryWriter(const std::string& path, const HistoryHeader& heade
             chargeBurst.append(&surface, 1);
         }
         for (Series* s : {&chargePos, &chargeMass, &chargeTime, &chargeBurst}) s->close();
+        m.flush();
+    } catch (...) {
+        m.close();
+        throw;
+    }
+}
+
+HistoryWriter::HistoryWriter(const std::string& path, const HistoryResumePoint& resume) : mImpl(std::make_unique<Impl>())
+{
+    Impl& m = *mImpl;
+    m.path = path;
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    m.file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    if (m.file < 0) throw IoError(path + ": cannot open the HDF5 history to continue it");
+    try {
+        hid_t parents[4];
+        for (int g = 0; g < 4; ++g) parents[g] = m.groups[g] = checkId(H5Gopen2(m.file, kGroupPaths[g], H5P_DEFAULT), kGroupPaths[g]);
+        // Rows each group keeps: what the checkpoint's frames, events and dust wrote.
+        Series offsets = Series::open(parents[kFrames], "body_offset", H5T_NATIVE_INT64, 1, resume.frames + 1);
+        m.bodyRows = offsets.int64At(resume.frames);
+        offsets.close();
+        Series childOffsets = Series::open(parents[kFracture], "child_offset", H5T_NATIVE_INT64, 1, resume.fractureEvents + 1);
+        m.childRows = childOffsets.int64At(resume.fractureEvents);
+        childOffsets.close();
+        for (const SeriesSpec& spec : seriesSpecs()) {
+            hsize_t rows = 0;
+            switch (spec.group) {
+            case kFrames: rows = resume.frames; break;
+            case kBodies: rows = m.bodyRows; break;
+            case kFracture: rows = resume.fractureEvents; break;
+            case kDust: rows = resume.dustRecords; break;
+            }
+            if (spec.member == &Impl::bodyOffset || spec.member == &Impl::eventChildOffset) ++rows;
+            if (spec.member == &Impl::eventChild) rows = m.childRows;
+            m.*spec.member = Series::open(parents[spec.group], spec.name, spec.type, spec.cols, rows);
+        }
+        writeScalarAttribute(m.file, "run_complete", H5T_NATIVE_INT, 0);
         m.flush();
     } catch (...) {
         m.close();

@@ -2,10 +2,12 @@
 
 #include <spall/core/Error.h>
 
+#include <openvdb/io/Archive.h>
 #include <openvdb/io/File.h>
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <unistd.h>
 #include <unordered_set>
@@ -15,27 +17,56 @@ namespace spall {
 void initialiseOpenVdb()
 {
     static std::once_flag once;
-    std::call_once(once, [] { openvdb::initialize(); });
+    std::call_once(once, [] {
+        openvdb::initialize();
+        // spall's own tree shapes, so checkpoints can stream them.
+        if (!LinkGrid::isRegistered()) LinkGrid::registerGrid();
+        if (!DamageGrid::isRegistered()) DamageGrid::registerGrid();
+    });
 }
+
+namespace {
+
+/// openvdb::io::File writes through a stream it never checks, so a full disk leaves a truncated
+/// file that looks whole. This writes the same seekable format into a stream we can check.
+class CheckedVdbWriter : public openvdb::io::Archive {
+public:
+    void writeTo(std::ostream& out, const openvdb::GridPtrVec& grids, const openvdb::MetaMap& metadata) const
+    {
+        Archive::write(out, grids, /*seekable=*/true, metadata);
+    }
+};
+
+}  // namespace
 
 void writeGridsAtomically(const std::string& path, const openvdb::GridPtrVec& grids, const openvdb::MetaMap& fileMetadata)
 {
     initialiseOpenVdb();
     const std::string temporary = path + ".partial." + std::to_string(::getpid());
-    try {
-        openvdb::io::File file(temporary);
-        file.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
-        file.write(grids, fileMetadata);
-        file.close();
-    } catch (const std::exception& e) {
+    const auto discard = [&] {
         std::error_code ec;
         std::filesystem::remove(temporary, ec);
+    };
+    try {
+        std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+        if (!out) throw IoError(path + ": cannot create " + temporary);
+        CheckedVdbWriter writer;
+        writer.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
+        writer.writeTo(out, grids, fileMetadata);
+        out.flush();
+        out.close();
+        if (out.fail()) throw IoError(path + ": cannot write (disk full?); nothing was left in its place");
+    } catch (const IoError&) {
+        discard();
+        throw;
+    } catch (const std::exception& e) {
+        discard();
         throw IoError(path + ": cannot write: " + e.what());
     }
     std::error_code ec;
     std::filesystem::rename(temporary, path, ec);
     if (ec) {
-        std::filesystem::remove(temporary, ec);
+        discard();
         throw IoError(path + ": cannot rename the finished file into place: " + ec.message());
     }
 }

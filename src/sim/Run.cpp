@@ -3,6 +3,7 @@
 #include <spall/io/History.h>
 #include <spall/io/VdbIo.h>
 #include <spall/render/Render.h>
+#include <spall/sim/Checkpoint.h>
 #include <spall/sim/Simulation.h>
 
 #include <algorithm>
@@ -34,44 +35,35 @@ void writeTextAtomically(const std::filesystem::path& path, const std::string& t
 
 }  // namespace
 
-RunReport runScene(const Scene& scene, const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame)
+namespace {
+
+/// Writes frames firstFrame .. frameCount-1 of a simulation that stands at firstFrame's start.
+RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t stepsSoFar, const RunOptions& options,
+                    const std::function<bool(const RunProgress&)>& onFrame, std::unique_ptr<HistoryWriter> history)
 {
     const auto start = std::chrono::steady_clock::now();
     namespace fs = std::filesystem;
+    const Scene& scene = sim.scene();
     const fs::path dir = options.outputDirectory;
-    std::error_code ec;
-    fs::create_directories(dir, ec);
-    if (ec || !fs::is_directory(dir)) throw IoError(dir.string() + ": cannot create the output directory: " + ec.message());
-    const nlohmann::json resolvedScene = sceneToJson(scene);
-    writeTextAtomically(dir / "scene.json", resolvedScene.dump(2) + "\n");
-
-    Simulation sim(scene);
-    const int frameCount = options.maxFrames >= 0 ? std::min(options.maxFrames, scene.frameCount()) : scene.frameCount();
-
-    std::unique_ptr<HistoryWriter> history;
-    if (scene.output.history) {
-        HistoryHeader header;
-        header.voxelSizeM = scene.voxelSizeM;
-        header.seed = scene.seed;
-        header.sceneJson = resolvedScene.dump();
-        for (const Charge& c : scene.charges) header.charges.push_back({c.positionM, c.tntKg, c.detonationTimeS, toString(c.burst)});
-        history = std::make_unique<HistoryWriter>((dir / "history.h5").string(), header);
-    }
+    const fs::path checkpointPath = dir / kCheckpointFileName;
+    const std::string checkpointScene = sceneToJson(scene).dump();
     std::unique_ptr<FrameWriter> frames;
     if (scene.output.vdb) frames = std::make_unique<FrameWriter>(dir.string(), scene.output.densityGrid);
 
     RunReport report;
-    size_t eventsWritten = 0, dustWritten = 0;
+    report.totalSteps = stepsSoFar;
+    size_t eventsWritten = sim.fractureEvents().size(), dustWritten = sim.dust().size();
     // Preview: the bodies of a few frames spread over the run. Copies share the grids, whose
     // active voxels never change once a body exists.
     std::vector<int> previewFrames;
     std::vector<std::vector<Body>> previewBodies;
     std::vector<double> previewTimes;
-    if (!options.previewPath.empty() && options.previewFrames > 0) {
+    const bool preview = !options.previewPath.empty() && options.previewFrames > 0;
+    if (preview) {
         const int n = std::min(options.previewFrames, frameCount);
         for (int i = 0; i < n; ++i) previewFrames.push_back(n == 1 ? frameCount - 1 : int(std::lround(double(i) * (frameCount - 1) / (n - 1))));
     }
-    for (int f = 0; f < frameCount; ++f) {
+    for (int f = firstFrame; f < frameCount; ++f) {
         const double t = f / scene.frameRateHz;
         sim.advanceTo(t);
         const StepStats stats = sim.takeStepStats();
@@ -102,6 +94,10 @@ RunReport runScene(const Scene& scene, const RunOptions& options, const std::fun
             eventsWritten = events.size();
             dustWritten = dust.size();
         }
+        // The checkpoint goes last: whatever it says is written, is.
+        const int every = scene.output.checkpointEveryFrames;
+        if (every > 0 && (f + 1) % every == 0 && f + 1 < frameCount)
+            writeCheckpoint(checkpointPath.string(), {f + 1, frameCount, report.totalSteps, checkpointScene, sim.state()});
         if (std::find(previewFrames.begin(), previewFrames.end(), f) != previewFrames.end()) {
             previewBodies.push_back(sim.bodies());
             previewTimes.push_back(t);
@@ -112,18 +108,73 @@ RunReport runScene(const Scene& scene, const RunOptions& options, const std::fun
         if (onFrame && !onFrame(progress) && f + 1 < frameCount) break;
     }
     report.complete = report.framesWritten == frameCount;
-    if (!previewBodies.empty()) {
-        RenderSettings settings{640, 360, scene.world.ground.offsetM};
-        const Camera camera = frameCamera({fragmentsOf(previewBodies.front()), fragmentsOf(previewBodies.back())}, settings);
+    const RenderSettings previewSettings{640, 360, scene.world.ground.offsetM};
+    if (preview && report.complete && firstFrame > 0) {
+        // Frames before the resume point are no longer in memory: read them back.
+        if (frames) writeContactSheet(dir.string(), options.previewPath, options.previewFrames, previewSettings);
+    } else if (!previewBodies.empty()) {
+        const Camera camera = frameCamera({fragmentsOf(previewBodies.front()), fragmentsOf(previewBodies.back())}, previewSettings);
         std::vector<Image> images;
-        for (const auto& bodies : previewBodies) images.push_back(renderFragments(fragmentsOf(bodies), camera, settings));
+        for (const auto& bodies : previewBodies) images.push_back(renderFragments(fragmentsOf(bodies), camera, previewSettings));
         writePng(options.previewPath, contactSheet(images, previewTimes, images.size() <= 4 ? int(images.size()) : 3));
     }
-    if (history && report.complete) history->finish();
+    if (report.complete) {
+        if (history) history->finish();
+        std::error_code ec;
+        fs::remove(checkpointPath, ec);  // the run is whole; nothing to resume
+    }
     report.finalBodies = sim.bodies().size();
     report.fractureEvents = static_cast<int64_t>(sim.fractureEvents().size());
     report.wallTimeS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return report;
+}
+
+}  // namespace
+
+RunReport runScene(const Scene& scene, const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame)
+{
+    namespace fs = std::filesystem;
+    const fs::path dir = options.outputDirectory;
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec || !fs::is_directory(dir)) throw IoError(dir.string() + ": cannot create the output directory: " + ec.message());
+    // A checkpoint of an earlier run in the same directory must not be resumed into this one.
+    fs::remove(dir / kCheckpointFileName, ec);
+    const nlohmann::json resolvedScene = sceneToJson(scene);
+    writeTextAtomically(dir / "scene.json", resolvedScene.dump(2) + "\n");
+
+    Simulation sim(scene);
+    const int frameCount = options.maxFrames >= 0 ? std::min(options.maxFrames, scene.frameCount()) : scene.frameCount();
+
+    std::unique_ptr<HistoryWriter> history;
+    if (scene.output.history) {
+        HistoryHeader header;
+        header.voxelSizeM = scene.voxelSizeM;
+        header.seed = scene.seed;
+        header.sceneJson = resolvedScene.dump();
+        for (const Charge& c : scene.charges) header.charges.push_back({c.positionM, c.tntKg, c.detonationTimeS, toString(c.burst)});
+        history = std::make_unique<HistoryWriter>((dir / "history.h5").string(), header);
+    }
+    return runFrames(sim, 0, frameCount, 0, options, onFrame, std::move(history));
+}
+
+RunReport resumeRun(const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame)
+{
+    namespace fs = std::filesystem;
+    const fs::path dir = options.outputDirectory;
+    const std::string path = (dir / kCheckpointFileName).string();
+    if (!fs::exists(path) && fs::exists(dir / "history.h5") && readHistory((dir / "history.h5").string()).runComplete)
+        throw InputError(dir.string() + ": the run is complete (history.h5 says run_complete = 1); there is nothing to resume");
+    Checkpoint checkpoint = readCheckpoint(path);
+    const Scene scene = parseScene(checkpoint.sceneJson, path + " (scene)", dir.string());
+    std::unique_ptr<HistoryWriter> history;
+    if (scene.output.history)
+        history = std::make_unique<HistoryWriter>(
+            (dir / "history.h5").string(),
+            HistoryResumePoint{checkpoint.framesDone, static_cast<int64_t>(checkpoint.state.events.size()),
+                               static_cast<int64_t>(checkpoint.state.dust.size())});
+    Simulation sim(scene, std::move(checkpoint.state));
+    return runFrames(sim, checkpoint.framesDone, checkpoint.frameCount, checkpoint.totalSteps, options, onFrame, std::move(history));
 }
 
 }  // namespace spall

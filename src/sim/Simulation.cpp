@@ -77,6 +77,22 @@ Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(sc
     mStats.minDtS = scene.timeStep.maxTimeStepS;
 }
 
+Simulation::Simulation(const Scene& scene, SimulationState state)
+    : mScene(scene), mBodies(std::move(state.bodies)), mDamage(std::move(state.damage)), mEvents(std::move(state.events)),
+      mDust(std::move(state.dust)), mTimeS(state.timeS), mNextId(state.nextId), mInitialVoxels(state.initialVoxels),
+      mContactCache(std::move(state.contactCache)), mPenetrationStepScale(state.penetrationStepScale)
+{
+    initialiseOpenVdb();
+    mField = std::make_unique<BlastField>(scene.charges, scene.blast);
+    mDamage.resize(mBodies.size());
+    mStats.minDtS = scene.timeStep.maxTimeStepS;
+}
+
+SimulationState Simulation::state() const
+{
+    return {mBodies, mDamage, mEvents, mDust, mTimeS, mNextId, mInitialVoxels, mContactCache, mPenetrationStepScale};
+}
+
 StepStats Simulation::takeStepStats()
 {
     StepStats s = mStats;

@@ -56,10 +56,20 @@ struct HistoryHeader {
     std::vector<ChargeRow> charges;
 };
 
+/// Where a resumed run picks a history up: everything after these rows is cut off.
+struct HistoryResumePoint {
+    int64_t frames = 0;
+    int64_t fractureEvents = 0;
+    int64_t dustRecords = 0;
+};
+
 /// Writes history.h5 incrementally. Throws IoError.
 class HistoryWriter {
 public:
+    /// Creates a new history.
     HistoryWriter(const std::string& path, const HistoryHeader& header);
+    /// Continues an existing one from a checkpoint (rows a later, lost frame wrote are cut off).
+    HistoryWriter(const std::string& path, const HistoryResumePoint& resume);
     ~HistoryWriter();
     HistoryWriter(const HistoryWriter&) = delete;
     HistoryWriter& operator=(const HistoryWriter&) = delete;
@@ -70,8 +80,9 @@ public:
     /// Marks the run complete (root attribute run_complete = 1) and closes the file.
     void finish();
 
-private:
     struct Impl;
+
+private:
     std::unique_ptr<Impl> mImpl;
 };
 

@@ -32,6 +32,8 @@ struct OutputSettings {
     bool vdb = true;           ///< fragments.NNNN.vdb per frame
     bool densityGrid = true;   ///< world-space `density` grid in each frame
     bool history = true;       ///< history.h5
+    /// OUTDIR/checkpoint.spall every this many frames, for `spall run --resume` (0: never).
+    int checkpointEveryFrames = 1;
 };
 
 struct Scene {

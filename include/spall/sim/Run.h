@@ -37,8 +37,14 @@ struct RunReport {
     double wallTimeS = 0;
 };
 
-/// Runs a scene and writes OUTDIR/scene.json, fragments.NNNN.vdb and history.h5. The callback
-/// returns false to stop after the current frame (frames written so far stay readable).
+/// Runs a scene and writes OUTDIR/scene.json, fragments.NNNN.vdb, history.h5 and, after each
+/// frame but the last, checkpoint.spall. The callback returns false to stop after the current
+/// frame (frames written so far stay readable; the checkpoint lets the run continue).
 RunReport runScene(const Scene& scene, const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame);
+
+/// Continues the run in options.outputDirectory from its checkpoint: frames and history rows
+/// after it are rewritten, and the run ends exactly as if it had never stopped. The scene,
+/// seed and frame count are the checkpoint's; maxFrames is ignored.
+RunReport resumeRun(const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame);
 
 }  // namespace spall

@@ -23,11 +23,30 @@ struct StepStats {
     int64_t contacts = 0;
 };
 
+/// Everything a simulation carries from one step to the next besides its scene: what a
+/// checkpoint stores so that a resumed run continues bit for bit.
+struct SimulationState {
+    std::vector<Body> bodies;
+    std::vector<DamageGrid::Ptr> damage;  ///< per body, Davison–Stevens only (else null)
+    std::vector<FractureEvent> events;
+    std::vector<DustRecord> dust;
+    double timeS = 0;
+    int64_t nextId = 0;
+    int64_t initialVoxels = 0;
+    ContactCache contactCache;
+    double penetrationStepScale = 1.0;
+};
+
 class Simulation {
 public:
     /// Voxelises every object and places it (throws InputError for bad input, e.g. a charge
     /// inside an object).
     explicit Simulation(const Scene& scene, Interrupter* interrupter = nullptr);
+    /// Continues from a saved state; `scene` is the simulation's own (Simulation::scene()).
+    Simulation(const Scene& scene, SimulationState state);
+
+    /// The state between steps (grids are shared, not copied: save it before stepping on).
+    SimulationState state() const;
 
     /// Steps (adaptively) until time t exactly.
     void advanceTo(double timeS);
@@ -61,6 +80,7 @@ private:
     StepStats mStats;
     ContactCache mContactCache;
     double mPenetrationStepScale = 1.0;  ///< < 1 while contacts are deeper than the tolerance
+    // Adding a member that carries over between steps? Add it to SimulationState too.
 };
 
 }  // namespace spall
