@@ -5,10 +5,24 @@
 #include <hdf5.h>
 
 #include <cstring>
+#include <filesystem>
+#include <mutex>
 
 namespace spall {
 
 namespace {
+
+/// Once per process, before any other HDF5 call: errors become IoError instead of stderr noise,
+/// and HDF5 does not close files from an exit handler (after a failed write it would crash
+/// there; the writer closes its file itself).
+void initialiseHdf5()
+{
+    static std::once_flag once;
+    std::call_once(once, [] {
+        H5dont_atexit();
+        H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    });
+}
 
 void check(herr_t status, const std::string& what)
 {
@@ -80,7 +94,7 @@ public:
         hsize_t start[2] = {mRows, 0}, count[2] = {rows, mCols};
         check(H5Sselect_hyperslab(file, H5S_SELECT_SET, start, nullptr, count, nullptr), "selecting rows");
         const hid_t memory = H5Screate_simple(rank, count, nullptr);
-        check(H5Dwrite(mId, mType, memory, file, H5P_DEFAULT, data), "writing rows");
+        check(H5Dwrite(mId, mType, memory, file, H5P_DEFAULT, data), "writing rows (disk full?)");
         H5Sclose(memory);
         H5Sclose(file);
         mRows += rows;
@@ -135,7 +149,7 @@ struct HistoryWriter::Impl {
     Series dustTime, dustParent, dustVoxels, dustMassRows, dustMomentum;
     int64_t bodyRows = 0, childRows = 0;
 
-    void flush() { check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flushing"); }
+    void flush() { check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flushing (disk full?)"); }
     void close()
     {
         for (Series* s : {&time, &bodyOffset, &kinetic, &linear, &angular, &broken, &steps, &minDt, &bodyCount, &voxelCount, &dustMass,
@@ -209,7 +223,7 @@ HistoryWriter::HistoryWriter(const std::string& path, const HistoryHeader& heade
 {
     Impl& m = *mImpl;
     m.path = path;
-    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors become IoError, not stderr noise
+    initialiseHdf5();
     m.file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
     if (m.file < 0) throw IoError(path + ": cannot create the HDF5 history");
     try {
@@ -255,7 +269,7 @@ HistoryWriter::HistoryWriter(const std::string& path, const HistoryResumePoint& 
 {
     Impl& m = *mImpl;
     m.path = path;
-    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    initialiseHdf5();
     m.file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
     if (m.file < 0) throw IoError(path + ": cannot open the HDF5 history to continue it");
     try {
@@ -298,6 +312,17 @@ void HistoryWriter::appendFrame(const FrameRow& f, const std::vector<BodyRow>& b
 {
     Impl& m = *mImpl;
     const size_t n = bodies.size();
+    // HDF5 cannot recover from running out of space part-way through a flush (the file is left
+    // claiming more than it holds, and does not open), so refuse before touching it. The
+    // margin covers a new chunk for every dataset and the metadata.
+    size_t childCount = 0;
+    for (const FractureEvent& e : events) childCount += e.childIds.size();
+    const uintmax_t needed = n * sizeof(BodyRow) + (events.size() + childCount + dust.size()) * 64 + (uintmax_t(512) << 10);
+    std::error_code ec;
+    const auto space = std::filesystem::space(std::filesystem::path(m.path).parent_path().empty() ? "." : std::filesystem::path(m.path).parent_path(), ec);
+    if (!ec && space.available < needed)
+        throw IoError(m.path + ": disk full (" + std::to_string(space.available) + " bytes free, a frame needs about " +
+                      std::to_string(needed) + "); the frames before it are intact");
     std::vector<int64_t> ids(n), parents(n), voxels(n);
     std::vector<double> pos(3 * n), ori(4 * n), lin(3 * n), ang(3 * n), mass(n);
     std::vector<int8_t> asleep(n), anchored(n);
@@ -372,7 +397,7 @@ class Reader {
 public:
     explicit Reader(const std::string& path) : mPath(path)
     {
-        H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+        initialiseHdf5();
         if (H5Fis_hdf5(path.c_str()) <= 0) throw IoError(path + ": not an HDF5 file (or missing)");
         mFile = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
         if (mFile < 0) throw IoError(path + ": cannot open");

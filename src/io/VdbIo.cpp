@@ -139,14 +139,27 @@ std::string FrameWriter::framePath(const std::string& directory, int frame)
     return (std::filesystem::path(directory) / name).string();
 }
 
-openvdb::FloatTree::Ptr FrameWriter::solidTree(const Body& body)
+const FrameWriter::Solid& FrameWriter::solidOf(const Body& body)
 {
-    auto it = mTrees.find(body.id);
-    if (it != mTrees.end()) return it->second;
+    auto found = mSolids.find(body.id);
+    if (found != mSolids.end()) return found->second;
+    const openvdb::Coord origin = body.indexBounds.min();
     auto tree = std::make_shared<openvdb::FloatTree>(0.0f);
-    copyActiveTopology(*tree, body.grid->constTree(), 1.0f);
-    mTrees.emplace(body.id, tree);
-    return tree;
+    {
+        openvdb::tree::ValueAccessor<openvdb::FloatTree> acc(*tree);
+        for (auto it = body.grid->constTree().cbeginValueOn(); it; ++it) acc.setValueOn(it.getCoord() - origin, 1.0f);
+    }
+    // FNV-1a over the shifted voxels in the new tree's own (canonical) order.
+    uint64_t hash = 1469598103934665603ull;
+    for (auto it = tree->cbeginValueOn(); it; ++it) {
+        const openvdb::Coord c = it.getCoord();
+        for (int32_t v : {c.x(), c.y(), c.z()}) hash = (hash ^ uint32_t(v)) * 1099511628211ull;
+    }
+    auto [first, last] = mTreesByShape.equal_range(hash);
+    for (auto it = first; it != last; ++it)
+        if (it->second->hasSameTopology(*tree)) return mSolids.emplace(body.id, Solid{it->second, origin}).first->second;
+    mTreesByShape.emplace(hash, tree);
+    return mSolids.emplace(body.id, Solid{tree, origin}).first->second;
 }
 
 std::string FrameWriter::write(const FrameInfo& info, const std::vector<Body>& bodies)
@@ -155,8 +168,11 @@ std::string FrameWriter::write(const FrameInfo& info, const std::vector<Body>& b
     std::unordered_set<int64_t> alive;
     for (const Body& body : bodies) {
         alive.insert(body.id);
-        auto grid = openvdb::FloatGrid::create(solidTree(body));
-        grid->setTransform(body.indexToWorld());
+        const Solid& solid = solidOf(body);
+        auto grid = openvdb::FloatGrid::create(solid.tree);
+        auto transform = body.indexToWorld();
+        transform->preTranslate(solid.originIjk.asVec3d());
+        grid->setTransform(transform);
         grid->setName("fragment_" + std::to_string(body.id));
         grid->setGridClass(openvdb::GRID_FOG_VOLUME);
         grid->insertMeta("frame", openvdb::Int32Metadata(info.frame));
@@ -174,7 +190,8 @@ std::string FrameWriter::write(const FrameInfo& info, const std::vector<Body>& b
         grid->insertMeta("anchored", openvdb::BoolMetadata(body.anchored));
         grids.push_back(grid);
     }
-    for (auto it = mTrees.begin(); it != mTrees.end();) it = alive.count(it->first) ? std::next(it) : mTrees.erase(it);
+    for (auto it = mSolids.begin(); it != mSolids.end();) it = alive.count(it->first) ? std::next(it) : mSolids.erase(it);
+    for (auto it = mTreesByShape.begin(); it != mTreesByShape.end();) it = it->second.use_count() > 1 ? std::next(it) : mTreesByShape.erase(it);
     if (mDensityGrid && !bodies.empty()) {
         auto density = rasteriseDensity(bodies, bodies.front().voxelSizeM);
         density->insertMeta("frame", openvdb::Int32Metadata(info.frame));
@@ -202,7 +219,7 @@ openvdb::FloatGrid::Ptr rasteriseDensity(const std::vector<Body>& bodies, double
         // index space: no holes, whatever the rotation.
         const Eigen::Matrix3d toLocal = body.orientation.toRotationMatrix().transpose();
         // World box around the body's index box (its eight corners, voxel cubes included).
-        const openvdb::CoordBBox box = body.grid->evalActiveVoxelBoundingBox();
+        const openvdb::CoordBBox& box = body.indexBounds;
         Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
         for (int c = 0; c < 8; ++c) {
             const Eigen::Vector3d corner((c & 1 ? box.max().x() + 0.5 : box.min().x() - 0.5),

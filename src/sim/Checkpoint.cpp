@@ -201,7 +201,7 @@ void writeCheckpoint(const std::string& path, const Checkpoint& c)
 Checkpoint readCheckpoint(const std::string& path)
 {
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw IoError(path + ": no checkpoint to resume from (was output.checkpoint_every_frames 0, or did the run finish?)");
+    if (!in) throw IoError(path + ": no checkpoint to resume from (the run stopped before its first frame was complete, had output.checkpoint_every_frames 0, or finished)");
     Reader r(in, path);
     char magic[sizeof kMagic];
     in.read(magic, sizeof magic);

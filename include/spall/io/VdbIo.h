@@ -37,8 +37,9 @@ struct FrameInfo {
 
 /// Writes OUTDIR/fragments.NNNN.vdb: one FloatGrid per body named fragment_<id> (value 1 inside,
 /// transform = the body's exact index-to-world map, motion metadata) plus, if asked, a
-/// world-space `density` grid with all bodies. Trees are cached per body id and shared between
-/// frames while the body's voxels do not change.
+/// world-space `density` grid with all bodies. Each fragment's tree starts at index (0,0,0)
+/// (the offset is in its transform), so fragments of the same shape — debris is full of
+/// single voxels — share one tree, which the file stores once (OpenVDB instancing).
 class FrameWriter {
 public:
     FrameWriter(std::string outputDirectory, bool densityGrid);
@@ -47,10 +48,15 @@ public:
     static std::string framePath(const std::string& directory, int frame);
 
 private:
-    openvdb::FloatTree::Ptr solidTree(const Body& body);
+    struct Solid {
+        openvdb::FloatTree::Ptr tree;
+        openvdb::Coord originIjk;  ///< the tree's (0,0,0) in the body's index space
+    };
+    const Solid& solidOf(const Body& body);
     std::string mDirectory;
     bool mDensityGrid;
-    std::unordered_map<int64_t, openvdb::FloatTree::Ptr> mTrees;
+    std::unordered_map<int64_t, Solid> mSolids;                                 ///< per body id
+    std::unordered_multimap<uint64_t, openvdb::FloatTree::Ptr> mTreesByShape;  ///< by shape hash
 };
 
 /// Rasterises bodies into one world-space grid of voxel size h (value 1 where a voxel centre of
