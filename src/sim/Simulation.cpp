@@ -120,11 +120,15 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
                 dt = std::min(dt, ts.pulseFraction * p.positiveDurationS);
             }
         }
-        // Never step over the moment a front first reaches the body.
+        // Never step far over the moment a front first reaches the body: land on it, or at most
+        // a crossing step past it (landing on every arrival of every charge at every fragment
+        // would take steps as short as the gaps between those moments).
         for (size_t c = 0; c < mField->charges().size(); ++c) {
             const double d = (body.positionM - mField->charges()[c].positionM).norm();
-            const double arrival = mField->window(static_cast<int>(c), std::max(d - body.boundingRadiusM, h)).first;
-            if (arrival > mTimeS) dt = std::min(dt, arrival - mTimeS);
+            const double nearM = std::max(d - body.boundingRadiusM, h);
+            const double arrival = mField->window(static_cast<int>(c), nearM).first;
+            if (arrival > mTimeS && arrival - mTimeS < dt)
+                dt = std::min(dt, std::max(arrival - mTimeS, ts.frontFraction * h / mField->shockSpeedMS(static_cast<int>(c), nearM)));
         }
         if (!body.anchored && !body.asleep) {
             const double speed = maxVoxelSpeedMS(body);
@@ -146,11 +150,19 @@ void Simulation::advanceTo(double target)
             dt = remaining;
         else if (remaining < 2.0 * dt)
             dt = 0.5 * remaining;
+        if (mObserver) {
+            mRecord = StepRecord{0.0, dt, false};
+            for (const Body& body : mBodies) mRecord.blastOpen = mRecord.blastOpen || bodyInWindows(body, pressure);
+        }
         fractureStep(pressure, dt);
         motionStep(pressure, dt);
         mTimeS = last ? target : mTimeS + dt;
         ++mStats.steps;
         mStats.minDtS = std::min(mStats.minDtS, dt);
+        if (mObserver) {
+            mRecord.timeS = mTimeS;
+            mObserver(*this, mRecord);
+        }
     }
 }
 
@@ -172,6 +184,19 @@ void Simulation::fractureStep(const PressureSnapshot& pressure, double dt)
     }
     if (std::none_of(changed.begin(), changed.end(), [](char c) { return c; })) return;
 
+    const auto momenta = [this](Eigen::Vector3d& linear, Eigen::Vector3d& angular) {
+        linear.setZero();
+        angular.setZero();
+        for (const Body& b : mBodies) {
+            linear += linearMomentum(b);
+            angular += angularMomentumAboutOrigin(b);
+        }
+        for (const DustRecord& d : mDust) {
+            linear += d.linearMomentum;
+            angular += d.angularMomentumAboutOrigin;
+        }
+    };
+    if (mObserver) momenta(mRecord.linearMomentumBeforeSplit, mRecord.angularMomentumBeforeSplit);
     // Split only bodies that lost links or anchors, in body order; parts replace their parent.
     std::vector<Body> next;
     std::vector<DamageGrid::Ptr> nextDamage;
@@ -203,6 +228,10 @@ void Simulation::fractureStep(const PressureSnapshot& pressure, double dt)
     }
     mBodies = std::move(next);
     mDamage = std::move(nextDamage);
+    if (mObserver) {
+        mRecord.split = true;
+        momenta(mRecord.linearMomentumAfterSplit, mRecord.angularMomentumAfterSplit);
+    }
 }
 
 void Simulation::motionStep(const PressureSnapshot& pressure, double dt)

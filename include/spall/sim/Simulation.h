@@ -9,6 +9,7 @@
 #include <spall/io/Scene.h>
 #include <spall/voxel/Body.h>
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -37,6 +38,20 @@ struct SimulationState {
     double penetrationStepScale = 1.0;
 };
 
+/// What one step did, for checks of invariants after every step (tests/stress_main.cpp).
+/// Momentum totals include the dust, and are taken around the fracture pass, where bodies
+/// split: they must agree to round-off.
+struct StepRecord {
+    double timeS = 0;  ///< at the end of the step
+    double dtS = 0;
+    bool blastOpen = false;  ///< some body was inside an open pressure window during the step
+    bool split = false;      ///< a body split this step
+    Eigen::Vector3d linearMomentumBeforeSplit = Eigen::Vector3d::Zero();
+    Eigen::Vector3d linearMomentumAfterSplit = Eigen::Vector3d::Zero();
+    Eigen::Vector3d angularMomentumBeforeSplit = Eigen::Vector3d::Zero();  ///< about the origin
+    Eigen::Vector3d angularMomentumAfterSplit = Eigen::Vector3d::Zero();
+};
+
 class Simulation {
 public:
     /// Voxelises every object and places it (throws InputError for bad input, e.g. a charge
@@ -60,6 +75,9 @@ public:
     int64_t initialVoxelCount() const { return mInitialVoxels; }
     StepStats takeStepStats();
 
+    /// Called after every step (costs nothing when unset).
+    void setStepObserver(std::function<void(const Simulation&, const StepRecord&)> observer) { mObserver = std::move(observer); }
+
     /// Chooses the next step: fine while a front crosses a body, coarse in free flight, and
     /// never letting a voxel travel more than a fraction of a voxel.
     double chooseTimeStep(const std::vector<OpenWindow>& windows) const;
@@ -80,6 +98,8 @@ private:
     StepStats mStats;
     ContactCache mContactCache;
     double mPenetrationStepScale = 1.0;  ///< < 1 while contacts are deeper than the tolerance
+    std::function<void(const Simulation&, const StepRecord&)> mObserver;
+    StepRecord mRecord;  ///< filled while a step runs, for the observer
     // Adding a member that carries over between steps? Add it to SimulationState too.
 };
 
