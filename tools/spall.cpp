@@ -1,4 +1,5 @@
 // spall: command-line front end. Only this file turns library errors into exit codes.
+#include "BenchAccuracy.h"
 #include "BenchCollisions.h"
 
 #include <spall/blast/Blast.h>
@@ -483,6 +484,12 @@ int main(int argc, char** argv)
     long benchMaxVoxels = 1'000'000;
     benchCollisionsCmd->add_flag("--json", benchJson, "One JSON row per method and size");
     benchCollisionsCmd->add_option("--max-boundary-voxels", benchMaxVoxels, "Largest size to run")->check(CLI::PositiveNumber);
+    auto* benchAccuracyCmd = bench->add_subcommand("accuracy", "Error against a reference next to run time: CSV and log-log plots");
+    std::string benchAccuracyOut = "accuracy";
+    double benchSceneDuration = 0.5;
+    benchAccuracyCmd->add_option("-o,--output", benchAccuracyOut, "Directory for accuracy.csv and the plots");
+    benchAccuracyCmd->add_option("--scene-duration", benchSceneDuration, "Seconds of the default scene per variant (s)")
+        ->check(CLI::PositiveNumber);
 
     try {
         app.parse(argc, argv);
@@ -507,6 +514,7 @@ int main(int argc, char** argv)
         }
         if (*blast) return runBlast(tnt, dist, burst, dataset, blastJson, curve);
         if (*benchCollisionsCmd) return spall::benchCollisions(benchJson, benchMaxVoxels);
+        if (*benchAccuracyCmd) return spall::benchAccuracy(benchAccuracyOut, benchSceneDuration);
     } catch (const spall::InputError& e) {
         std::cerr << "spall: error: " << e.what() << "\n";
         return 2;

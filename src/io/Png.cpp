@@ -144,32 +144,75 @@ void writePng(const std::string& path, const Image& image)
 Image plotCurve(const std::vector<double>& x, const std::vector<double>& y, const std::string& xLabel, const std::string& yLabel,
                 const std::string& title, int width, int height)
 {
+    return plotSeries({{"", x, y}}, xLabel, yLabel, title, false, width, height);
+}
+
+Image plotSeries(const std::vector<PlotSeries>& series, const std::string& xLabel, const std::string& yLabel, const std::string& title,
+                 bool logLog, int width, int height)
+{
     Image img(width, height);
     const int left = 110, right = width - 30, top = 50, bottom = height - 70;
-    double x0 = *std::min_element(x.begin(), x.end()), x1 = *std::max_element(x.begin(), x.end());
-    double y0 = *std::min_element(y.begin(), y.end()), y1 = *std::max_element(y.begin(), y.end());
+    // On log-log axes the plot works in log10 of the values; points that are not positive are left out.
+    const auto axisValue = [&](double v) { return logLog ? std::log10(v) : v; };
+    const auto usable = [&](double v) { return std::isfinite(v) && (!logLog || v > 0); };
+    double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+    for (const PlotSeries& s : series)
+        for (size_t i = 0; i < s.x.size(); ++i) {
+            if (!usable(s.x[i]) || !usable(s.y[i])) continue;
+            x0 = std::min(x0, axisValue(s.x[i]));
+            x1 = std::max(x1, axisValue(s.x[i]));
+            y0 = std::min(y0, axisValue(s.y[i]));
+            y1 = std::max(y1, axisValue(s.y[i]));
+        }
+    if (x0 > x1) x0 = 0, x1 = 1, y0 = 0, y1 = 1;
     if (x1 <= x0) x1 = x0 + 1;
     const double pad = 0.05 * (y1 - y0 > 0 ? y1 - y0 : 1);
     y0 -= pad;
     y1 += pad;
     auto px = [&](double v) { return left + (v - x0) / (x1 - x0) * (right - left); };
     auto py = [&](double v) { return bottom - (v - y0) / (y1 - y0) * (bottom - top); };
-    const Rgb grid{225, 225, 225}, axis{60, 60, 60}, curve{30, 90, 200};
-    const double xs = tickStep(x1 - x0, 8), ys = tickStep(y1 - y0, 6);
+    const Rgb grid{225, 225, 225}, axis{60, 60, 60};
+    const Rgb colours[] = {{30, 90, 200}, {200, 60, 40}, {40, 150, 60}, {150, 60, 170}, {220, 140, 20}, {20, 150, 160}};
+    const auto tickLabel = [&](double v) { return logLog ? "1e" + formatTick(v) : formatTick(v); };
+    const double xs = logLog ? std::max(1.0, std::ceil((x1 - x0) / 8)) : tickStep(x1 - x0, 8);
+    const double ys = logLog ? std::max(1.0, std::ceil((y1 - y0) / 6)) : tickStep(y1 - y0, 6);
     for (double v = std::ceil(x0 / xs) * xs; v <= x1 + 1e-12 * xs; v += xs) {
         img.line(px(v), top, px(v), bottom, grid);
-        const std::string s = formatTick(v);
+        const std::string s = tickLabel(v);
         img.text(int(px(v)) - Image::textWidth(s) / 2, bottom + 10, s, axis);
     }
     for (double v = std::ceil(y0 / ys) * ys; v <= y1 + 1e-12 * ys; v += ys) {
         img.line(left, py(v), right, py(v), grid);
-        const std::string s = formatTick(v);
+        const std::string s = tickLabel(v);
         img.text(left - 10 - Image::textWidth(s), int(py(v)) - 7, s, axis);
     }
-    if (y0 < 0 && y1 > 0) img.line(left, py(0), right, py(0), axis);
+    if (!logLog && y0 < 0 && y1 > 0) img.line(left, py(0), right, py(0), axis);
     img.line(left, top, left, bottom, axis);
     img.line(left, bottom, right, bottom, axis);
-    for (size_t i = 1; i < x.size(); ++i) img.line(px(x[i - 1]), py(y[i - 1]), px(x[i]), py(y[i]), curve, 2);
+    for (size_t k = 0; k < series.size(); ++k) {
+        const PlotSeries& s = series[k];
+        const Rgb colour = colours[k % std::size(colours)];
+        bool havePrevious = false;
+        double previousX = 0, previousY = 0;
+        for (size_t i = 0; i < s.x.size(); ++i) {
+            if (!usable(s.x[i]) || !usable(s.y[i])) continue;
+            const double cx = px(axisValue(s.x[i])), cy = py(axisValue(s.y[i]));
+            if (havePrevious) img.line(previousX, previousY, cx, cy, colour, 2);
+            if (series.size() > 1) img.fillRect(int(cx) - 3, int(cy) - 3, int(cx) + 3, int(cy) + 3, colour);
+            havePrevious = true;
+            previousX = cx;
+            previousY = cy;
+        }
+        if (!s.name.empty()) {
+            // Legend in the upper right, wide enough for the longest name.
+            size_t longest = 0;
+            for (const PlotSeries& other : series) longest = std::max(longest, other.name.size());
+            const int lx = right - 30 - Image::textWidth(std::string(longest, ' '));
+            const int ly = top + 10 + 20 * int(k);
+            img.fillRect(lx - 20, ly + 2, lx - 6, ly + 12, colour);
+            img.text(lx, ly, s.name, axis);
+        }
+    }
     img.text((left + right - Image::textWidth(xLabel)) / 2, height - 35, xLabel, axis);
     img.text(10, 15, yLabel, axis);
     img.text((left + right - Image::textWidth(title)) / 2, 15, title, axis);

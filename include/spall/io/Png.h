@@ -36,6 +36,17 @@ private:
 /// Writes an 8-bit RGB PNG atomically (temporary name, then rename). Throws IoError.
 void writePng(const std::string& path, const Image& image);
 
+/// One named line of a plot.
+struct PlotSeries {
+    std::string name;
+    std::vector<double> x, y;
+};
+
+/// Lines with axes, ticks, labels and a legend; on log-log axes (powers of ten) points that
+/// are not positive are left out.
+Image plotSeries(const std::vector<PlotSeries>& series, const std::string& xLabel, const std::string& yLabel, const std::string& title,
+                 bool logLog, int width = 900, int height = 560);
+
 /// A line plot of y(x) with axes, ticks and labels.
 Image plotCurve(const std::vector<double>& x, const std::vector<double>& y, const std::string& xLabel,
                 const std::string& yLabel, const std::string& title, int width = 900, int height = 560);
