@@ -8,6 +8,7 @@
 #include <tbb/global_control.h>
 
 #include <filesystem>
+#include <fstream>
 
 using namespace spall;
 
@@ -205,6 +206,14 @@ TEST(Checkpoint, DamagedFilesAreRefusedNamingTheFile)
         EXPECT_NE(message.find(path), std::string::npos) << cut << ": " << message;
         writeCheckpoint(path, {1, 12, 5, sceneToJson(sim.scene()).dump(), sim.state()});
     }
+    {
+        // A length that the file cannot hold (the scene text's, after magic, version, frames and steps).
+        std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(8 + 4 + 4 + 4 + 8);
+        const uint64_t huge = ~uint64_t(0);
+        f.write(reinterpret_cast<const char*>(&huge), sizeof huge);
+    }
+    EXPECT_NE(messageOf().find("exceeds what is left of the file"), std::string::npos) << messageOf();
     std::filesystem::remove(path);
     EXPECT_NE(messageOf().find("no checkpoint"), std::string::npos);
 }

@@ -539,7 +539,7 @@ double BlastField::shockSpeedMS(int charge, double distanceM) const
 
 namespace spall {
 
-PressureSnapshot::PressureSnapshot(const BlastField& field, double timeS) : mTimeS(timeS), mWindows(field.openWindows(timeS))
+PressureSnapshot::PressureSnapshot(const BlastField& field, double timeS) : mWindows(field.openWindows(timeS))
 {
     constexpr double kNearestM = 1e-6;  // the fits are clamped there anyway; keeps log(0) out
     mProfiles.resize(mWindows.size());

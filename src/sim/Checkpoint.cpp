@@ -17,21 +17,32 @@ namespace {
 
 constexpr char kMagic[8] = {'S', 'P', 'A', 'L', 'L', 'C', 'K', 'P'};
 
+// Writer and Reader offer the same calls; `transferFields` lists the fields once and runs with
+// either, so what is written and what is read cannot drift apart.
 class Writer {
 public:
+    static constexpr bool kReading = false;
     explicit Writer(std::ostream& out) : mOut(out) {}
     template <typename T>
-    void pod(const T& value)
+    void pod(const T& value, const char*)
     {
         static_assert(std::is_trivially_copyable_v<T>);
         mOut.write(reinterpret_cast<const char*>(&value), sizeof(T));
     }
-    void doubles(const double* values, int n) { mOut.write(reinterpret_cast<const char*>(values), n * sizeof(double)); }
-    void vec(const Eigen::Vector3d& v) { doubles(v.data(), 3); }
-    void text(const std::string& s)
+    void flag(bool value, const char* what) { pod<uint8_t>(value, what); }
+    void doubles(const double* values, int n, const char*) { mOut.write(reinterpret_cast<const char*>(values), n * sizeof(double)); }
+    void vec(const Eigen::Vector3d& v, const char* what) { doubles(v.data(), 3, what); }
+    void text(const std::string& s, const char* what)
     {
-        pod<uint64_t>(s.size());
+        pod<uint64_t>(s.size(), what);
         mOut.write(s.data(), static_cast<std::streamsize>(s.size()));
+    }
+    /// Its size, then each element.
+    template <typename Sequence, typename F>
+    void sequence(const Sequence& items, const char* what, F&& each)
+    {
+        pod<uint64_t>(items.size(), what);
+        for (const auto& item : items) each(item);
     }
 
 private:
@@ -40,39 +51,52 @@ private:
 
 class Reader {
 public:
-    Reader(std::istream& in, std::string path) : mIn(in), mPath(std::move(path)) {}
-    template <typename T>
-    T pod(const char* what)
+    static constexpr bool kReading = true;
+    Reader(std::istream& in, std::string path) : mIn(in), mPath(std::move(path))
     {
-        T value{};
+        const auto here = mIn.tellg();
+        mIn.seekg(0, std::ios::end);
+        mSize = static_cast<uint64_t>(mIn.tellg());
+        mIn.seekg(here);
+    }
+    template <typename T>
+    void pod(T& value, const char* what)
+    {
         mIn.read(reinterpret_cast<char*>(&value), sizeof(T));
         check(what);
-        return value;
+    }
+    void flag(bool& value, const char* what)
+    {
+        uint8_t byte = 0;
+        pod(byte, what);
+        value = byte != 0;
     }
     void doubles(double* values, int n, const char* what)
     {
         mIn.read(reinterpret_cast<char*>(values), n * sizeof(double));
         check(what);
     }
-    Eigen::Vector3d vec(const char* what)
+    void vec(Eigen::Vector3d& v, const char* what) { doubles(v.data(), 3, what); }
+    void text(std::string& s, const char* what)
     {
-        Eigen::Vector3d v;
-        doubles(v.data(), 3, what);
-        return v;
-    }
-    std::string text(const char* what)
-    {
-        const uint64_t n = count(what, uint64_t(1) << 34);
-        std::string s(n, '\0');
-        mIn.read(s.data(), static_cast<std::streamsize>(n));
+        s.assign(count(what), '\0');
+        mIn.read(s.data(), static_cast<std::streamsize>(s.size()));
         check(what);
-        return s;
     }
-    /// A count, refused when it exceeds `limit` (a corrupt file must not allocate the world).
-    uint64_t count(const char* what, uint64_t limit = uint64_t(1) << 32)
+    template <typename Sequence, typename F>
+    void sequence(Sequence& items, const char* what, F&& each)
     {
-        const uint64_t n = pod<uint64_t>(what);
-        if (n > limit) fail(std::string(what) + " count " + std::to_string(n) + " is implausible");
+        items.resize(count(what));
+        for (auto& item : items) each(item);
+    }
+    /// A count, refused when the rest of the file could not hold that many elements (every
+    /// element takes at least a byte): a corrupt file must not allocate the world.
+    uint64_t count(const char* what)
+    {
+        uint64_t n = 0;
+        pod(n, what);
+        const uint64_t left = mSize - static_cast<uint64_t>(mIn.tellg());
+        if (n > left) fail(std::string(what) + " count " + std::to_string(n) + " exceeds what is left of the file");
         return n;
     }
     [[noreturn]] void fail(const std::string& why) const { throw IoError(mPath + ": corrupt checkpoint: " + why); }
@@ -84,7 +108,74 @@ private:
     }
     std::istream& mIn;
     std::string mPath;
+    uint64_t mSize = 0;
 };
+
+using ContactEntry = std::pair<std::pair<int64_t, int64_t>, std::vector<ContactCache::Point>>;
+
+/// Every field but the grids, in file order. `C` is `const Checkpoint` when writing. The
+/// contact cache travels as entries sorted by key (the file must not depend on hash order);
+/// `hasDamage[i]` says whether body i has a damage grid.
+template <typename Archive, typename C>
+void transferFields(Archive& a, C& c, std::vector<ContactEntry>& contacts, std::vector<uint8_t>& hasDamage)
+{
+    auto& s = c.state;
+    a.pod(c.framesDone, "frames done");
+    a.pod(c.frameCount, "frame count");
+    a.pod(c.totalSteps, "total steps");
+    a.text(c.sceneJson, "scene");
+    a.pod(s.timeS, "time");
+    a.pod(s.nextId, "next id");
+    a.pod(s.initialVoxels, "initial voxels");
+    a.pod(s.penetrationStepScale, "step scale");
+    size_t index = 0;
+    a.sequence(s.bodies, "bodies", [&](auto& b) {
+        a.pod(b.id, "body id");
+        a.pod(b.parentId, "parent id");
+        a.pod(b.materialIndex, "material");
+        a.pod(b.voxelSizeM, "voxel size");
+        a.pod(b.densityKgM3, "density");
+        a.pod(b.linkCount, "link count");
+        a.flag(b.anchored, "anchored");
+        a.vec(b.positionM, "position");
+        a.doubles(b.orientation.coeffs().data(), 4, "orientation");
+        a.vec(b.linearVelocityMS, "velocity");
+        a.vec(b.angularVelocityRadS, "angular velocity");
+        a.flag(b.asleep, "asleep");
+        a.pod(b.restTimeS, "rest time");
+        // Mass properties as they were: recomputing them gives the same bits, but a checkpoint
+        // should not depend on that.
+        a.pod(b.mass.voxelCount, "voxel count");
+        a.pod(b.mass.massKg, "mass");
+        a.vec(b.mass.centreOfMassLocalM, "centre of mass");
+        a.doubles(b.mass.inertiaKgM2.data(), 9, "inertia");
+        a.pod(b.boundingRadiusM, "bounding radius");
+        if constexpr (Archive::kReading) hasDamage.resize(index + 1);
+        a.pod(hasDamage[index++], "damage flag");
+    });
+    a.sequence(s.events, "events", [&](auto& e) {
+        a.pod(e.timeS, "event time");
+        a.pod(e.parentId, "event parent");
+        a.sequence(e.childIds, "event children", [&](auto& id) { a.pod(id, "event child"); });
+    });
+    a.sequence(s.dust, "dust", [&](auto& d) {
+        a.pod(d.timeS, "dust time");
+        a.pod(d.parentId, "dust parent");
+        a.pod(d.voxelCount, "dust voxels");
+        a.pod(d.massKg, "dust mass");
+        a.vec(d.linearMomentum, "dust momentum");
+        a.vec(d.angularMomentumAboutOrigin, "dust angular momentum");
+    });
+    a.sequence(contacts, "contact pairs", [&](auto& entry) {
+        a.pod(entry.first.first, "contact key");
+        a.pod(entry.first.second, "contact key");
+        a.sequence(entry.second, "contact points", [&](auto& p) {
+            a.vec(p.localM, "contact point");
+            a.pod(p.normalNs, "normal impulse");
+            a.vec(p.frictionNs, "friction impulse");
+        });
+    });
+}
 
 std::string gridName(const char* kind, size_t body) { return std::string(kind) + "_" + std::to_string(body); }
 
@@ -93,82 +184,23 @@ std::string gridName(const char* kind, size_t body) { return std::string(kind) +
 void writeCheckpoint(const std::string& path, const Checkpoint& c)
 {
     const SimulationState& s = c.state;
+    std::vector<ContactEntry> contacts(s.contactCache.points.begin(), s.contactCache.points.end());
+    std::sort(contacts.begin(), contacts.end(), [](const ContactEntry& a, const ContactEntry& b) { return a.first < b.first; });
+    std::vector<uint8_t> hasDamage(s.bodies.size());
+    for (size_t i = 0; i < s.bodies.size(); ++i) hasDamage[i] = i < s.damage.size() && s.damage[i] != nullptr;
+
     std::ostringstream buffer(std::ios::binary);
     Writer w(buffer);
     buffer.write(kMagic, sizeof kMagic);
-    w.pod(kCheckpointFormatVersion);
-    w.pod<int32_t>(c.framesDone);
-    w.pod<int32_t>(c.frameCount);
-    w.pod(c.totalSteps);
-    w.text(c.sceneJson);
-    w.pod(s.timeS);
-    w.pod(s.nextId);
-    w.pod(s.initialVoxels);
-    w.pod(s.penetrationStepScale);
+    w.pod(kCheckpointFormatVersion, "version");
+    transferFields(w, c, contacts, hasDamage);
 
-    w.pod<uint64_t>(s.bodies.size());
-    for (size_t i = 0; i < s.bodies.size(); ++i) {
-        const Body& b = s.bodies[i];
-        w.pod(b.id);
-        w.pod(b.parentId);
-        w.pod<int32_t>(b.materialIndex);
-        w.pod(b.voxelSizeM);
-        w.pod(b.densityKgM3);
-        w.pod(b.linkCount);
-        w.pod<uint8_t>(b.anchored);
-        w.vec(b.positionM);
-        w.doubles(b.orientation.coeffs().data(), 4);
-        w.vec(b.linearVelocityMS);
-        w.vec(b.angularVelocityRadS);
-        w.pod<uint8_t>(b.asleep);
-        w.pod(b.restTimeS);
-        // Mass properties as they were: recomputing them would give the same bits, but a
-        // checkpoint should not depend on that.
-        w.pod(b.mass.voxelCount);
-        w.pod(b.mass.massKg);
-        w.vec(b.mass.centreOfMassLocalM);
-        w.doubles(b.mass.inertiaKgM2.data(), 9);
-        w.pod(b.boundingRadiusM);
-        w.pod<uint8_t>(i < s.damage.size() && s.damage[i] != nullptr);
-    }
-    w.pod<uint64_t>(s.events.size());
-    for (const FractureEvent& e : s.events) {
-        w.pod(e.timeS);
-        w.pod(e.parentId);
-        w.pod<uint64_t>(e.childIds.size());
-        for (int64_t id : e.childIds) w.pod(id);
-    }
-    w.pod<uint64_t>(s.dust.size());
-    for (const DustRecord& d : s.dust) {
-        w.pod(d.timeS);
-        w.pod(d.parentId);
-        w.pod(d.voxelCount);
-        w.pod(d.massKg);
-        w.vec(d.linearMomentum);
-        w.vec(d.angularMomentumAboutOrigin);
-    }
-    // The contact cache in key order, so the file does not depend on hash-table order.
-    std::vector<std::pair<int64_t, int64_t>> keys;
-    for (const auto& entry : s.contactCache.points) keys.push_back(entry.first);
-    std::sort(keys.begin(), keys.end());
-    w.pod<uint64_t>(keys.size());
-    for (const auto& key : keys) {
-        const auto& points = s.contactCache.points.at(key);
-        w.pod(key.first);
-        w.pod(key.second);
-        w.pod<uint64_t>(points.size());
-        for (const ContactCache::Point& p : points) {
-            w.vec(p.localM);
-            w.pod(p.normalNs);
-            w.vec(p.frictionNs);
-        }
-    }
     openvdb::GridCPtrVec grids;
     for (size_t i = 0; i < s.bodies.size(); ++i) {
         auto links = s.bodies[i].grid->copyGrid();  // shares the tree; only the name differs
         links->setName(gridName("links", i));
         grids.push_back(links);
-        if (i < s.damage.size() && s.damage[i]) {
+        if (hasDamage[i]) {
             auto damage = s.damage[i]->copyGrid();
             damage->setName(gridName("damage", i));
             grids.push_back(damage);
@@ -177,7 +209,7 @@ void writeCheckpoint(const std::string& path, const Checkpoint& c)
     initialiseOpenVdb();
     std::ostringstream vdb(std::ios::binary);
     openvdb::io::Stream(vdb).write(grids);
-    w.text(vdb.str());
+    w.text(vdb.str(), "grids");
     buffer.write(kMagic, sizeof kMagic);  // a trailer: a file cut short is recognised
 
     const std::string temporary = path + ".partial";
@@ -201,80 +233,29 @@ void writeCheckpoint(const std::string& path, const Checkpoint& c)
 Checkpoint readCheckpoint(const std::string& path)
 {
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw IoError(path + ": no checkpoint to resume from (the run stopped before its first frame was complete, had output.checkpoint_every_frames 0, or finished)");
+    if (!in)
+        throw IoError(path + ": no checkpoint to resume from (the run stopped before its first frame was complete, had "
+                             "output.checkpoint_every_frames 0, or finished)");
     Reader r(in, path);
     char magic[sizeof kMagic];
     in.read(magic, sizeof magic);
     if (!in || std::memcmp(magic, kMagic, sizeof kMagic) != 0) r.fail("not a spall checkpoint");
-    const uint32_t version = r.pod<uint32_t>("version");
+    uint32_t version = 0;
+    r.pod(version, "version");
     if (version != kCheckpointFormatVersion)
         throw IoError(path + ": checkpoint format version " + std::to_string(version) + " is not the supported " +
                       std::to_string(kCheckpointFormatVersion));
     Checkpoint c;
+    std::vector<ContactEntry> contacts;
+    std::vector<uint8_t> hasDamage;
+    transferFields(r, c, contacts, hasDamage);
+    if (c.framesDone < 1 || c.frameCount < c.framesDone)
+        r.fail("frames done " + std::to_string(c.framesDone) + " of " + std::to_string(c.frameCount));
     SimulationState& s = c.state;
-    c.framesDone = r.pod<int32_t>("frames done");
-    c.frameCount = r.pod<int32_t>("frame count");
-    if (c.framesDone < 1 || c.frameCount < c.framesDone) r.fail("frames done " + std::to_string(c.framesDone) + " of " + std::to_string(c.frameCount));
-    c.totalSteps = r.pod<int64_t>("total steps");
-    c.sceneJson = r.text("scene");
-    s.timeS = r.pod<double>("time");
-    s.nextId = r.pod<int64_t>("next id");
-    s.initialVoxels = r.pod<int64_t>("initial voxels");
-    s.penetrationStepScale = r.pod<double>("step scale");
-
-    const uint64_t bodyCount = r.count("bodies");
-    std::vector<char> hasDamage(bodyCount);
-    s.bodies.resize(bodyCount);
-    for (uint64_t i = 0; i < bodyCount; ++i) {
-        Body& b = s.bodies[i];
-        b.id = r.pod<int64_t>("body id");
-        b.parentId = r.pod<int64_t>("parent id");
-        b.materialIndex = r.pod<int32_t>("material");
-        b.voxelSizeM = r.pod<double>("voxel size");
-        b.densityKgM3 = r.pod<double>("density");
-        b.linkCount = r.pod<int64_t>("link count");
-        b.anchored = r.pod<uint8_t>("anchored") != 0;
-        b.positionM = r.vec("position");
-        r.doubles(b.orientation.coeffs().data(), 4, "orientation");
-        b.linearVelocityMS = r.vec("velocity");
-        b.angularVelocityRadS = r.vec("angular velocity");
-        b.asleep = r.pod<uint8_t>("asleep") != 0;
-        b.restTimeS = r.pod<double>("rest time");
-        b.mass.voxelCount = r.pod<int64_t>("voxel count");
-        b.mass.massKg = r.pod<double>("mass");
-        b.mass.centreOfMassLocalM = r.vec("centre of mass");
-        r.doubles(b.mass.inertiaKgM2.data(), 9, "inertia");
-        b.boundingRadiusM = r.pod<double>("bounding radius");
-        hasDamage[i] = r.pod<uint8_t>("damage flag");
-    }
-    s.events.resize(r.count("events"));
-    for (FractureEvent& e : s.events) {
-        e.timeS = r.pod<double>("event time");
-        e.parentId = r.pod<int64_t>("event parent");
-        e.childIds.resize(r.count("event children"));
-        for (int64_t& id : e.childIds) id = r.pod<int64_t>("event child");
-    }
-    s.dust.resize(r.count("dust"));
-    for (DustRecord& d : s.dust) {
-        d.timeS = r.pod<double>("dust time");
-        d.parentId = r.pod<int64_t>("dust parent");
-        d.voxelCount = r.pod<int64_t>("dust voxels");
-        d.massKg = r.pod<double>("dust mass");
-        d.linearMomentum = r.vec("dust momentum");
-        d.angularMomentumAboutOrigin = r.vec("dust angular momentum");
-    }
-    const uint64_t pairs = r.count("contact pairs");
-    for (uint64_t k = 0; k < pairs; ++k) {
-        const int64_t a = r.pod<int64_t>("contact key"), b = r.pod<int64_t>("contact key");
-        auto& points = s.contactCache.points[{a, b}];
-        points.resize(r.count("contact points"));
-        for (ContactCache::Point& p : points) {
-            p.localM = r.vec("contact point");
-            p.normalNs = r.pod<double>("normal impulse");
-            p.frictionNs = r.vec("friction impulse");
-        }
-    }
-    std::istringstream vdb(r.text("grids"), std::ios::binary);
+    for (ContactEntry& entry : contacts) s.contactCache.points[entry.first] = std::move(entry.second);
+    std::string vdbBytes;
+    r.text(vdbBytes, "grids");
+    std::istringstream vdb(vdbBytes, std::ios::binary);
     char trailer[sizeof kMagic];
     in.read(trailer, sizeof trailer);
     if (!in || std::memcmp(trailer, kMagic, sizeof kMagic) != 0) r.fail("the trailer is missing (the file is cut short)");
@@ -288,8 +269,8 @@ Checkpoint readCheckpoint(const std::string& path)
     }
     std::unordered_map<std::string, openvdb::GridBase::Ptr> byName;
     for (const auto& g : *grids) byName[g->getName()] = g;
-    s.damage.resize(bodyCount);
-    for (uint64_t i = 0; i < bodyCount; ++i) {
+    s.damage.resize(s.bodies.size());
+    for (size_t i = 0; i < s.bodies.size(); ++i) {
         Body& b = s.bodies[i];
         b.grid = openvdb::gridPtrCast<LinkGrid>(byName[gridName("links", i)]);
         if (!b.grid) r.fail("the link grid of body " + std::to_string(i) + " is missing");

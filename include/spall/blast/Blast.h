@@ -266,7 +266,6 @@ public:
 
     PressureSnapshot(const BlastField& field, double timeS);
 
-    double timeS() const { return mTimeS; }
     const std::vector<OpenWindow>& windows() const { return mWindows; }
     bool empty() const { return mWindows.empty(); }
     const Eigen::Vector3d& chargePositionM(size_t window) const { return mProfiles[window].centreM; }
@@ -322,7 +321,6 @@ private:
             return overpressurePa[i] + w * (overpressurePa[i + 1] - overpressurePa[i]);
         }
     };
-    double mTimeS = 0;
     std::vector<OpenWindow> mWindows;
     std::vector<Profile> mProfiles;
 };
