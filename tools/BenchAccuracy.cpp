@@ -6,6 +6,7 @@
 #include <spall/io/Png.h>
 #include <spall/io/Scene.h>
 #include <spall/sim/Simulation.h>
+#include <spall/voxel/Voxelise.h>
 
 #include <nlohmann/json.hpp>
 
@@ -36,11 +37,9 @@ struct Row {
 
 Body voxelBox(int nx, int ny, int nz, double h, double density)
 {
-    auto grid = LinkGrid::create(0);
-    grid->tree().denseFill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(nx - 1, ny - 1, nz - 1)), 0, true);
-    grid->tree().voxelizeActiveTiles();
-    linkAllNeighbours(*grid);
-    return makeBody(grid, h, density);
+    VoxeliseSettings settings;
+    settings.voxelSizeM = h;
+    return makeBody(voxelisePrimitive({PrimitiveShape::Box, Eigen::Vector3d(nx, ny, nz) * h}, settings).grid, h, density);
 }
 
 const WrenchFunction kNoForce = [](double, const Eigen::Vector3d&, const Eigen::Quaterniond&, const Eigen::Vector3d&,

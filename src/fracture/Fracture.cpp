@@ -41,12 +41,11 @@ double linkRandom(uint64_t seed, const openvdb::Coord& ijk, int axis)
     return double(z >> 11) * (1.0 / 9007199254740992.0);
 }
 
-bool bodyInWindows(const Body& body, const PressureSnapshot& pressure)
+bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows)
 {
-    for (size_t w = 0; w < pressure.windows().size(); ++w) {
-        const double d = (body.positionM - pressure.chargePositionM(w)).norm();
-        const OpenWindow& window = pressure.windows()[w];
-        if (d + body.boundingRadiusM >= window.minDistanceM && d - body.boundingRadiusM <= window.maxDistanceM) return true;
+    for (const OpenWindow& w : windows) {
+        const double d = (body.positionM - field.charges()[w.charge].positionM).norm();
+        if (d + body.boundingRadiusM >= w.minDistanceM && d - body.boundingRadiusM <= w.maxDistanceM) return true;
     }
     return false;
 }
@@ -81,15 +80,14 @@ PointLoad pointLoad(const PressureSnapshot& pressure, const Eigen::Vector3d& x)
 {
     PointLoad load;
     double dominantPa = 0.0;
-    for (size_t w = 0; w < pressure.windows().size(); ++w) {
-        const double p = pressure.overpressurePa(w, (x - pressure.chargePositionM(w)).norm());
+    pressure.forEachCharge(x, [&](size_t window, int charge, double p) {
         load.pressurePa += p;
         if (p > dominantPa) {
             dominantPa = p;
-            load.dominant = pressure.windows()[w].charge;
-            load.dominantWindow = w;
+            load.dominant = charge;
+            load.dominantWindow = window;
         }
-    }
+    });
     return load;
 }
 

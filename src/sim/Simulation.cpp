@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace spall {
 
@@ -38,7 +39,7 @@ Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(sc
         const Material& material = scene.material(spec.material);
         validateMaterial(material);
         Body body = makeBody(vox.grid, scene.voxelSizeM, material.densityKgM3);
-        body.id = mNextId++;
+        body.id = mState.nextId++;
         body.materialIndex = static_cast<int>(std::find_if(scene.materials.begin(), scene.materials.end(),
                                                            [&](const Material& m) { return m.name == spec.material; }) -
                                               scene.materials.begin());
@@ -64,33 +65,25 @@ Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(sc
             if (body.grid->tree().isValueOn(ijk))
                 throw InputError(scene.sourceName + ": charges[" + std::to_string(c) + "].position_m: the charge is inside object '" + spec.name + "'");
         }
-        mInitialVoxels += body.mass.voxelCount;
-        mDamage.push_back(nullptr);
+        mState.initialVoxels += body.mass.voxelCount;
+        mState.damage.push_back(nullptr);
         if (scene.fracture.algorithm == FractureAlgorithm::DavisonStevens) {
             auto damage = DamageGrid::create(0.0f);
             damage->setTransform(body.grid->transform().copy());
             copyActiveTopology(damage->tree(), body.grid->constTree(), 0.0f);
-            mDamage.back() = damage;
+            mState.damage.back() = damage;
         }
-        mBodies.push_back(std::move(body));
+        mState.bodies.push_back(std::move(body));
     }
     mStats.minDtS = scene.timeStep.maxTimeStepS;
 }
 
-Simulation::Simulation(const Scene& scene, SimulationState state)
-    : mScene(scene), mBodies(std::move(state.bodies)), mDamage(std::move(state.damage)), mEvents(std::move(state.events)),
-      mDust(std::move(state.dust)), mTimeS(state.timeS), mNextId(state.nextId), mInitialVoxels(state.initialVoxels),
-      mContactCache(std::move(state.contactCache)), mPenetrationStepScale(state.penetrationStepScale)
+Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene), mState(std::move(state))
 {
     initialiseOpenVdb();
     mField = std::make_unique<BlastField>(scene.charges, scene.blast);
-    mDamage.resize(mBodies.size());
+    mState.damage.resize(mState.bodies.size());
     mStats.minDtS = scene.timeStep.maxTimeStepS;
-}
-
-SimulationState Simulation::state() const
-{
-    return {mBodies, mDamage, mEvents, mDust, mTimeS, mNextId, mInitialVoxels, mContactCache, mPenetrationStepScale};
 }
 
 StepStats Simulation::takeStepStats()
@@ -106,7 +99,7 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
     const TimeStepSettings& ts = mScene.timeStep;
     const double h = mScene.voxelSizeM;
     double dt = ts.maxTimeStepS;
-    for (const Body& body : mBodies) {
+    for (const Body& body : mState.bodies) {
         for (const OpenWindow& w : windows) {
             const double d = (body.positionM - mField->charges()[w.charge].positionM).norm();
             const double near = std::max(d - body.boundingRadiusM, 0.0), far = d + body.boundingRadiusM;
@@ -127,23 +120,23 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
             const double d = (body.positionM - mField->charges()[c].positionM).norm();
             const double nearM = std::max(d - body.boundingRadiusM, h);
             const double arrival = mField->window(static_cast<int>(c), nearM).first;
-            if (arrival > mTimeS && arrival - mTimeS < dt)
-                dt = std::min(dt, std::max(arrival - mTimeS, ts.frontFraction * h / mField->shockSpeedMS(static_cast<int>(c), nearM)));
+            if (arrival > mState.timeS && arrival - mState.timeS < dt)
+                dt = std::min(dt, std::max(arrival - mState.timeS, ts.frontFraction * h / mField->shockSpeedMS(static_cast<int>(c), nearM)));
         }
         if (!body.anchored && !body.asleep) {
             const double speed = maxVoxelSpeedMS(body);
             if (speed > 0) dt = std::min(dt, ts.speedFraction * h / speed);
         }
     }
-    return std::max(dt * mPenetrationStepScale, ts.minTimeStepS);
+    return std::max(dt * mState.penetrationStepScale, ts.minTimeStepS);
 }
 
 void Simulation::advanceTo(double target)
 {
-    while (mTimeS < target) {
-        const PressureSnapshot pressure(*mField, mTimeS);
-        const double remaining = target - mTimeS;
-        double dt = chooseTimeStep(pressure.windows());
+    while (mState.timeS < target) {
+        const std::vector<OpenWindow> windows = mField->openWindows(mState.timeS);
+        const double remaining = target - mState.timeS;
+        double dt = chooseTimeStep(windows);
         // Land exactly on the target without a sliver of a step just before it.
         const bool last = dt >= remaining;
         if (last)
@@ -152,31 +145,35 @@ void Simulation::advanceTo(double target)
             dt = 0.5 * remaining;
         if (mObserver) {
             mRecord = StepRecord{0.0, dt, false};
-            for (const Body& body : mBodies) mRecord.blastOpen = mRecord.blastOpen || bodyInWindows(body, pressure);
+            for (const Body& body : mState.bodies) mRecord.blastOpen = mRecord.blastOpen || bodyInWindows(body, *mField, windows);
         }
-        fractureStep(pressure, dt);
-        motionStep(pressure, dt);
-        mTimeS = last ? target : mTimeS + dt;
+        fractureStep(windows, dt);
+        motionStep(windows, dt);
+        mState.timeS = last ? target : mState.timeS + dt;
         ++mStats.steps;
         mStats.minDtS = std::min(mStats.minDtS, dt);
         if (mObserver) {
-            mRecord.timeS = mTimeS;
+            mRecord.timeS = mState.timeS;
             mObserver(*this, mRecord);
         }
     }
 }
 
-void Simulation::fractureStep(const PressureSnapshot& pressure, double dt)
+void Simulation::fractureStep(const std::vector<OpenWindow>& windows, double dt)
 {
-    if (pressure.empty() || mScene.fracture.algorithm == FractureAlgorithm::None) return;
-    std::vector<char> changed(mBodies.size(), 0);
-    for (size_t i = 0; i < mBodies.size(); ++i) {
-        Body& body = mBodies[i];
+    if (windows.empty() || mScene.fracture.algorithm == FractureAlgorithm::None) return;
+    // The pressure table is built only when some body can fracture inside a window: windows
+    // stay open far away long after the blast has passed every body.
+    std::optional<PressureSnapshot> pressure;
+    std::vector<char> changed(mState.bodies.size(), 0);
+    for (size_t i = 0; i < mState.bodies.size(); ++i) {
+        Body& body = mState.bodies[i];
         if (body.linkCount == 0 && !body.anchored) continue;
-        if (!bodyInWindows(body, pressure)) continue;
+        if (!bodyInWindows(body, *mField, windows)) continue;
+        if (!pressure) pressure.emplace(*mField, mState.timeS);
         body.asleep = false;
         body.restTimeS = 0;
-        const LoadResult r = loadLinks(body, mDamage[i].get(), mScene.materials[body.materialIndex], pressure, dt, mScene.fracture);
+        const LoadResult r = loadLinks(body, mState.damage[i].get(), mScene.materials[body.materialIndex], *pressure, dt, mScene.fracture);
         mStats.brokenLinks += r.brokenLinks;
         body.linkCount -= r.brokenLinks;
         if (r.brokenAnchors > 0) body.anchored = hasAnchoredVoxel(*body.grid);
@@ -187,11 +184,11 @@ void Simulation::fractureStep(const PressureSnapshot& pressure, double dt)
     const auto momenta = [this](Eigen::Vector3d& linear, Eigen::Vector3d& angular) {
         linear.setZero();
         angular.setZero();
-        for (const Body& b : mBodies) {
+        for (const Body& b : mState.bodies) {
             linear += linearMomentum(b);
             angular += angularMomentumAboutOrigin(b);
         }
-        for (const DustRecord& d : mDust) {
+        for (const DustRecord& d : mState.dust) {
             linear += d.linearMomentum;
             angular += d.angularMomentumAboutOrigin;
         }
@@ -200,57 +197,56 @@ void Simulation::fractureStep(const PressureSnapshot& pressure, double dt)
     // Split only bodies that lost links or anchors, in body order; parts replace their parent.
     std::vector<Body> next;
     std::vector<DamageGrid::Ptr> nextDamage;
-    next.reserve(mBodies.size());
-    for (size_t i = 0; i < mBodies.size(); ++i) {
+    next.reserve(mState.bodies.size());
+    for (size_t i = 0; i < mState.bodies.size(); ++i) {
         std::vector<SplitPart> parts;
-        if (changed[i]) parts = splitBody(mBodies[i], mDamage[i].get());
+        if (changed[i]) parts = splitBody(mState.bodies[i], mState.damage[i].get());
         if (parts.empty()) {
-            next.push_back(std::move(mBodies[i]));
-            nextDamage.push_back(mDamage[i]);
+            next.push_back(std::move(mState.bodies[i]));
+            nextDamage.push_back(mState.damage[i]);
             continue;
         }
         FractureEvent event;
-        event.timeS = mTimeS;
-        event.parentId = mBodies[i].id;
+        event.timeS = mState.timeS;
+        event.parentId = mState.bodies[i].id;
         for (SplitPart& part : parts) {
             const bool small = part.body.mass.voxelCount < mScene.fracture.minFragmentVoxels;
             if (small && mScene.fracture.smallFragments == SmallFragmentPolicy::Dust && !part.body.anchored) {
-                mDust.push_back({mTimeS, mBodies[i].id, part.body.mass.voxelCount, part.body.mass.massKg,
+                mState.dust.push_back({mState.timeS, mState.bodies[i].id, part.body.mass.voxelCount, part.body.mass.massKg,
                                  linearMomentum(part.body), angularMomentumAboutOrigin(part.body)});
                 continue;
             }
-            part.body.id = mNextId++;
+            part.body.id = mState.nextId++;
             event.childIds.push_back(part.body.id);
             next.push_back(std::move(part.body));
             nextDamage.push_back(part.damage);
         }
-        mEvents.push_back(std::move(event));
+        mState.events.push_back(std::move(event));
     }
-    mBodies = std::move(next);
-    mDamage = std::move(nextDamage);
+    mState.bodies = std::move(next);
+    mState.damage = std::move(nextDamage);
     if (mObserver) {
         mRecord.split = true;
         momenta(mRecord.linearMomentumAfterSplit, mRecord.angularMomentumAfterSplit);
     }
 }
 
-void Simulation::motionStep(const PressureSnapshot& pressure, double dt)
+void Simulation::motionStep(const std::vector<OpenWindow>& windows, double dt)
 {
     // The wrench is evaluated at each integrator stage's own time, from the field directly.
-    const std::vector<OpenWindow>& windows = pressure.windows();
     ExternalLoad blast;
-    blast.loaded = [&](const Body& body) { return bodyInWindows(body, pressure); };
+    blast.loaded = [&](const Body& body) { return bodyInWindows(body, *mField, windows); };
     blast.wrench = [&](const Body& body, double t, const Eigen::Vector3d& x, const Eigen::Quaterniond& q) {
         return blastWrench(body, x, q, *mField, windows, t, mScene.world.reflectedPressure);
     };
-    const ContactStats contacts = stepBodies(mBodies, mScene.world, mScene.collisions, mScene.sleep,
-                                             mScene.timeStep.integrator, mTimeS, dt, &mContactCache, &blast);
+    const ContactStats contacts = stepBodies(mState.bodies, mScene.world, mScene.collisions, mScene.sleep,
+                                             mScene.timeStep.integrator, mState.timeS, dt, &mState.contactCache, &blast);
     mStats.contacts += contacts.staticContacts + contacts.bodyContacts;
     // The paper's adaptive step: halve while bodies interpenetrate beyond the tolerance.
     if (contacts.maxPenetrationM > mScene.collisions.penetrationToleranceVoxels * mScene.voxelSizeM)
-        mPenetrationStepScale = std::max(0.5 * mPenetrationStepScale, 1.0 / 64.0);
+        mState.penetrationStepScale = std::max(0.5 * mState.penetrationStepScale, 1.0 / 64.0);
     else
-        mPenetrationStepScale = std::min(2.0 * mPenetrationStepScale, 1.0);
+        mState.penetrationStepScale = std::min(2.0 * mState.penetrationStepScale, 1.0);
 }
 
 }  // namespace spall

@@ -62,7 +62,7 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
                      const FractureSettings& settings);
 
 /// True when the body's bounding sphere meets some open window's distance range.
-bool bodyInWindows(const Body& body, const PressureSnapshot& pressure);
+bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows);
 
 /// A piece that left its parent.
 struct SplitPart {

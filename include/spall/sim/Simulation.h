@@ -35,7 +35,7 @@ struct SimulationState {
     int64_t nextId = 0;
     int64_t initialVoxels = 0;
     ContactCache contactCache;
-    double penetrationStepScale = 1.0;
+    double penetrationStepScale = 1.0;  ///< < 1 while contacts are deeper than the tolerance
 };
 
 /// What one step did, for checks of invariants after every step (tests/stress_main.cpp).
@@ -61,18 +61,18 @@ public:
     Simulation(const Scene& scene, SimulationState state);
 
     /// The state between steps (grids are shared, not copied: save it before stepping on).
-    SimulationState state() const;
+    const SimulationState& state() const { return mState; }
 
     /// Steps (adaptively) until time t exactly.
     void advanceTo(double timeS);
 
-    double timeS() const { return mTimeS; }
-    const std::vector<Body>& bodies() const { return mBodies; }
-    const std::vector<FractureEvent>& fractureEvents() const { return mEvents; }
-    const std::vector<DustRecord>& dust() const { return mDust; }
+    double timeS() const { return mState.timeS; }
+    const std::vector<Body>& bodies() const { return mState.bodies; }
+    const std::vector<FractureEvent>& fractureEvents() const { return mState.events; }
+    const std::vector<DustRecord>& dust() const { return mState.dust; }
     const BlastField& field() const { return *mField; }
     const Scene& scene() const { return mScene; }
-    int64_t initialVoxelCount() const { return mInitialVoxels; }
+    int64_t initialVoxelCount() const { return mState.initialVoxels; }
     StepStats takeStepStats();
 
     /// Called after every step (costs nothing when unset).
@@ -83,24 +83,15 @@ public:
     double chooseTimeStep(const std::vector<OpenWindow>& windows) const;
 
 private:
-    void fractureStep(const PressureSnapshot& pressure, double dtS);
-    void motionStep(const PressureSnapshot& pressure, double dtS);
+    void fractureStep(const std::vector<OpenWindow>& windows, double dtS);
+    void motionStep(const std::vector<OpenWindow>& windows, double dtS);
 
     Scene mScene;
     std::unique_ptr<BlastField> mField;
-    std::vector<Body> mBodies;
-    std::vector<DamageGrid::Ptr> mDamage;  ///< per body, Davison–Stevens only
-    std::vector<FractureEvent> mEvents;
-    std::vector<DustRecord> mDust;
-    double mTimeS = 0;
-    int64_t mNextId = 0;
-    int64_t mInitialVoxels = 0;
+    SimulationState mState;  ///< everything carried from step to step (what a checkpoint saves)
     StepStats mStats;
-    ContactCache mContactCache;
-    double mPenetrationStepScale = 1.0;  ///< < 1 while contacts are deeper than the tolerance
     std::function<void(const Simulation&, const StepRecord&)> mObserver;
     StepRecord mRecord;  ///< filled while a step runs, for the observer
-    // Adding a member that carries over between steps? Add it to SimulationState too.
 };
 
 }  // namespace spall
