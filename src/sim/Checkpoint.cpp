@@ -111,13 +111,10 @@ private:
     uint64_t mSize = 0;
 };
 
-using ContactEntry = std::pair<std::pair<int64_t, int64_t>, std::vector<ContactCache::Point>>;
-
-/// Every field but the grids, in file order. `C` is `const Checkpoint` when writing. The
-/// contact cache travels as entries sorted by key (the file must not depend on hash order);
+/// Every field but the grids, in file order. `C` is `const Checkpoint` when writing.
 /// `hasDamage[i]` says whether body i has a damage grid.
 template <typename Archive, typename C>
-void transferFields(Archive& a, C& c, std::vector<ContactEntry>& contacts, std::vector<uint8_t>& hasDamage)
+void transferFields(Archive& a, C& c, std::vector<uint8_t>& hasDamage)
 {
     auto& s = c.state;
     a.pod(c.framesDone, "frames done");
@@ -166,14 +163,12 @@ void transferFields(Archive& a, C& c, std::vector<ContactEntry>& contacts, std::
         a.vec(d.linearMomentum, "dust momentum");
         a.vec(d.angularMomentumAboutOrigin, "dust angular momentum");
     });
-    a.sequence(contacts, "contact pairs", [&](auto& entry) {
-        a.pod(entry.first.first, "contact key");
-        a.pod(entry.first.second, "contact key");
-        a.sequence(entry.second, "contact points", [&](auto& p) {
-            a.vec(p.localM, "contact point");
-            a.pod(p.normalNs, "normal impulse");
-            a.vec(p.frictionNs, "friction impulse");
-        });
+    a.sequence(s.contactCache.points, "contact points", [&](auto& p) {
+        a.pod(p.key.first, "contact key");
+        a.pod(p.key.second, "contact key");
+        a.vec(p.localM, "contact point");
+        a.pod(p.normalNs, "normal impulse");
+        a.vec(p.frictionNs, "friction impulse");
     });
 }
 
@@ -184,8 +179,6 @@ std::string gridName(const char* kind, size_t body) { return std::string(kind) +
 void writeCheckpoint(const std::string& path, const Checkpoint& c)
 {
     const SimulationState& s = c.state;
-    std::vector<ContactEntry> contacts(s.contactCache.points.begin(), s.contactCache.points.end());
-    std::sort(contacts.begin(), contacts.end(), [](const ContactEntry& a, const ContactEntry& b) { return a.first < b.first; });
     std::vector<uint8_t> hasDamage(s.bodies.size());
     for (size_t i = 0; i < s.bodies.size(); ++i) hasDamage[i] = i < s.damage.size() && s.damage[i] != nullptr;
 
@@ -193,7 +186,7 @@ void writeCheckpoint(const std::string& path, const Checkpoint& c)
     Writer w(buffer);
     buffer.write(kMagic, sizeof kMagic);
     w.pod(kCheckpointFormatVersion, "version");
-    transferFields(w, c, contacts, hasDamage);
+    transferFields(w, c, hasDamage);
 
     openvdb::GridCPtrVec grids;
     for (size_t i = 0; i < s.bodies.size(); ++i) {
@@ -246,13 +239,14 @@ Checkpoint readCheckpoint(const std::string& path)
         throw IoError(path + ": checkpoint format version " + std::to_string(version) + " is not the supported " +
                       std::to_string(kCheckpointFormatVersion));
     Checkpoint c;
-    std::vector<ContactEntry> contacts;
     std::vector<uint8_t> hasDamage;
-    transferFields(r, c, contacts, hasDamage);
+    transferFields(r, c, hasDamage);
+    const auto& cached = c.state.contactCache.points;
+    if (!std::is_sorted(cached.begin(), cached.end(), [](const ContactCache::Point& x, const ContactCache::Point& y) { return x.key < y.key; }))
+        r.fail("contact points out of order");
     if (c.framesDone < 1 || c.frameCount < c.framesDone)
         r.fail("frames done " + std::to_string(c.framesDone) + " of " + std::to_string(c.frameCount));
     SimulationState& s = c.state;
-    for (ContactEntry& entry : contacts) s.contactCache.points[entry.first] = std::move(entry.second);
     std::string vdbBytes;
     r.text(vdbBytes, "grids");
     std::istringstream vdb(vdbBytes, std::ios::binary);
