@@ -51,7 +51,8 @@ double measureStepsPerSecond(const std::function<void()>& step)
 
 #ifdef SPALL_WITH_BULLET
 /// The same scene in Bullet: each fragment a compound of one box per voxel, the ground a plane,
-/// the container walls static boxes; same time step, friction and restitution, no sleeping.
+/// the container walls static boxes; same time step, solver sweeps, friction and restitution, no
+/// sleeping.
 class BulletWorld {
 public:
     explicit BulletWorld(const DebrisScene& scene)
@@ -60,6 +61,7 @@ public:
     {
         const Eigen::Vector3d g = scene.world.gravityMS2;
         mWorld.setGravity(btVector3(g.x(), g.y(), g.z()));
+        mWorld.getSolverInfo().m_numIterations = CollisionSettings().solverIterations;  // same sweeps as spall's
         addStatic(std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), 0.0), btTransform::getIdentity(), scene.world.ground.friction,
                   scene.world.ground.restitution);
         for (const StaticBox& box : scene.world.colliders) {

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <tuple>
 #include <chrono>
 #include <cstdio>
 
@@ -200,6 +201,7 @@ std::vector<VoxelContact> treeLookupContacts(const Body& a, const Body& b)
     const Eigen::Vector3d lo = Eigen::Vector3d(box.min().x(), box.min().y(), box.min().z()).array() - kReach;
     const Eigen::Vector3d hi = Eigen::Vector3d(box.max().x(), box.max().y(), box.max().z()).array() + kReach;
     if (!boxesOverlap(probe.indexBounds, m, t, lo, hi)) return out;  // no probe voxel can be within reach
+    out.reserve(32);
     const ConstLinkAccessor targetAcc(target.grid->constTree());
     const CubePairAxes axes(a.orientation.toRotationMatrix(), b.orientation.toRotationMatrix(), h);
     constexpr double reach2 = kReach * kReach;
@@ -848,22 +850,32 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
         f(groupEnd[1], groupEnd[2]);
     };
     if (cache) {
-        // Warm start from the old point within a quarter voxel of each new one.
+        // Warm start from the old point within a quarter voxel of each new one. Contacts are
+        // visited as found, so a pair's points look up their key once.
         const std::vector<ContactCache::Point>& old = cache->points;
-        forEachIndex(contacts.size(), [&](size_t k) {
-            const SolverContact& c = contacts[order[k]];
-            SolverConstraint& s = constraints[k];
-            if (s.rows[0].mass == 0) return;
-            const auto [first, last] = std::equal_range(old.begin(), old.end(), c.cacheKey, ByKey());
-            const Eigen::Vector3d local = rotation[c.a].transpose() * c.armA;
-            const double near = 0.25 * bodies[c.a].voxelSizeM;
-            const ContactCache::Point* best = nullptr;
-            for (auto p = first; p != last; ++p)
-                if ((p->localM - local).norm() < near && (!best || (p->localM - local).norm() < (best->localM - local).norm())) best = &*p;
-            if (!best) return;
-            s.normalImpulse = kWarmStartFraction * best->normalNs;
-            const Eigen::Vector3d f = kWarmStartFraction * (rotation[c.a] * best->frictionNs);
-            s.frictionImpulse = Eigen::Vector2d(s.rows[1].dir.dot(f), s.rows[2].dir.dot(f));
+        std::vector<uint32_t> position(contacts.size());  // contact -> solve position
+        forEachIndex(contacts.size(), [&](size_t k) { position[order[k]] = static_cast<uint32_t>(k); });
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, contacts.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
+            std::pair<int64_t, int64_t> key(-1, -1);
+            auto first = old.end(), last = old.end();
+            for (size_t k = range.begin(); k != range.end(); ++k) {
+                const SolverContact& c = contacts[k];
+                SolverConstraint& s = constraints[position[k]];
+                if (s.rows[0].mass == 0) continue;
+                if (k == range.begin() || c.cacheKey != key) {
+                    key = c.cacheKey;
+                    std::tie(first, last) = std::equal_range(old.begin(), old.end(), key, ByKey());
+                }
+                const Eigen::Vector3d local = rotation[c.a].transpose() * c.armA;
+                const double near = 0.25 * bodies[c.a].voxelSizeM;
+                const ContactCache::Point* best = nullptr;
+                for (auto p = first; p != last; ++p)
+                    if ((p->localM - local).norm() < near && (!best || (p->localM - local).norm() < (best->localM - local).norm())) best = &*p;
+                if (!best) continue;
+                s.normalImpulse = kWarmStartFraction * best->normalNs;
+                const Eigen::Vector3d f = kWarmStartFraction * (rotation[c.a] * best->frictionNs);
+                s.frictionImpulse = Eigen::Vector2d(s.rows[1].dir.dot(f), s.rows[2].dir.dot(f));
+            }
         });
         inGroups([&](size_t begin, size_t end) {
             for (size_t k = begin; k < end; ++k) {
