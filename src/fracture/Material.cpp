@@ -32,8 +32,10 @@ const std::vector<Material>& materialPresets()
     //   wood panels (standard housing) fail, blow in           6.9–13.8 kPa
     //   concrete or cinder block walls, not reinforced, shatter 13.8–20.7 kPa
     //   brick panels 8–12 in thick, not reinforced, fail        48.2–55.1 kPa
-    // Reinforced concrete has no entry there: its range is an estimate (2.5x brick), to be replaced
-    // by a cited figure. Densities: typical values; concrete and reinforced concrete from
+    // Reinforced concrete has no entry there. Its high end is NUKEMAP's heavy-damage benchmark
+    // (A. Wellerstein, nuclearsecrecy.com/nukemap): at 20 psi = 137.9 kPa "heavily built concrete
+    // buildings are severely damaged or demolished"; its low end keeps brick's relative spread
+    // (48.2/55.1). Densities: typical values; concrete and reinforced concrete from
     // EN 1991-1-1 Table A.1 (24 and 25 kN/m^3).
     static const std::vector<Material> presets = {
         calibrateMaterial("glass", 2500.0, 3.4e3, 6.9e3, "Clancey 1972: windows shatter at 3.4-6.9 kPa"),
@@ -42,8 +44,9 @@ const std::vector<Material>& materialPresets()
                           "Clancey 1972: unreinforced brick panels 8-12 in fail at 48.2-55.1 kPa"),
         calibrateMaterial("concrete", 2400.0, 13.8e3, 20.7e3,
                           "Clancey 1972: unreinforced concrete/cinder block walls shatter at 13.8-20.7 kPa"),
-        calibrateMaterial("reinforced-concrete", 2500.0, 120e3, 140e3,
-                          "estimate (no entry in Clancey 1972): 2.5x unreinforced brick"),
+        calibrateMaterial("reinforced-concrete", 2500.0, 137.9e3 * (48.2 / 55.1), 137.9e3,
+                          "NUKEMAP 20 psi benchmark: heavily built concrete buildings severely damaged or demolished at "
+                          "137.9 kPa; low end at brick's relative spread (120.6 kPa)"),
     };
     return presets;
 }
