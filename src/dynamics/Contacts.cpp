@@ -756,6 +756,7 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
         stats.touching.push_back({manifolds[m].a, manifolds[m].b});
     }
     stats.staticContacts = static_cast<int64_t>(staticStart.back());
+    stats.solverContacts = static_cast<int64_t>(manifoldStart.back());
     std::vector<SolverContact> contacts(manifoldStart.back());
     forEachIndex(bodies.size(), [&](size_t i) {
         for (size_t n = 0; n < statics[i].size(); ++n) {

@@ -75,6 +75,7 @@ ContactManifold reduceManifold(int a, int b, const std::vector<VoxelContact>& co
 struct ContactStats {
     int64_t staticContacts = 0;   ///< voxel corners in the ground or a static box
     int64_t bodyContacts = 0;     ///< voxel pairs between bodies
+    int64_t solverContacts = 0;   ///< points the solver works on (static ones and the manifolds')
     double maxPenetrationM = 0;   ///< deepest body-body contact before correction
     std::vector<BodyPair> touching;  ///< pairs with contacts, sorted
 };
