@@ -154,12 +154,17 @@ $py "$dir/same.py" "$dir/t1" "$dir/t2" "$dir/out" || fail "runs differ between t
 $py "$dir/same.py" "$dir/default-1" "$dir/default-2" || fail "the default scene differs between 1 and 2 threads"
 
 # interruption: a run killed (SIGKILL) part-way, and one stopped by Ctrl-C (SIGINT), each resumed
-# with --resume, end exactly as the uninterrupted run
+# with --resume, end exactly as the uninterrupted run. long.json keeps the default checkpoint
+# interval (30 s, longer than the run), so only Ctrl-C writes its checkpoint; every.json writes
+# one after every frame, which a SIGKILL needs.
 sed 's/"duration_s": 0.25/"duration_s": 0.5/' "$dir/scene.json" > "$dir/long.json"
+sed 's/"duration_s": 0.25/"duration_s": 0.5, "output": {"checkpoint_every_s": 1e-9}/' "$dir/scene.json" > "$dir/every.json"
 "$spall" run "$dir/long.json" -o "$dir/whole" --quiet --no-preview > /dev/null
+"$spall" run "$dir/every.json" -o "$dir/whole-every" --quiet --no-preview > /dev/null
 for signal in KILL INT; do
   out="$dir/cut-$signal"
-  "$spall" run "$dir/long.json" -o "$out" --quiet > /dev/null 2> "$dir/err.txt" &
+  if [[ $signal == KILL ]]; then scene=every whole=whole-every; else scene=long whole=whole; fi
+  "$spall" run "$dir/$scene.json" -o "$out" --quiet > /dev/null 2> "$dir/err.txt" &
   pid=$!
   for _ in $(seq 600); do [[ -e "$out/fragments.0004.vdb" ]] && break; sleep 0.05; done
   kill -s "$signal" "$pid"
@@ -172,7 +177,7 @@ for signal in KILL INT; do
   fi
   "$spall" run --resume "$out" --quiet > /dev/null || fail "SIG$signal: --resume failed"
   [[ -s "$out/preview.png" ]] || fail "SIG$signal: the resumed run wrote no preview"
-  $py "$dir/same.py" "$dir/whole" "$out" || fail "SIG$signal: the resumed run differs from the uninterrupted one"
+  $py "$dir/same.py" "$dir/$whole" "$out" || fail "SIG$signal: the resumed run differs from the uninterrupted one"
 done
 # a full disk: a 2 MB tmpfs, about half of what the run writes. A clear error naming the file,
 # every frame and history row written so far readable, no partial file left looking whole, and
@@ -180,7 +185,7 @@ done
 mkdir -p "$dir/small-disk"
 if mount -t tmpfs -o size=2m tmpfs "$dir/small-disk" 2> /dev/null; then
   trap 'umount "$dir/small-disk" 2> /dev/null || true' EXIT
-  if "$spall" run "$dir/long.json" -o "$dir/small-disk/out" --quiet --no-preview > /dev/null 2> "$dir/err.txt"; then
+  if "$spall" run "$dir/every.json" -o "$dir/small-disk/out" --quiet --no-preview > /dev/null 2> "$dir/err.txt"; then
     fail "a run on a full disk reported success"
   fi
   grep -q "small-disk/out/.*disk full" "$dir/err.txt" || fail "full disk: $(cat "$dir/err.txt")"
@@ -192,7 +197,7 @@ if mount -t tmpfs -o size=2m tmpfs "$dir/small-disk" 2> /dev/null; then
   umount "$dir/small-disk"
   trap - EXIT
   "$spall" run --resume "$dir/full-disk" --quiet --no-preview > /dev/null || fail "full disk: --resume failed"
-  $py "$dir/same.py" "$dir/whole" "$dir/full-disk" || fail "full disk: the resumed run differs from the uninterrupted one"
+  $py "$dir/same.py" "$dir/whole-every" "$dir/full-disk" || fail "full disk: the resumed run differs from the uninterrupted one"
 else
   echo "skipped: the full-disk test needs to mount a 2 MB tmpfs (root); it could not"
 fi

@@ -44,7 +44,7 @@ json charge(const std::vector<double>& positionM, double tntKg, double timeS = 0
 json baseScene(double voxelM, double durationS)
 {
     return {{"voxel_size_m", voxelM}, {"duration_s", durationS}, {"frame_rate_hz", 24}, {"seed", 1},
-            {"output", {{"vdb", false}, {"history", false}, {"checkpoint_every_frames", 0}}}};
+            {"output", {{"vdb", false}, {"history", false}, {"checkpoint_every_s", 0}}}};
 }
 
 /// A scene randomised from a seed: box size, voxel size, material, algorithm, charges, gravity.

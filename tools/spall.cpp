@@ -9,6 +9,7 @@
 #include <spall/io/Scene.h>
 #include <spall/io/VdbIo.h>
 #include <spall/render/Render.h>
+#include <spall/sim/Checkpoint.h>
 #include <spall/sim/Run.h>
 #include <spall/voxel/Voxelise.h>
 
@@ -395,8 +396,13 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
     std::printf("open: Blender: File > Import > OpenVDB (the sequence); Houdini: File SOP on fragments.$F4.vdb;\n"
                 "      Python: h5py.File('%s/history.h5') (see docs/file-formats.md)\n", outDir.c_str());
     if (!report.complete) {
-        std::fprintf(stderr, "spall run: interrupted after %d frames; they are complete and readable; continue with: spall run --resume %s\n",
-                     report.framesWritten, outDir.c_str());
+        if (std::filesystem::exists(std::filesystem::path(outDir) / spall::kCheckpointFileName))
+            std::fprintf(stderr, "spall run: interrupted after %d frames; they are complete and readable; continue with: spall run --resume %s\n",
+                         report.framesWritten, outDir.c_str());
+        else
+            std::fprintf(stderr, "spall run: interrupted after %d frames; they are complete and readable; no checkpoint "
+                                 "(output.checkpoint_every_s is 0), so finishing means running the scene again\n",
+                         report.framesWritten);
         return 130;
     }
     if (preview) std::printf("preview: %s\n", options.previewPath.c_str());

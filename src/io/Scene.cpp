@@ -344,8 +344,7 @@ Scene parseScene(const std::string& text, const std::string& sourceName, const s
         scene.output.vdb = o.boolean("vdb", scene.output.vdb);
         scene.output.densityGrid = o.boolean("density_grid", scene.output.densityGrid);
         scene.output.history = o.boolean("history", scene.output.history);
-        scene.output.checkpointEveryFrames =
-            static_cast<int>(o.integer("checkpoint_every_frames", scene.output.checkpointEveryFrames, 0, 1'000'000));
+        scene.output.checkpointEveryS = o.number("checkpoint_every_s", scene.output.checkpointEveryS, 0, 1e9);
     });
     r.finish();
     scene.fracture.seed = scene.seed;
@@ -440,7 +439,7 @@ nlohmann::json sceneToJson(const Scene& scene)
                        {"solver_iterations", cs.solverIterations},
                        {"penetration_tolerance_voxels", cs.penetrationToleranceVoxels}};
     j["output"] = {{"vdb", scene.output.vdb}, {"density_grid", scene.output.densityGrid}, {"history", scene.output.history},
-                   {"checkpoint_every_frames", scene.output.checkpointEveryFrames}};
+                   {"checkpoint_every_s", scene.output.checkpointEveryS}};
     return j;
 }
 

@@ -228,7 +228,7 @@ Checkpoint readCheckpoint(const std::string& path)
     std::ifstream in(path, std::ios::binary);
     if (!in)
         throw IoError(path + ": no checkpoint to resume from (the run stopped before its first frame was complete, had "
-                             "output.checkpoint_every_frames 0, or finished)");
+                             "output.checkpoint_every_s 0, or finished)");
     Reader r(in, path);
     char magic[sizeof kMagic];
     in.read(magic, sizeof magic);

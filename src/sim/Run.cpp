@@ -42,6 +42,7 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
                     const std::function<bool(const RunProgress&)>& onFrame, std::unique_ptr<HistoryWriter> history)
 {
     const auto start = std::chrono::steady_clock::now();
+    auto lastCheckpoint = start;
     namespace fs = std::filesystem;
     const Scene& scene = sim.scene();
     const fs::path dir = options.outputDirectory;
@@ -94,18 +95,21 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
             eventsWritten = events.size();
             dustWritten = dust.size();
         }
-        // The checkpoint goes last: whatever it says is written, is.
-        const int every = scene.output.checkpointEveryFrames;
-        if (every > 0 && (f + 1) % every == 0 && f + 1 < frameCount)
-            writeCheckpoint(checkpointPath.string(), {f + 1, frameCount, report.totalSteps, checkpointScene, sim.state()});
         if (std::find(previewFrames.begin(), previewFrames.end(), f) != previewFrames.end()) {
             previewBodies.push_back(sim.bodies());
             previewTimes.push_back(t);
         }
         report.framesWritten = f + 1;
-        RunProgress progress{f, frameCount, t, sim.bodies().size(), report.totalSteps,
-                             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};
-        if (onFrame && !onFrame(progress) && f + 1 < frameCount) break;
+        const auto now = std::chrono::steady_clock::now();
+        RunProgress progress{f, frameCount, t, sim.bodies().size(), report.totalSteps, std::chrono::duration<double>(now - start).count()};
+        const bool stop = onFrame && !onFrame(progress) && f + 1 < frameCount;
+        // The checkpoint goes after the frame's outputs: whatever it says is written, is.
+        const double every = scene.output.checkpointEveryS;
+        if (every > 0 && f + 1 < frameCount && (stop || std::chrono::duration<double>(now - lastCheckpoint).count() >= every)) {
+            writeCheckpoint(checkpointPath.string(), {f + 1, frameCount, report.totalSteps, checkpointScene, sim.state()});
+            lastCheckpoint = std::chrono::steady_clock::now();
+        }
+        if (stop) break;
     }
     report.complete = report.framesWritten == frameCount;
     const RenderSettings previewSettings{640, 360, scene.world.ground.offsetM};

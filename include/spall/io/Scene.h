@@ -32,8 +32,11 @@ struct OutputSettings {
     bool vdb = true;           ///< fragments.NNNN.vdb per frame
     bool densityGrid = true;   ///< world-space `density` grid in each frame
     bool history = true;       ///< history.h5
-    /// OUTDIR/checkpoint.spall every this many frames, for `spall run --resume` (0: never).
-    int checkpointEveryFrames = 1;
+    /// OUTDIR/checkpoint.spall, for `spall run --resume`: after the first frame that ends this
+    /// long (wall-clock) after the last checkpoint or the start, and when a run is stopped on
+    /// request (0: never). Bounds the work an interruption loses without paying for a
+    /// checkpoint every frame (unit: s).
+    double checkpointEveryS = 30.0;
 };
 
 struct Scene {
