@@ -620,6 +620,185 @@ std::vector<int> solverSides(const std::vector<Body>& bodies, size_t contactCoun
     return side;
 }
 
+/// Sequential impulses over one step's contacts (docs/architecture.md, "Solver"). The contacts
+/// are solved lowest first (Gauss–Seidel converges fastest up a stack that way); large problems
+/// are cut in two halves that share no movable body, each solved on its own thread, and the
+/// seam between them after both, so the result does not depend on the thread count.
+class ImpulseSolver {
+public:
+    /// `state` ends with the world's immovable entry; `contacts` are in the order found.
+    ImpulseSolver(const std::vector<Body>& bodies, std::vector<SolverBody>& state, const std::vector<SolverContact>& contacts)
+        : mState(state), mContacts(contacts), mOrder(contacts.size()), mConstraints(new SolverConstraint[contacts.size()])
+    {
+        const int worldIndex = static_cast<int>(state.size()) - 1;
+        const std::vector<int> side = solverSides(bodies, contacts.size());
+        auto group = [&](const SolverContact& c) {
+            const int sa = side[c.a], sb = c.b == worldIndex ? -1 : side[c.b];
+            if (sa < 0) return sb < 0 ? 0 : sb;  // neither moves: any group will do
+            return sb < 0 || sb == sa ? sa : 2;
+        };
+        struct SortKey {
+            int group;
+            double height;
+            uint32_t contact;
+            bool operator<(const SortKey& o) const
+            {
+                return group != o.group ? group < o.group : height != o.height ? height < o.height : contact < o.contact;
+            }
+        };
+        std::vector<SortKey> sortKey(contacts.size());
+        forEachIndex(contacts.size(), [&](size_t k) { sortKey[k] = {group(contacts[k]), contacts[k].height, static_cast<uint32_t>(k)}; });
+        tbb::parallel_sort(sortKey.begin(), sortKey.end());  // the keys are unique: the order is
+        forEachIndex(contacts.size(), [&](size_t k) { mOrder[k] = sortKey[k].contact; });
+        for (const SortKey& key : sortKey) ++mGroupEnd[key.group];
+        mGroupEnd[1] += mGroupEnd[0];
+        mGroupEnd[2] += mGroupEnd[1];
+        forEachIndex(contacts.size(), [&](size_t k) { mConstraints[k] = constraintOf(contacts[mOrder[k]]); });
+    }
+
+    /// Starts each contact from the old point within a quarter voxel of it (in the first body's
+    /// frame) and applies those impulses.
+    void warmStart(const ContactCache& cache, const std::vector<Body>& bodies, const std::vector<Eigen::Matrix3d>& rotation)
+    {
+        const std::vector<ContactCache::Point>& old = cache.points;
+        std::vector<uint32_t> position(mContacts.size());  // contact -> solve position
+        forEachIndex(mContacts.size(), [&](size_t k) { position[mOrder[k]] = static_cast<uint32_t>(k); });
+        // Contacts are visited as found, so a pair's points look up their key once.
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, mContacts.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
+            std::pair<int64_t, int64_t> key(-1, -1);
+            auto first = old.end(), last = old.end();
+            for (size_t k = range.begin(); k != range.end(); ++k) {
+                const SolverContact& c = mContacts[k];
+                SolverConstraint& s = mConstraints[position[k]];
+                if (s.rows[0].mass == 0) continue;
+                if (k == range.begin() || c.cacheKey != key) {
+                    key = c.cacheKey;
+                    std::tie(first, last) = std::equal_range(old.begin(), old.end(), key, ByKey());
+                }
+                const Eigen::Vector3d local = rotation[c.a].transpose() * c.armA;
+                const double near = 0.25 * bodies[c.a].voxelSizeM;
+                const ContactCache::Point* best = nullptr;
+                for (auto p = first; p != last; ++p)
+                    if ((p->localM - local).norm() < near && (!best || (p->localM - local).norm() < (best->localM - local).norm())) best = &*p;
+                if (!best) continue;
+                s.normalImpulse = kWarmStartFraction * best->normalNs;
+                const Eigen::Vector3d f = kWarmStartFraction * (rotation[c.a] * best->frictionNs);
+                s.frictionImpulse = Eigen::Vector2d(s.rows[1].dir.dot(f), s.rows[2].dir.dot(f));
+            }
+        });
+        inGroups([&](size_t begin, size_t end) {
+            for (size_t k = begin; k < end; ++k) {
+                const SolverConstraint& s = mConstraints[k];
+                push(s.rows[0], s, s.normalImpulse);
+                for (int d = 1; d <= 2; ++d) push(s.rows[d], s, s.frictionImpulse[d - 1]);
+            }
+        });
+    }
+
+    void solve(int iterations)
+    {
+        for (int iteration = 0; iteration < iterations; ++iteration) inGroups([&](size_t begin, size_t end) { sweep(begin, end); });
+    }
+
+    /// The impulses reached, for the next step's warm start: sorted by key, within a key in
+    /// solve order.
+    void store(ContactCache& cache, const std::vector<Eigen::Matrix3d>& rotation) const
+    {
+        std::vector<std::pair<std::pair<int64_t, int64_t>, uint32_t>> byKey(mContacts.size());
+        forEachIndex(mContacts.size(), [&](size_t k) { byKey[k] = {mContacts[mOrder[k]].cacheKey, static_cast<uint32_t>(k)}; });
+        tbb::parallel_sort(byKey.begin(), byKey.end());
+        cache.points.resize(mContacts.size());
+        forEachIndex(mContacts.size(), [&](size_t n) {
+            const uint32_t k = byKey[n].second;
+            const SolverContact& c = mContacts[mOrder[k]];
+            const SolverConstraint& s = mConstraints[k];
+            const Eigen::Vector3d friction = s.frictionImpulse[0] * s.rows[1].dir + s.frictionImpulse[1] * s.rows[2].dir;
+            cache.points[n] = {c.cacheKey, rotation[c.a].transpose() * c.armA, s.normalImpulse, rotation[c.a].transpose() * friction};
+        });
+    }
+
+private:
+    /// Jacobian rows (normal, then two fixed tangents, so friction converges like the normal
+    /// does) with each body's velocity response to a unit impulse.
+    SolverConstraint constraintOf(const SolverContact& c) const
+    {
+        SolverConstraint s;
+        s.a = c.a;
+        s.b = c.b;
+        s.bounceTarget = c.bounceTarget;
+        s.friction = c.friction;
+        s.normalImpulse = 0;
+        s.frictionImpulse.setZero();
+        const Eigen::Vector3d t1 =
+            (std::abs(c.normal.x()) < 0.6 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(c.normal).normalized();
+        const Eigen::Vector3d dirs[3] = {c.normal, t1, c.normal.cross(t1)};
+        for (int d = 0; d < 3; ++d) {
+            SolverRow& r = s.rows[d];
+            r.dir = dirs[d];
+            r.angularA = c.armA.cross(r.dir);
+            r.angularB = c.armB.cross(r.dir);
+            r.responseA = mState[c.a].invInertia * r.angularA;
+            r.responseB = mState[c.b].invInertia * r.angularB;
+            const double inv = mState[c.a].invMass + mState[c.b].invMass + r.angularA.dot(r.responseA) + r.angularB.dot(r.responseB);
+            r.mass = inv > 0 ? 1.0 / inv : 0.0;
+        }
+        return s;
+    }
+
+    double relativeSpeed(const SolverRow& r, const SolverConstraint& c) const
+    {
+        return r.dir.dot(mState[c.a].v - mState[c.b].v) + r.angularA.dot(mState[c.a].w) - r.angularB.dot(mState[c.b].w);
+    }
+
+    /// Immovable entries are never written: both halves may read them at once.
+    void push(const SolverRow& r, const SolverConstraint& c, double impulse)
+    {
+        if (mState[c.a].invMass > 0) {
+            mState[c.a].v += mState[c.a].invMass * impulse * r.dir;
+            mState[c.a].w += impulse * r.responseA;
+        }
+        if (mState[c.b].invMass > 0) {
+            mState[c.b].v -= mState[c.b].invMass * impulse * r.dir;
+            mState[c.b].w -= impulse * r.responseB;
+        }
+    }
+
+    void sweep(size_t begin, size_t end)
+    {
+        for (size_t k = begin; k < end; ++k) {
+            SolverConstraint& c = mConstraints[k];
+            if (c.rows[0].mass == 0) continue;
+            // Friction first (from the current normal impulse), then the normal, which matters
+            // more: the accumulated tangential impulse stays in the Coulomb cone |f| <= mu N.
+            Eigen::Vector2d accumulated = c.frictionImpulse;
+            for (int d = 1; d <= 2; ++d) accumulated[d - 1] -= c.rows[d].mass * relativeSpeed(c.rows[d], c);
+            const double limit = c.friction * c.normalImpulse;
+            const double squared = accumulated.squaredNorm();
+            if (squared > limit * limit) accumulated *= limit / std::sqrt(squared);
+            for (int d = 1; d <= 2; ++d) push(c.rows[d], c, accumulated[d - 1] - c.frictionImpulse[d - 1]);
+            c.frictionImpulse = accumulated;
+            // Normal: the accumulated impulse stays >= 0.
+            const double previous = c.normalImpulse;
+            c.normalImpulse = std::max(previous + c.rows[0].mass * (c.bounceTarget - relativeSpeed(c.rows[0], c)), 0.0);
+            push(c.rows[0], c, c.normalImpulse - previous);
+        }
+    }
+
+    /// Runs f(begin, end) over the solve order: the two halves side by side, then the seam.
+    template <typename F>
+    void inGroups(const F& f)
+    {
+        tbb::parallel_invoke([&] { f(0, mGroupEnd[0]); }, [&] { f(mGroupEnd[0], mGroupEnd[1]); });
+        f(mGroupEnd[1], mGroupEnd[2]);
+    }
+
+    std::vector<SolverBody>& mState;
+    const std::vector<SolverContact>& mContacts;
+    std::vector<uint32_t> mOrder;  ///< solve position -> contact
+    size_t mGroupEnd[3] = {0, 0, 0};
+    std::unique_ptr<SolverConstraint[]> mConstraints;  ///< in solve order
+};
+
 }  // namespace
 
 bool pairCanInteract(const Body& a, const Body& b) { return movable(a) || movable(b); }
@@ -779,152 +958,15 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
         if (cache) cache->points.clear();
         return stats;
     }
-    // Gauss–Seidel converges fastest up a stack when the lowest contacts come first. Large
-    // scenes are cut in two halves that share no movable body: each half is solved on its own
-    // thread and the seam between them after both, so the result does not depend on the thread count.
-    const std::vector<int> side = solverSides(bodies, contacts.size());
-    auto group = [&](const SolverContact& c) {
-        const int sa = side[c.a], sb = c.b == worldIndex ? -1 : side[c.b];
-        if (sa < 0) return sb < 0 ? 0 : sb;  // neither moves: any group will do
-        return sb < 0 || sb == sa ? sa : 2;
-    };
-    struct SortKey {
-        int group;
-        double height;
-        uint32_t contact;
-        bool operator<(const SortKey& o) const
-        {
-            return group != o.group ? group < o.group : height != o.height ? height < o.height : contact < o.contact;
-        }
-    };
-    std::vector<SortKey> sortKey(contacts.size());
-    forEachIndex(contacts.size(), [&](size_t k) { sortKey[k] = {group(contacts[k]), contacts[k].height, static_cast<uint32_t>(k)}; });
-    tbb::parallel_sort(sortKey.begin(), sortKey.end());  // the keys are unique: the order is
-    std::vector<uint32_t> order(contacts.size());  // solve position -> contact
-    forEachIndex(contacts.size(), [&](size_t k) { order[k] = sortKey[k].contact; });
-    size_t groupEnd[3] = {0, 0, 0};
-    for (const SortKey& key : sortKey) ++groupEnd[key.group];
-    groupEnd[1] += groupEnd[0];
-    groupEnd[2] += groupEnd[1];
-
-    const std::unique_ptr<SolverConstraint[]> constraints(new SolverConstraint[contacts.size()]);
-    forEachIndex(contacts.size(), [&](size_t k) {
-        const SolverContact& c = contacts[order[k]];
-        SolverConstraint& s = constraints[k];
-        s.a = c.a;
-        s.b = c.b;
-        s.bounceTarget = c.bounceTarget;
-        s.friction = c.friction;
-        s.normalImpulse = 0;
-        s.frictionImpulse.setZero();
-        const Eigen::Vector3d t1 =
-            (std::abs(c.normal.x()) < 0.6 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(c.normal).normalized();
-        const Eigen::Vector3d dirs[3] = {c.normal, t1, c.normal.cross(t1)};
-        for (int d = 0; d < 3; ++d) {
-            SolverRow& r = s.rows[d];
-            r.dir = dirs[d];
-            r.angularA = c.armA.cross(r.dir);
-            r.angularB = c.armB.cross(r.dir);
-            r.responseA = state[c.a].invInertia * r.angularA;
-            r.responseB = state[c.b].invInertia * r.angularB;
-            const double inv = state[c.a].invMass + state[c.b].invMass + r.angularA.dot(r.responseA) + r.angularB.dot(r.responseB);
-            r.mass = inv > 0 ? 1.0 / inv : 0.0;
-        }
-    });
-    auto relativeSpeed = [&](const SolverRow& r, const SolverConstraint& c) {
-        return r.dir.dot(state[c.a].v - state[c.b].v) + r.angularA.dot(state[c.a].w) - r.angularB.dot(state[c.b].w);
-    };
-    // Immovable entries are never written: both halves may read them at once.
-    auto push = [&](const SolverRow& r, const SolverConstraint& c, double impulse) {
-        if (state[c.a].invMass > 0) {
-            state[c.a].v += state[c.a].invMass * impulse * r.dir;
-            state[c.a].w += impulse * r.responseA;
-        }
-        if (state[c.b].invMass > 0) {
-            state[c.b].v -= state[c.b].invMass * impulse * r.dir;
-            state[c.b].w -= impulse * r.responseB;
-        }
-    };
-    // Runs f(begin, end) over the solve order: the two halves side by side, then the seam.
-    auto inGroups = [&](const auto& f) {
-        tbb::parallel_invoke([&] { f(0, groupEnd[0]); }, [&] { f(groupEnd[0], groupEnd[1]); });
-        f(groupEnd[1], groupEnd[2]);
-    };
-    if (cache) {
-        // Warm start from the old point within a quarter voxel of each new one. Contacts are
-        // visited as found, so a pair's points look up their key once.
-        const std::vector<ContactCache::Point>& old = cache->points;
-        std::vector<uint32_t> position(contacts.size());  // contact -> solve position
-        forEachIndex(contacts.size(), [&](size_t k) { position[order[k]] = static_cast<uint32_t>(k); });
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, contacts.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
-            std::pair<int64_t, int64_t> key(-1, -1);
-            auto first = old.end(), last = old.end();
-            for (size_t k = range.begin(); k != range.end(); ++k) {
-                const SolverContact& c = contacts[k];
-                SolverConstraint& s = constraints[position[k]];
-                if (s.rows[0].mass == 0) continue;
-                if (k == range.begin() || c.cacheKey != key) {
-                    key = c.cacheKey;
-                    std::tie(first, last) = std::equal_range(old.begin(), old.end(), key, ByKey());
-                }
-                const Eigen::Vector3d local = rotation[c.a].transpose() * c.armA;
-                const double near = 0.25 * bodies[c.a].voxelSizeM;
-                const ContactCache::Point* best = nullptr;
-                for (auto p = first; p != last; ++p)
-                    if ((p->localM - local).norm() < near && (!best || (p->localM - local).norm() < (best->localM - local).norm())) best = &*p;
-                if (!best) continue;
-                s.normalImpulse = kWarmStartFraction * best->normalNs;
-                const Eigen::Vector3d f = kWarmStartFraction * (rotation[c.a] * best->frictionNs);
-                s.frictionImpulse = Eigen::Vector2d(s.rows[1].dir.dot(f), s.rows[2].dir.dot(f));
-            }
-        });
-        inGroups([&](size_t begin, size_t end) {
-            for (size_t k = begin; k < end; ++k) {
-                const SolverConstraint& s = constraints[k];
-                push(s.rows[0], s, s.normalImpulse);
-                for (int d = 1; d <= 2; ++d) push(s.rows[d], s, s.frictionImpulse[d - 1]);
-            }
-        });
-    }
-    auto sweep = [&](size_t begin, size_t end) {
-        for (size_t k = begin; k < end; ++k) {
-            SolverConstraint& c = constraints[k];
-            if (c.rows[0].mass == 0) continue;
-            // Friction first (from the current normal impulse), then the normal, which matters
-            // more: the accumulated tangential impulse stays in the Coulomb cone |f| <= mu N.
-            Eigen::Vector2d accumulated = c.frictionImpulse;
-            for (int d = 1; d <= 2; ++d) accumulated[d - 1] -= c.rows[d].mass * relativeSpeed(c.rows[d], c);
-            const double limit = c.friction * c.normalImpulse;
-            const double squared = accumulated.squaredNorm();
-            if (squared > limit * limit) accumulated *= limit / std::sqrt(squared);
-            for (int d = 1; d <= 2; ++d) push(c.rows[d], c, accumulated[d - 1] - c.frictionImpulse[d - 1]);
-            c.frictionImpulse = accumulated;
-            // Normal: the accumulated impulse stays >= 0.
-            const double previous = c.normalImpulse;
-            c.normalImpulse = std::max(previous + c.rows[0].mass * (c.bounceTarget - relativeSpeed(c.rows[0], c)), 0.0);
-            push(c.rows[0], c, c.normalImpulse - previous);
-        }
-    };
-    for (int iteration = 0; iteration < collisions.solverIterations; ++iteration) inGroups(sweep);
+    ImpulseSolver solver(bodies, state, contacts);
+    if (cache) solver.warmStart(*cache, bodies, rotation);
+    solver.solve(collisions.solverIterations);
     for (size_t i = 0; i < bodies.size(); ++i) {
         if (!movable(bodies[i])) continue;
         bodies[i].linearVelocityMS = state[i].v;
         bodies[i].angularVelocityRadS = state[i].w;
     }
-    if (cache) {
-        // Sorted by key; within a key in solve order.
-        std::vector<std::pair<std::pair<int64_t, int64_t>, uint32_t>> byKey(contacts.size());
-        forEachIndex(contacts.size(), [&](size_t k) { byKey[k] = {contacts[order[k]].cacheKey, static_cast<uint32_t>(k)}; });
-        tbb::parallel_sort(byKey.begin(), byKey.end());
-        cache->points.resize(contacts.size());
-        forEachIndex(contacts.size(), [&](size_t n) {
-            const uint32_t k = byKey[n].second;
-            const SolverContact& c = contacts[order[k]];
-            const SolverConstraint& s = constraints[k];
-            const Eigen::Vector3d friction = s.frictionImpulse[0] * s.rows[1].dir + s.frictionImpulse[1] * s.rows[2].dir;
-            cache->points[n] = {c.cacheKey, rotation[c.a].transpose() * c.armA, s.normalImpulse, rotation[c.a].transpose() * friction};
-        });
-    }
+    if (cache) solver.store(*cache, rotation);
     correctPositions(bodies, state, statics, manifolds, up, world.colliders.size());
     return stats;
 }
