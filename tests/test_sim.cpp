@@ -55,6 +55,11 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "colliders": [{"colour": 1}]})").find("colliders[0].colour: unknown key"),
               std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"checkpoint_every_frames": 1}})")
+                  .find("output.checkpoint_every_frames: unknown key, replaced by output.checkpoint_every_s"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"checkpoint_every_s": -1}})").find("output.checkpoint_every_s"),
+              std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "solver": {"integrator": "leapfrog"}})").find("solver.integrator"),
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "fracture": {"small_fragments": "burn"}})").find("fracture.small_fragments"),

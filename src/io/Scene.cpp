@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -111,8 +112,14 @@ public:
     /// Every key of this object not read is unknown.
     void finish() const
     {
-        for (auto it = mValue.begin(); it != mValue.end(); ++it)
-            if (!mUsed.count(it.key())) fail(keyPath(it.key()), "unknown key");
+        // Keys that were renamed, with what replaced them.
+        static const std::map<std::string, std::string> renamed = {
+            {"checkpoint_every_frames", "output.checkpoint_every_s (wall-clock seconds between checkpoints)"}};
+        for (auto it = mValue.begin(); it != mValue.end(); ++it) {
+            if (mUsed.count(it.key())) continue;
+            const auto r = renamed.find(it.key());
+            fail(keyPath(it.key()), r == renamed.end() ? "unknown key" : "unknown key, replaced by " + r->second);
+        }
     }
     const std::string& file() const { return mFile; }
 
