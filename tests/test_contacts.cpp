@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 #include <tbb/global_control.h>
 
@@ -102,6 +103,32 @@ TEST(Collisions, ThreeNarrowPhasesFindTheSameVoxelPairs)
         compared += static_cast<int>(reference.size());
     }
     EXPECT_GT(compared, 10) << "too few touching pairs to compare";
+}
+
+TEST(Collisions, BroadPhaseFindsExactlyTheOverlappingSpheres)
+{
+    // Bodies of sizes spread over three decades, packed and scattered, some asleep or anchored:
+    // the grid must return exactly what testing every pair returns.
+    std::mt19937_64 rng(17);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::vector<Body> bodies(600);
+    for (size_t i = 0; i < bodies.size(); ++i) {
+        Body& b = bodies[i];
+        b.boundingRadiusM = 0.01 * std::pow(1000.0, unit(rng));
+        const double extent = i < 300 ? 1.0 : 20.0;  // a packed cluster, then a scattered cloud
+        b.positionM = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * extent - Eigen::Vector3d::Constant(0.5 * extent);
+        b.asleep = unit(rng) < 0.2;
+        b.anchored = unit(rng) < 0.05;
+    }
+    std::vector<BodyPair> expected;
+    for (int i = 0; i < static_cast<int>(bodies.size()); ++i)
+        for (int j = i + 1; j < static_cast<int>(bodies.size()); ++j) {
+            const double reach = bodies[i].boundingRadiusM + bodies[j].boundingRadiusM;
+            if ((bodies[i].positionM - bodies[j].positionM).norm() <= reach && pairCanInteract(bodies[i], bodies[j]))
+                expected.push_back({i, j});
+        }
+    ASSERT_GT(expected.size(), 1000u);
+    EXPECT_EQ(findCandidatePairs(bodies), expected);
 }
 
 TEST(Collisions, ManifoldOfAFlatContactIsNormalToTheFaces)
