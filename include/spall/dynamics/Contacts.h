@@ -59,7 +59,7 @@ struct BodyPair {
 /// True when a contact between the two bodies could change anything: at least one of them moves.
 bool pairCanInteract(const Body& a, const Body& b);
 
-/// Broad phase: pairs whose bounding spheres overlap (sweep and prune along x) and that can
+/// Broad phase: pairs whose bounding spheres overlap (found with a hierarchical grid) and that can
 /// interact, sorted.
 std::vector<BodyPair> findCandidatePairs(const std::vector<Body>& bodies);
 
