@@ -510,9 +510,6 @@ struct SolverBody {
     Eigen::Matrix3d invInertia = Eigen::Matrix3d::Zero();
 };
 
-/// Warm starting applies this much of last step's impulse: a little less than all of it, so a
-/// contact that is opening does not get pushed.
-constexpr double kWarmStartFraction = 1.0;
 
 /// Removes penetration by moving positions only (velocities untouched: no kinetic energy is
 /// added). Constraints: per body and static collider its deepest contact, per touching pair its
@@ -681,8 +678,8 @@ public:
                 for (auto p = first; p != last; ++p)
                     if ((p->localM - local).norm() < near && (!best || (p->localM - local).norm() < (best->localM - local).norm())) best = &*p;
                 if (!best) continue;
-                s.normalImpulse = kWarmStartFraction * best->normalNs;
-                const Eigen::Vector3d f = kWarmStartFraction * (rotation[c.a] * best->frictionNs);
+                s.normalImpulse = best->normalNs;
+                const Eigen::Vector3d f = rotation[c.a] * best->frictionNs;
                 s.frictionImpulse = Eigen::Vector2d(s.rows[1].dir.dot(f), s.rows[2].dir.dot(f));
             }
         });
