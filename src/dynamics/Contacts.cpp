@@ -510,7 +510,6 @@ struct SolverBody {
     Eigen::Matrix3d invInertia = Eigen::Matrix3d::Zero();
 };
 
-
 /// Removes penetration by moving positions only (velocities untouched: no kinetic energy is
 /// added). Constraints: per body and static collider its deepest contact, per touching pair its
 /// manifold, split by inverse mass; a few Gauss–Seidel passes from the bottom up, each seeing
