@@ -51,21 +51,16 @@ constexpr double kContactMarginVoxels = 0.1;
 /// diagonal overlaps by under a quarter voxel.
 constexpr double kReach = 1.4143 + kContactMarginVoxels;
 
-/// Runs f(block) for blocks [0, count) in parallel; each block writes only its own slot.
+/// Runs f(k) for k in [0, count) in parallel; each k writes only its own slot. Tasks take at
+/// least `grain` indices: 1 where f does much (a body, a pair), kCheapGrain where it does little.
 template <typename F>
-void forEachBlock(size_t count, const F& f)
+void forEachIndex(size_t count, const F& f, size_t grain = 1)
 {
-    tbb::parallel_for(size_t(0), count, [&](size_t block) { f(block); });
-}
-
-/// Runs f(k) for k in [0, count) in parallel, in chunks; each k writes only its own slot.
-template <typename F>
-void forEachIndex(size_t count, const F& f)
-{
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1024), [&](const tbb::blocked_range<size_t>& range) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, grain), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t k = range.begin(); k != range.end(); ++k) f(k);
     });
 }
+constexpr size_t kCheapGrain = 1024;
 
 // ---- the contact between two voxels ----------------------------------------------------------
 
@@ -254,7 +249,7 @@ std::vector<WorldVoxel> worldBoundaryVoxels(const std::vector<Body>& bodies)
     std::vector<size_t> offset(bodies.size() + 1, 0);
     for (size_t i = 0; i < bodies.size(); ++i) offset[i + 1] = offset[i] + bodies[i].boundaryVoxels.size();
     std::vector<WorldVoxel> voxels(offset.back());
-    forEachBlock(bodies.size(), [&](size_t i) {
+    forEachIndex(bodies.size(), [&](size_t i) {
         for (size_t k = 0; k < bodies[i].boundaryVoxels.size(); ++k) {
             voxels[offset[i] + k] = {bodies[i].voxelWorldM(bodies[i].boundaryVoxels[k]), static_cast<int>(i)};
         }
@@ -289,7 +284,7 @@ std::vector<ContactManifold> manifoldsFromVoxelPairs(const std::vector<Body>& bo
         i = j;
     }
     std::vector<ContactManifold> manifolds(groups.size());
-    forEachBlock(groups.size(), [&](size_t g) {
+    forEachIndex(groups.size(), [&](size_t g) {
         const Body& a = bodies[all[groups[g].first].pair.a];
         const Body& b = bodies[all[groups[g].first].pair.b];
         const CubePairAxes axes(a.orientation.toRotationMatrix(), b.orientation.toRotationMatrix(), a.voxelSizeM);
@@ -310,7 +305,7 @@ std::vector<VoxelPair> collectInBlocks(size_t count, size_t blockSize, const Per
 {
     const size_t blocks = (count + blockSize - 1) / blockSize;
     std::vector<std::vector<VoxelPair>> found(blocks);
-    forEachBlock(blocks, [&](size_t blk) { perBlock(blk * blockSize, std::min(count, (blk + 1) * blockSize), found[blk]); });
+    forEachIndex(blocks, [&](size_t blk) { perBlock(blk * blockSize, std::min(count, (blk + 1) * blockSize), found[blk]); });
     std::vector<VoxelPair> all;
     for (auto& f : found) all.insert(all.end(), f.begin(), f.end());
     return all;
@@ -643,13 +638,13 @@ public:
             }
         };
         std::vector<SortKey> sortKey(contacts.size());
-        forEachIndex(contacts.size(), [&](size_t k) { sortKey[k] = {group(contacts[k]), contacts[k].height, static_cast<uint32_t>(k)}; });
+        forEachIndex(contacts.size(), [&](size_t k) { sortKey[k] = {group(contacts[k]), contacts[k].height, static_cast<uint32_t>(k)}; }, kCheapGrain);
         tbb::parallel_sort(sortKey.begin(), sortKey.end());  // the keys are unique: the order is
-        forEachIndex(contacts.size(), [&](size_t k) { mOrder[k] = sortKey[k].contact; });
+        forEachIndex(contacts.size(), [&](size_t k) { mOrder[k] = sortKey[k].contact; }, kCheapGrain);
         for (const SortKey& key : sortKey) ++mGroupEnd[key.group];
         mGroupEnd[1] += mGroupEnd[0];
         mGroupEnd[2] += mGroupEnd[1];
-        forEachIndex(contacts.size(), [&](size_t k) { mConstraints[k] = constraintOf(contacts[mOrder[k]]); });
+        forEachIndex(contacts.size(), [&](size_t k) { mConstraints[k] = constraintOf(contacts[mOrder[k]]); }, kCheapGrain);
     }
 
     /// Starts each contact from the old point within a quarter voxel of it (in the first body's
@@ -658,7 +653,7 @@ public:
     {
         const std::vector<ContactCache::Point>& old = cache.points;
         std::vector<uint32_t> position(mContacts.size());  // contact -> solve position
-        forEachIndex(mContacts.size(), [&](size_t k) { position[mOrder[k]] = static_cast<uint32_t>(k); });
+        forEachIndex(mContacts.size(), [&](size_t k) { position[mOrder[k]] = static_cast<uint32_t>(k); }, kCheapGrain);
         // Contacts are visited as found, so a pair's points look up their key once.
         tbb::parallel_for(tbb::blocked_range<size_t>(0, mContacts.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
             std::pair<int64_t, int64_t> key(-1, -1);
@@ -701,7 +696,7 @@ public:
     void store(ContactCache& cache, const std::vector<Eigen::Matrix3d>& rotation) const
     {
         std::vector<std::pair<std::pair<int64_t, int64_t>, uint32_t>> byKey(mContacts.size());
-        forEachIndex(mContacts.size(), [&](size_t k) { byKey[k] = {mContacts[mOrder[k]].cacheKey, static_cast<uint32_t>(k)}; });
+        forEachIndex(mContacts.size(), [&](size_t k) { byKey[k] = {mContacts[mOrder[k]].cacheKey, static_cast<uint32_t>(k)}; }, kCheapGrain);
         tbb::parallel_sort(byKey.begin(), byKey.end());
         cache.points.resize(mContacts.size());
         forEachIndex(mContacts.size(), [&](size_t n) {
@@ -710,7 +705,7 @@ public:
             const SolverConstraint& s = mConstraints[k];
             const Eigen::Vector3d friction = s.frictionImpulse[0] * s.rows[1].dir + s.frictionImpulse[1] * s.rows[2].dir;
             cache.points[n] = {c.cacheKey, rotation[c.a].transpose() * c.armA, s.normalImpulse, rotation[c.a].transpose() * friction};
-        });
+        }, kCheapGrain);
     }
 
 private:
@@ -830,7 +825,7 @@ std::vector<BodyPair> findCandidatePairs(const std::vector<Body>& bodies)
     std::vector<std::pair<Cell, int>> entries(bodies.size());
     forEachIndex(bodies.size(), [&](size_t i) {
         entries[i] = {cellAt(bodies[i].positionM, levelOf(bodies[i].boundingRadiusM)), static_cast<int>(i)};
-    });
+    }, kCheapGrain);
     std::sort(entries.begin(), entries.end(),
               [](const auto& x, const auto& y) { return x.first < y.first || (!(y.first < x.first) && x.second < y.second); });
     // Occupied cells as runs of entries; the bodies of one cell share every search.
@@ -849,7 +844,7 @@ std::vector<BodyPair> findCandidatePairs(const std::vector<Body>& bodies)
     auto floorHalf = [](int64_t v, int shift) { return v >= 0 ? v >> shift : -((-v + (int64_t(1) << shift) - 1) >> shift); };
     constexpr size_t kBlock = 64;
     std::vector<std::vector<BodyPair>> found((runs.size() + kBlock - 1) / kBlock);
-    forEachBlock(found.size(), [&](size_t block) {
+    forEachIndex(found.size(), [&](size_t block) {
         auto test = [&](int i, int j) {
             const Body& a = bodies[i];
             const Body& b = bodies[j];
@@ -920,7 +915,7 @@ std::vector<ContactManifold> findBodyContacts(const std::vector<Body>& bodies, C
     }
     const std::vector<BodyPair> pairs = findCandidatePairs(bodies);
     std::vector<ContactManifold> found(pairs.size());
-    forEachBlock(pairs.size(), [&](size_t i) {
+    forEachIndex(pairs.size(), [&](size_t i) {
         found[i] = reduceManifold(pairs[i].a, pairs[i].b, treeLookupContacts(bodies[pairs[i].a], bodies[pairs[i].b]),
                                   bodies[pairs[i].a].voxelSizeM);
     });
@@ -945,7 +940,7 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
     }
 
     std::vector<std::vector<StaticContact>> statics(bodies.size());
-    forEachBlock(bodies.size(), [&](size_t i) {
+    forEachIndex(bodies.size(), [&](size_t i) {
         if (movable(bodies[i])) statics[i] = reduceStaticContacts(findStaticContacts(bodies[i], world));
     });
 
@@ -996,7 +991,7 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
             contacts[staticStart[i] + n] = makeContact(static_cast<int>(i), worldIndex, {bodies[i].id, -2 - s.collider}, s.arm,
                                                        Eigen::Vector3d::Zero(), s.normal, s.depth, s.restitution, s.friction);
         }
-    });
+    }, kCheapGrain);
     forEachIndex(manifolds.size(), [&](size_t m) {
         const ContactManifold& manifold = manifolds[m];
         const Body& a = bodies[manifold.a];
@@ -1006,7 +1001,7 @@ ContactStats resolveContacts(std::vector<Body>& bodies, const WorldSettings& wor
             contacts[manifoldStart[m] + n] = makeContact(manifold.a, manifold.b, {a.id, b.id}, p.pointM - a.positionM, p.pointM - b.positionM,
                                                          manifold.normal, p.depthM, collisions.restitution, collisions.friction);
         }
-    });
+    }, kCheapGrain);
     if (contacts.empty()) {
         if (cache) cache->points.clear();
         return stats;
@@ -1030,7 +1025,7 @@ ContactStats stepBodies(std::vector<Body>& bodies, const WorldSettings& world, c
 {
     std::vector<char> loaded(bodies.size(), 0);
     // Bodies are independent here: each task writes only its own body.
-    forEachBlock(bodies.size(), [&](size_t i) {
+    forEachIndex(bodies.size(), [&](size_t i) {
         Body& body = bodies[i];
         if (body.anchored) return;
         loaded[i] = load && load->loaded(body);

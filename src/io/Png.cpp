@@ -189,6 +189,8 @@ Image plotSeries(const std::vector<PlotSeries>& series, const std::string& xLabe
     if (!logLog && y0 < 0 && y1 > 0) img.line(left, py(0), right, py(0), axis);
     img.line(left, top, left, bottom, axis);
     img.line(left, bottom, right, bottom, axis);
+    size_t longestName = 0;  // the legend sits in the upper right, wide enough for it
+    for (const PlotSeries& s : series) longestName = std::max(longestName, s.name.size());
     for (size_t k = 0; k < series.size(); ++k) {
         const PlotSeries& s = series[k];
         const Rgb colour = colours[k % std::size(colours)];
@@ -204,10 +206,7 @@ Image plotSeries(const std::vector<PlotSeries>& series, const std::string& xLabe
             previousY = cy;
         }
         if (!s.name.empty()) {
-            // Legend in the upper right, wide enough for the longest name.
-            size_t longest = 0;
-            for (const PlotSeries& other : series) longest = std::max(longest, other.name.size());
-            const int lx = right - 30 - Image::textWidth(std::string(longest, ' '));
+            const int lx = right - 30 - Image::textWidth(std::string(longestName, ' '));
             const int ly = top + 10 + 20 * int(k);
             img.fillRect(lx - 20, ly + 2, lx - 6, ly + 12, colour);
             img.text(lx, ly, s.name, axis);
