@@ -110,48 +110,20 @@ grep -q "cube.obj/out" "$dir/err.txt" || fail "error does not name the output di
 if "$spall" run "$dir/missing-scene.json" -o "$dir/x" --quiet > /dev/null 2> "$dir/err.txt"; then fail "missing scene accepted"; fi
 grep -q "missing-scene.json" "$dir/err.txt" || fail "error does not name the scene: $(cat "$dir/err.txt")"
 
-# Frames (every fragment grid's voxel count, centre of mass and velocity) and history content
-# (every dataset, every root attribute) of output directories: identical or not.
-cat > "$dir/same.py" <<'PY'
-import glob, sys, h5py, numpy as np, pyopenvdb as vdb
-def content(out):
-    h = h5py.File(out + "/history.h5", "r")
-    arrays = {}
-    h.visititems(lambda name, obj: arrays.__setitem__(name, obj[()]) if isinstance(obj, h5py.Dataset) else None)
-    attrs = {k: str(h.attrs[k]) for k in h.attrs}
-    frames = []
-    for path in sorted(glob.glob(out + "/fragments.*.vdb")):
-        metas = vdb.readAllGridMetadata(path)
-        # Each fragment's metadata and exact index-to-world map (four points fix the affine map).
-        frames.append(sorted((m.name, m.metadata["voxel_count"], tuple(m.metadata["centre_of_mass_m"]),
-                              tuple(m.metadata["linear_velocity_m_s"]), tuple(m.metadata["angular_velocity_rad_s"]),
-                              tuple(tuple(m.transform.indexToWorld(p)) for p in ((0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1))))
-                             for m in metas if m.name.startswith("fragment_")))
-        # Every voxel of the world-space density grid.
-        if any(m.name == "density" for m in metas):
-            frames.append(sorted(tuple(v.min) for v in vdb.read(path, "density").citerOnValues()))
-    return arrays, frames, attrs
-a, fa, ta = content(sys.argv[1])
-for other in sys.argv[2:]:
-    b, fb, tb = content(other)
-    assert a.keys() == b.keys()
-    for k in a:
-        assert np.array_equal(a[k], b[k]), k
-    assert fa == fb
-    assert ta == tb
-PY
+# Identical content of output directories (history, fragment metadata and transforms, density).
+compare="$(dirname "$0")/../tools/compare_runs.py"
 
 # determinism: 1 and 2 threads, and a repeated run, give identical frames and history content
 "$spall" run "$dir/scene.json" -o "$dir/t1" --threads 1 --quiet --no-preview > /dev/null
 "$spall" run "$dir/scene.json" -o "$dir/t2" --threads 2 --quiet --no-preview > /dev/null
-$py "$dir/same.py" "$dir/t1" "$dir/t2" "$dir/out" || fail "runs differ between thread counts or repeats"
+$py "$compare" "$dir/t1" "$dir/t2" "$dir/out" || fail "runs differ between thread counts or repeats"
 [[ ! -e "$dir/out/checkpoint.spall" ]] || fail "a complete run left its checkpoint behind"
 
 # determinism on the built-in default scene, shortened to its first 4 frames (the blast, the
 # wall breaking into 3000 bricks and their first collisions): 1 and 2 threads, identical content
 "$spall" run -o "$dir/default-1" --frames 4 --threads 1 --quiet --no-preview > /dev/null
 "$spall" run -o "$dir/default-2" --frames 4 --threads 2 --quiet --no-preview > /dev/null
-$py "$dir/same.py" "$dir/default-1" "$dir/default-2" || fail "the default scene differs between 1 and 2 threads"
+$py "$compare" "$dir/default-1" "$dir/default-2" || fail "the default scene differs between 1 and 2 threads"
 
 # interruption: a run killed (SIGKILL) part-way, and one stopped by Ctrl-C (SIGINT), each resumed
 # with --resume, end exactly as the uninterrupted run. long.json keeps the default checkpoint
@@ -177,7 +149,7 @@ for signal in KILL INT; do
   fi
   "$spall" run --resume "$out" --quiet > /dev/null || fail "SIG$signal: --resume failed"
   [[ -s "$out/preview.png" ]] || fail "SIG$signal: the resumed run wrote no preview"
-  $py "$dir/same.py" "$dir/$whole" "$out" || fail "SIG$signal: the resumed run differs from the uninterrupted one"
+  $py "$compare" "$dir/$whole" "$out" || fail "SIG$signal: the resumed run differs from the uninterrupted one"
 done
 # a full disk: a 2 MB tmpfs, about half of what the run writes. A clear error naming the file,
 # every frame and history row written so far readable, no partial file left looking whole, and
@@ -197,7 +169,7 @@ if mount -t tmpfs -o size=2m tmpfs "$dir/small-disk" 2> /dev/null; then
   umount "$dir/small-disk"
   trap - EXIT
   "$spall" run --resume "$dir/full-disk" --quiet --no-preview > /dev/null || fail "full disk: --resume failed"
-  $py "$dir/same.py" "$dir/whole-every" "$dir/full-disk" || fail "full disk: the resumed run differs from the uninterrupted one"
+  $py "$compare" "$dir/whole-every" "$dir/full-disk" || fail "full disk: the resumed run differs from the uninterrupted one"
 else
   echo "skipped: the full-disk test needs to mount a 2 MB tmpfs (root); it could not"
 fi

@@ -2,7 +2,7 @@
 // plates, long runs, many charges at once and scenes randomised from seeds, with invariants
 // checked after every step. `spall_stress` runs the reduced suite (CI); `spall_stress --full`
 // the whole one (docs/testing.md). Exit status 1 when any invariant fails.
-#include <spall/dynamics/Dynamics.h>
+#include <spall/dynamics/Integrate.h>
 #include <spall/io/Scene.h>
 #include <spall/sim/Simulation.h>
 

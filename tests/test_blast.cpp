@@ -164,8 +164,8 @@ TEST(Range, BadInputIsRejected)
     EXPECT_THROW(kb(-1.0, 1.0), InputError);
     EXPECT_THROW(kb(1.0, 0.0), InputError);
     EXPECT_THROW(kb(std::nan(""), 1.0), InputError);
-    EXPECT_THROW(parseBurstType("underwater"), InputError);
-    EXPECT_THROW(parseBlastDataset("friedlander"), InputError);
+    EXPECT_THROW(parseEnum<BurstType>("underwater"), InputError);
+    EXPECT_THROW(parseEnum<BlastDataset>("friedlander"), InputError);
 }
 
 TEST(Sachs, HalfPressureAtmosphere)

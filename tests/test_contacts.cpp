@@ -1,7 +1,11 @@
 #include "TestUtil.h"
 
+#include <spall/dynamics/ContactSolver.h>
 #include <spall/dynamics/Contacts.h>
 #include <spall/dynamics/DebrisScenes.h>
+#include <spall/dynamics/Integrate.h>
+
+#include <spall/sim/Simulation.h>
 
 #include <gtest/gtest.h>
 
@@ -156,12 +160,9 @@ TEST(Collisions, HeadOnImpactMatchesRestitutionAndConservesMomentum)
         cs.friction = 0.0;
         const Eigen::Vector3d p0 = totalLinearMomentum(bodies), l0 = totalAngularMomentum(bodies);
         const double energy0 = totalKineticEnergy(bodies);
-        double t = 0;
-        for (int i = 0; i < 200; ++i) {
-            const double dt = speedLimitedStep(bodies, 1e-3);
-            stepBodies(bodies, emptySpace(), cs, noSleep(), Integrator::SemiImplicitEuler, t, dt);
-            t += dt;
-        }
+        Simulation sim = rigidBodySimulation(bodies, emptySpace(), cs, noSleep(), 1e-3);
+        for (int i = 0; i < 200; ++i) sim.step();
+        bodies = sim.bodies();
         EXPECT_NEAR(bodies[0].linearVelocityMS.x(), 0.5 * (1 - e) * v, 0.01 * v) << "e = " << e;
         EXPECT_NEAR(bodies[1].linearVelocityMS.x(), 0.5 * (1 + e) * v, 0.01 * v) << "e = " << e;
         EXPECT_LT((totalLinearMomentum(bodies) - p0).norm(), 1e-12 * p0.norm());
@@ -174,8 +175,9 @@ TEST(Collisions, EnergyNeverGrowsAndMomentumIsKeptInAFreeCluster)
 {
     // Tumbling fragments packed together in empty space, no external force: every contact may
     // only take energy out, and impulses come in equal and opposite pairs, so linear and angular
-    // momentum are kept. (Angular momentum is compared at the poses the impulses acted on: the
-    // position correction afterwards moves centres, which changes r x p but no velocity.)
+    // momentum are kept. (Angular momentum is compared right after the solve, at the poses the
+    // impulses acted on: the position correction afterwards moves centres, which changes r x p
+    // but no velocity.)
     DebrisScene cloud = makeExplosionCloud(27, 3, 0.1, 2.0, 11);
     std::vector<Body>& bodies = cloud.bodies;
     for (Body& b : bodies) b.linearVelocityMS = -b.linearVelocityMS;  // inwards: they collide
@@ -189,12 +191,12 @@ TEST(Collisions, EnergyNeverGrowsAndMomentumIsKeptInAFreeCluster)
         const double dt = speedLimitedStep(bodies, 1.0 / 240);
         for (Body& b : bodies) integrateBody(b, t, dt, Integrator::SemiImplicitEuler, none);
         const Eigen::Vector3d before = totalAngularMomentum(bodies);
-        std::vector<Eigen::Vector3d> positions;
-        for (const Body& b : bodies) positions.push_back(b.positionM);
-        contacts += resolveContacts(bodies, emptySpace(), CollisionSettings(), noSleep(), dt).bodyContacts;
-        std::vector<Body> atImpulse = bodies;
-        for (size_t k = 0; k < bodies.size(); ++k) atImpulse[k].positionM = positions[k];
-        worstAngular = std::max(worstAngular, (totalAngularMomentum(atImpulse) - before).norm());
+        const ContactSet found = detectContacts(bodies, emptySpace(), CollisionSettings(), noSleep());
+        contacts += found.bodyContacts;
+        ContactCache cold;  // no warm start: every impulse comes from this step's contacts
+        solveContacts(bodies, found, emptySpace(), CollisionSettings(), dt, cold);
+        worstAngular = std::max(worstAngular, (totalAngularMomentum(bodies) - before).norm());
+        correctPositions(bodies, found, emptySpace());
         t += dt;
         const double now = totalKineticEnergy(bodies);
         ASSERT_LE(now, energy * (1 + 1e-9)) << "step " << i;
@@ -225,16 +227,16 @@ TEST(Collisions, NoTunnellingAt500MetresPerSecond)
     bodies.back().linearVelocityMS = Eigen::Vector3d(v, 0, 0);
     bodies.push_back(cube(2, h, Eigen::Vector3d(7.0, 0, 1.0)));
     bodies.back().linearVelocityMS = Eigen::Vector3d(-v, 0, 0);
-    double t = 0;
-    for (int i = 0; i < 4000 && t < 0.02; ++i) {
-        const double dt = speedLimitedStep(bodies, 1.0 / 240);
-        stepBodies(bodies, world, CollisionSettings(), SleepSettings(), Integrator::SemiImplicitEuler, t, dt);
-        t += dt;
-        for (const Body& b : bodies) ASSERT_TRUE(b.positionM.allFinite() && b.linearVelocityMS.allFinite() && b.angularVelocityRadS.allFinite());
-        ASSERT_GT(bodies[0].positionM.z(), 0.0) << "through the ground";
-        ASSERT_LT(bodies[2].positionM.x(), 3.0) << "through the plate";
-        ASSERT_LT(bodies[3].positionM.x(), bodies[4].positionM.x()) << "through each other";
+    Simulation sim = rigidBodySimulation(bodies, world, CollisionSettings(), SleepSettings(), 1.0 / 240);
+    for (int i = 0; i < 4000 && sim.timeS() < 0.02; ++i) {
+        sim.step();
+        const std::vector<Body>& now = sim.bodies();
+        for (const Body& b : now) ASSERT_TRUE(b.positionM.allFinite() && b.linearVelocityMS.allFinite() && b.angularVelocityRadS.allFinite());
+        ASSERT_GT(now[0].positionM.z(), 0.0) << "through the ground";
+        ASSERT_LT(now[2].positionM.x(), 3.0) << "through the plate";
+        ASSERT_LT(now[3].positionM.x(), now[4].positionM.x()) << "through each other";
     }
+    const double t = sim.timeS();
     EXPECT_GE(t, 0.02);
 }
 
@@ -254,16 +256,17 @@ TEST(Collisions, PileOfAThousandFragmentsSettlesAndSleeps)
         wall.halfExtentM.z() *= 2.0;
         wall.centreM.z() *= 2.0;
     }
-    ContactCache cache;
-    double t = 0, peak = 0, energy = 0;
-    const double dt = 1.0 / 240;
+    Simulation sim = rigidBodySimulation(bodies, pile.world, CollisionSettings(), SleepSettings(), 1.0 / 240, true);
+    double peak = 0, energy = 0;
     for (int step = 0; step < 240 * 10; ++step) {
-        stepBodies(bodies, pile.world, CollisionSettings(), SleepSettings(), Integrator::SemiImplicitEuler, t, dt, &cache);
-        t += dt;
-        energy = totalKineticEnergy(bodies);
+        sim.step();
+        energy = 0;
+        for (const Body& b : sim.bodies()) energy += kineticEnergyJ(b);
         peak = std::max(peak, energy);
-        if (std::all_of(bodies.begin(), bodies.end(), [](const Body& b) { return b.asleep; })) break;
+        if (std::all_of(sim.bodies().begin(), sim.bodies().end(), [](const Body& b) { return b.asleep; })) break;
     }
+    const double t = sim.timeS();
+    bodies = sim.bodies();
     const auto asleep = std::count_if(bodies.begin(), bodies.end(), [](const Body& b) { return b.asleep; });
     EXPECT_GE(asleep, 990) << "after " << t << " s";
     EXPECT_LT(energy, 1e-4 * peak);
@@ -277,14 +280,10 @@ TEST(Collisions, SameResultWithOneAndTwoThreads)
     auto run = [&](int threads) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
         DebrisScene pile = makeDebrisPile(1500, 3, 0.05, 9);
-        double t = 0;
-        for (int i = 0; i < 40; ++i) {
-            const ContactStats stats =
-                stepBodies(pile.bodies, pile.world, CollisionSettings(), SleepSettings(), Integrator::SemiImplicitEuler, t, 1.0 / 240);
-            fewestContacts = std::min(fewestContacts, stats.solverContacts);
-            t += 1.0 / 240;
-        }
-        return pile.bodies;
+        Simulation sim = rigidBodySimulation(pile.bodies, pile.world, CollisionSettings(), SleepSettings(), 1.0 / 240, true);
+        sim.setStepObserver([&](const Simulation&, const StepRecord& r) { fewestContacts = std::min(fewestContacts, r.solverContacts); });
+        for (int i = 0; i < 40; ++i) sim.step();
+        return sim.bodies();
     };
     const std::vector<Body> one = run(1), two = run(2);
     EXPECT_GT(fewestContacts, 4096);

@@ -1,6 +1,9 @@
 #include "TestUtil.h"
 
-#include <spall/dynamics/Contacts.h>
+#include <spall/dynamics/Integrate.h>
+#include <spall/loads/BlastLoads.h>
+
+#include <spall/sim/Simulation.h>
 
 #include <gtest/gtest.h>
 
@@ -43,8 +46,8 @@ TEST(Integrators, BallisticFlightMatchesClosedForm)
         for (int i = 0; i < steps; ++i) integrateBody(b, i * dt, dt, integrator, f);
         // Euler methods are first order: position error g t dt / 2 exactly; RK4 is exact for a parabola.
         const double expected = integrator == Integrator::RungeKutta4 ? 0.0 : 0.5 * g.norm() * t * dt;
-        EXPECT_NEAR((b.positionM - exact).norm(), expected, 1e-9 + 1e-6 * expected) << toString(integrator);
-        EXPECT_NEAR((b.linearVelocityMS - (v0 + g * t)).norm(), 0.0, 1e-9) << toString(integrator);
+        EXPECT_NEAR((b.positionM - exact).norm(), expected, 1e-9 + 1e-6 * expected) << enumName(integrator);
+        EXPECT_NEAR((b.linearVelocityMS - (v0 + g * t)).norm(), 0.0, 1e-9) << enumName(integrator);
     }
 }
 
@@ -67,9 +70,9 @@ TEST(Integrators, TorqueFreeAsymmetricBodyConservesAngularMomentumAndFlips)
             EXPECT_NEAR(b.orientation.norm(), 1.0, 1e-12);
         }
         const Eigen::Vector3d l = b.worldInertiaKgM2() * b.angularVelocityRadS;
-        EXPECT_LT((l - l0).norm(), 1e-9 * l0.norm()) << toString(integrator);
-        EXPECT_LT(maxDrift, integrator == Integrator::RungeKutta4 ? 1e-6 : 2e-2) << toString(integrator);
-        EXPECT_LT(minBodyY, -4.0) << "the intermediate-axis flip did not appear with " << toString(integrator);
+        EXPECT_LT((l - l0).norm(), 1e-9 * l0.norm()) << enumName(integrator);
+        EXPECT_LT(maxDrift, integrator == Integrator::RungeKutta4 ? 1e-6 : 2e-2) << enumName(integrator);
+        EXPECT_LT(minBodyY, -4.0) << "the intermediate-axis flip did not appear with " << enumName(integrator);
     }
 }
 
@@ -88,7 +91,7 @@ TEST(BlastForce, FriedlanderPulseGivesTheAnalyticImpulse)
     for (double t = p.arrivalTimeS - 10 * dt; t < p.arrivalTimeS + p.positiveDurationS + p.negativeDurationS + 10 * dt; t += dt) {
         const auto windows = field.openWindows(t);
         const WrenchFunction f = [&](double time, const Eigen::Vector3d& x, const Eigen::Quaterniond& q, const Eigen::Vector3d&,
-                                     const Eigen::Vector3d&) { return blastWrench(b, x, q, field, windows, time, false); };
+                                     const Eigen::Vector3d&) { return BlastLoads(field, windows, LoadSettings{false}).wrench(b, time, x, q); };
         integrateBody(b, t, dt, Integrator::RungeKutta4, f);
     }
     EXPECT_NEAR(b.linearVelocityMS.x(), expected, 0.01 * std::abs(expected));
@@ -115,7 +118,7 @@ TEST(BlastForce, StressFromOneGramToOneTonne)
             const BlastParameters p = field.tableParameters(0, 0.5);
             dt = std::min({dt, 0.5 * h / field.shockSpeedMS(0, 0.5), p.positiveDurationS / 32});
             const WrenchFunction f = [&](double time, const Eigen::Vector3d& x, const Eigen::Quaterniond& q, const Eigen::Vector3d&,
-                                         const Eigen::Vector3d&) { return blastWrench(b, x, q, field, windows, time, true); };
+                                         const Eigen::Vector3d&) { return BlastLoads(field, windows, LoadSettings{true}).wrench(b, time, x, q); };
             const Eigen::Vector3d before = b.positionM;
             integrateBody(b, t, dt, Integrator::SemiImplicitEuler, f);
             t += dt;
@@ -130,12 +133,12 @@ TEST(BlastForce, StressFromOneGramToOneTonne)
 /// Steps a body alone in the world under gravity until it sleeps or `steps` have passed.
 Body stepAlone(Body b, const WorldSettings& world, double dt, int steps, double* lowestZ = nullptr)
 {
-    std::vector<Body> one{std::move(b)};
-    for (int i = 0; i < steps && !one[0].asleep; ++i) {
-        stepBodies(one, world, CollisionSettings(), SleepSettings(), Integrator::SemiImplicitEuler, i * dt, dt);
-        if (lowestZ) *lowestZ = std::min(*lowestZ, one[0].positionM.z());
+    Simulation sim = rigidBodySimulation({std::move(b)}, world, CollisionSettings(), SleepSettings(), dt, true);
+    for (int i = 0; i < steps && !sim.bodies()[0].asleep; ++i) {
+        sim.step();
+        if (lowestZ) *lowestZ = std::min(*lowestZ, sim.bodies()[0].positionM.z());
     }
-    return std::move(one[0]);
+    return sim.bodies()[0];
 }
 
 TEST(Ground, DroppedBoxComesToRestOnTheGroundAndSleeps)

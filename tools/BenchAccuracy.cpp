@@ -1,7 +1,8 @@
 #include "BenchAccuracy.h"
 
 #include <spall/blast/Blast.h>
-#include <spall/dynamics/Dynamics.h>
+#include <spall/dynamics/Integrate.h>
+#include <spall/loads/BlastLoads.h>
 #include <spall/fracture/Fracture.h>
 #include <spall/io/Png.h>
 #include <spall/io/Scene.h>
@@ -50,7 +51,7 @@ void integratorStudy(std::vector<Row>& rows)
 {
     const Integrator integrators[] = {Integrator::ExplicitEuler, Integrator::SemiImplicitEuler, Integrator::RungeKutta4};
     for (Integrator integrator : integrators) {
-        const std::string name = toString(integrator);
+        const std::string name = enumName(integrator);
         // Ballistic flight for 1 s: x(t) = x0 + v0 t + g t^2 / 2.
         for (int n = 15; n <= 3840; n *= 2) {
             Body b = voxelBox(2, 2, 2, 0.1, 1000.0);
@@ -93,7 +94,7 @@ void integratorStudy(std::vector<Row>& rows)
                 const double t = p.arrivalTimeS + i * dt;
                 const auto windows = field.openWindows(t);
                 const WrenchFunction f = [&](double time, const Eigen::Vector3d& x, const Eigen::Quaterniond& q, const Eigen::Vector3d&,
-                                             const Eigen::Vector3d&) { return blastWrench(b, x, q, field, windows, time, false); };
+                                             const Eigen::Vector3d&) { return BlastLoads(field, windows, LoadSettings{false}).wrench(b, time, x, q); };
                 integrateBody(b, t, dt, integrator, f);
             }
             rows.push_back({"integrator", "friedlander pulse", name, dt, "relative_velocity_error",

@@ -1,6 +1,6 @@
 #include "BenchCollisions.h"
 
-#include <spall/dynamics/Contacts.h>
+#include <spall/sim/Simulation.h>
 #include <spall/dynamics/DebrisScenes.h>
 #include <spall/io/VdbIo.h>
 
@@ -163,9 +163,9 @@ int benchCollisions(bool json, long maxBoundaryVoxels)
                                                : makeExplosionCloud(fragments, edge, kVoxelSizeM, kExplosionSpeedMS, 1);
             if (base.boundaryVoxels > maxBoundaryVoxels) break;
             if (scene == "pile") {
-                ContactCache cache;
-                for (double t = 0; t < kSettleS; t += kStepS)
-                    stepBodies(base.bodies, base.world, CollisionSettings(), noSleep, Integrator::SemiImplicitEuler, t, kStepS, &cache);
+                Simulation settle = rigidBodySimulation(base.bodies, base.world, CollisionSettings(), noSleep, kStepS, true);
+                settle.advanceTo(kSettleS);
+                base.bodies = settle.bodies();
             }
             for (const std::string& method : methods) {
                 if (method == "bullet" && scene != "pile") continue;
@@ -186,15 +186,10 @@ int benchCollisions(bool json, long maxBoundaryVoxels)
                     stepsPerS = measureStepsPerSecond([&] { world.step(); });
 #endif
                 } else {
-                    DebrisScene copy = base;
                     CollisionSettings collisions;
-                    collisions.method = parseCollisionMethod(method);
-                    ContactCache cache;
-                    double t = 0;
-                    stepsPerS = measureStepsPerSecond([&] {
-                        stepBodies(copy.bodies, copy.world, collisions, noSleep, Integrator::SemiImplicitEuler, t, kStepS, &cache);
-                        t += kStepS;
-                    });
+                    collisions.method = parseEnum<CollisionMethod>(method);
+                    Simulation sim = rigidBodySimulation(base.bodies, base.world, collisions, noSleep, kStepS, true);
+                    stepsPerS = measureStepsPerSecond([&] { sim.step(); });
                 }
                 rows.push_back({scene, method, base.boundaryVoxels, stepsPerS});
                 lastStepS[method] = 1.0 / stepsPerS;

@@ -124,11 +124,22 @@ int runVoxelise(const std::string& input, const std::string& primitiveSpec, cons
     return 0;
 }
 
+/// An enum-valued option; a bad value is an error naming the option.
+template <typename E>
+E parseOption(const std::string& option, const std::string& value)
+{
+    try {
+        return spall::parseEnum<E>(value);
+    } catch (const spall::InputError& e) {
+        throw spall::InputError(option + ": " + e.what());
+    }
+}
+
 int runBlast(double tntKg, double distanceM, const std::string& burstName, const std::string& datasetName, bool json,
              const std::string& curvePath)
 {
-    const spall::BurstType burst = spall::parseBurstType(burstName);
-    const spall::BlastDataset dataset = spall::parseBlastDataset(datasetName);
+    const auto burst = parseOption<spall::BurstType>("--burst", burstName);
+    const auto dataset = parseOption<spall::BlastDataset>("--dataset", datasetName);
     const spall::BlastParameters p = spall::blastParameters(dataset, burst, tntKg, distanceM);
     std::string warning;
     if (p.status == spall::RangeStatus::ClampedNear)

@@ -260,26 +260,6 @@ CoreValues coreValues(BlastDataset dataset, BurstType burst, double z)
 
 }  // namespace
 
-BurstType parseBurstType(const std::string& name)
-{
-    if (name == "free-air") return BurstType::FreeAir;
-    if (name == "surface") return BurstType::Surface;
-    throw InputError("burst type '" + name + "' is unknown (expected free-air or surface)");
-}
-
-BlastDataset parseBlastDataset(const std::string& name)
-{
-    if (name == "kingery-bulmash") return BlastDataset::KingeryBulmash;
-    if (name == "kinney-graham") return BlastDataset::KinneyGraham;
-    throw InputError("blast dataset '" + name + "' is unknown (expected kingery-bulmash or kinney-graham)");
-}
-
-std::string toString(BurstType burst) { return burst == BurstType::FreeAir ? "free-air" : "surface"; }
-std::string toString(BlastDataset dataset)
-{
-    return dataset == BlastDataset::KingeryBulmash ? "kingery-bulmash" : "kinney-graham";
-}
-
 double friedlanderImpulseFraction(double b)
 {
     if (std::abs(b) < 1e-3) {

@@ -10,24 +10,6 @@
 
 namespace spall {
 
-FractureAlgorithm parseFractureAlgorithm(const std::string& name)
-{
-    if (name == "yield-limit") return FractureAlgorithm::YieldLimit;
-    if (name == "davison-stevens") return FractureAlgorithm::DavisonStevens;
-    if (name == "none") return FractureAlgorithm::None;
-    throw InputError("fracture algorithm '" + name + "' is unknown (expected yield-limit, davison-stevens or none)");
-}
-
-std::string toString(FractureAlgorithm algorithm)
-{
-    switch (algorithm) {
-    case FractureAlgorithm::YieldLimit: return "yield-limit";
-    case FractureAlgorithm::DavisonStevens: return "davison-stevens";
-    case FractureAlgorithm::None: return "none";
-    }
-    return "none";
-}
-
 double linkRandom(uint64_t seed, const openvdb::Coord& ijk, int axis)
 {
     // splitmix64 finaliser over a combination of the inputs.
@@ -39,15 +21,6 @@ double linkRandom(uint64_t seed, const openvdb::Coord& ijk, int axis)
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
     z ^= z >> 31;
     return double(z >> 11) * (1.0 / 9007199254740992.0);
-}
-
-bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows)
-{
-    for (const OpenWindow& w : windows) {
-        const double d = (body.positionM - field.charges()[w.charge].positionM).norm();
-        if (d + body.boundingRadiusM >= w.minDistanceM && d - body.boundingRadiusM <= w.maxDistanceM) return true;
-    }
-    return false;
 }
 
 namespace {
@@ -218,6 +191,8 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
             }
         }
     }
+    body.linkCount -= result.brokenLinks;
+    if (result.brokenAnchors > 0) body.anchored = hasAnchoredVoxel(*body.grid);
     return result;
 }
 

@@ -303,30 +303,24 @@ Scene parseScene(const std::string& text, const std::string& sourceName, const s
         charge.positionM = c.vector3("position_m", charge.positionM);
         charge.tntKg = c.number("tnt_kg", charge.tntKg, 0, 1e9, true);
         charge.detonationTimeS = c.number("detonation_time_s", charge.detonationTimeS, 0, 1e5);
-        charge.burst = c.checked("burst", [&] { return parseBurstType(c.string("burst", toString(charge.burst))); });
+        charge.burst = c.checked("burst", [&] { return parseEnum<decltype(charge.burst)>(c.string("burst", enumName(charge.burst))); });
         scene.charges.push_back(charge);
     });
     r.object("blast", [&](ObjectReader& b) {
-        scene.blast.dataset = b.checked("dataset", [&] { return parseBlastDataset(b.string("dataset", toString(scene.blast.dataset))); });
+        scene.blast.dataset = b.checked("dataset", [&] { return parseEnum<decltype(scene.blast.dataset)>(b.string("dataset", enumName(scene.blast.dataset))); });
         scene.blast.tableNodesPerDecade = static_cast<int>(b.integer("table_nodes_per_decade", scene.blast.tableNodesPerDecade, 2, 100000));
     });
     r.object("fracture", [&](ObjectReader& f) {
         FractureSettings& fs = scene.fracture;
-        fs.algorithm = f.checked("algorithm", [&] { return parseFractureAlgorithm(f.string("algorithm", toString(fs.algorithm))); });
+        fs.algorithm = f.checked("algorithm", [&] { return parseEnum<decltype(fs.algorithm)>(f.string("algorithm", enumName(fs.algorithm))); });
         fs.weakening = f.boolean("weakening", fs.weakening);
         fs.orientation = f.boolean("orientation", fs.orientation);
         fs.minFragmentVoxels = f.integer("min_fragment_voxels", fs.minFragmentVoxels, 1, INT64_MAX);
-        const std::string policy = f.string("small_fragments", fs.smallFragments == SmallFragmentPolicy::Keep ? "keep" : "dust");
-        if (policy == "keep")
-            fs.smallFragments = SmallFragmentPolicy::Keep;
-        else if (policy == "dust")
-            fs.smallFragments = SmallFragmentPolicy::Dust;
-        else
-            f.fail(f.keyPath("small_fragments"), "'" + policy + "' is unknown (expected keep or dust)");
+        fs.smallFragments = f.checked("small_fragments", [&] { return parseEnum<SmallFragmentPolicy>(f.string("small_fragments", enumName(fs.smallFragments))); });
     });
     r.object("solver", [&](ObjectReader& s) {
         TimeStepSettings& ts = scene.timeStep;
-        ts.integrator = s.checked("integrator", [&] { return parseIntegrator(s.string("integrator", toString(ts.integrator))); });
+        ts.integrator = s.checked("integrator", [&] { return parseEnum<decltype(ts.integrator)>(s.string("integrator", enumName(ts.integrator))); });
         ts.maxTimeStepS = s.number("max_time_step_s", ts.maxTimeStepS, 0, 10, true);
         ts.minTimeStepS = s.number("min_time_step_s", ts.minTimeStepS, 0, ts.maxTimeStepS, true);
         ts.frontFraction = s.number("front_fraction_voxels", ts.frontFraction, 0, 100, true);
@@ -334,14 +328,14 @@ Scene parseScene(const std::string& text, const std::string& sourceName, const s
         ts.speedFraction = s.number("speed_fraction_voxels", ts.speedFraction, 0, 100, true);
         scene.world.linearDragPerS = s.number("linear_drag_per_s", scene.world.linearDragPerS, 0, 1e6);
         scene.world.angularDragPerS = s.number("angular_drag_per_s", scene.world.angularDragPerS, 0, 1e6);
-        scene.world.reflectedPressure = s.boolean("reflected_pressure", scene.world.reflectedPressure);
+        scene.loads.reflectedPressure = s.boolean("reflected_pressure", scene.loads.reflectedPressure);
         scene.sleep.enabled = s.boolean("sleep", scene.sleep.enabled);
         scene.sleep.speedMS = s.number("sleep_speed_m_s", scene.sleep.speedMS, 0, 1e3);
         scene.sleep.timeS = s.number("sleep_time_s", scene.sleep.timeS, 0, 1e5);
     });
     r.object("collisions", [&](ObjectReader& c) {
         CollisionSettings& cs = scene.collisions;
-        cs.method = c.checked("method", [&] { return parseCollisionMethod(c.string("method", toString(cs.method))); });
+        cs.method = c.checked("method", [&] { return parseEnum<decltype(cs.method)>(c.string("method", enumName(cs.method))); });
         cs.restitution = c.number("restitution", cs.restitution, 0, 1);
         cs.friction = c.number("friction", cs.friction, 0, 100);
         cs.solverIterations = static_cast<int>(c.integer("solver_iterations", cs.solverIterations, 1, 1000));
@@ -419,15 +413,15 @@ nlohmann::json sceneToJson(const Scene& scene)
     json charges = json::array();
     for (const Charge& c : scene.charges)
         charges.push_back({{"position_m", vec(c.positionM)}, {"tnt_kg", c.tntKg}, {"detonation_time_s", c.detonationTimeS},
-                           {"burst", toString(c.burst)}});
+                           {"burst", enumName(c.burst)}});
     j["charges"] = charges;
-    j["blast"] = {{"dataset", toString(scene.blast.dataset)}, {"table_nodes_per_decade", scene.blast.tableNodesPerDecade}};
+    j["blast"] = {{"dataset", enumName(scene.blast.dataset)}, {"table_nodes_per_decade", scene.blast.tableNodesPerDecade}};
     const FractureSettings& f = scene.fracture;
-    j["fracture"] = {{"algorithm", toString(f.algorithm)}, {"weakening", f.weakening}, {"orientation", f.orientation},
+    j["fracture"] = {{"algorithm", enumName(f.algorithm)}, {"weakening", f.weakening}, {"orientation", f.orientation},
                      {"min_fragment_voxels", f.minFragmentVoxels},
-                     {"small_fragments", f.smallFragments == SmallFragmentPolicy::Keep ? "keep" : "dust"}};
+                     {"small_fragments", enumName(f.smallFragments)}};
     const TimeStepSettings& t = scene.timeStep;
-    j["solver"] = {{"integrator", toString(t.integrator)},
+    j["solver"] = {{"integrator", enumName(t.integrator)},
                    {"max_time_step_s", t.maxTimeStepS},
                    {"min_time_step_s", t.minTimeStepS},
                    {"front_fraction_voxels", t.frontFraction},
@@ -435,12 +429,12 @@ nlohmann::json sceneToJson(const Scene& scene)
                    {"speed_fraction_voxels", t.speedFraction},
                    {"linear_drag_per_s", scene.world.linearDragPerS},
                    {"angular_drag_per_s", scene.world.angularDragPerS},
-                   {"reflected_pressure", scene.world.reflectedPressure},
+                   {"reflected_pressure", scene.loads.reflectedPressure},
                    {"sleep", scene.sleep.enabled},
                    {"sleep_speed_m_s", scene.sleep.speedMS},
                    {"sleep_time_s", scene.sleep.timeS}};
     const CollisionSettings& cs = scene.collisions;
-    j["collisions"] = {{"method", toString(cs.method)},
+    j["collisions"] = {{"method", enumName(cs.method)},
                        {"restitution", cs.restitution},
                        {"friction", cs.friction},
                        {"solver_iterations", cs.solverIterations},

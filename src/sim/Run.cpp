@@ -1,5 +1,6 @@
 #include <spall/sim/Run.h>
 
+#include <spall/dynamics/Integrate.h>
 #include <spall/io/History.h>
 #include <spall/io/VdbIo.h>
 #include <spall/render/Render.h>
@@ -156,7 +157,7 @@ RunReport runScene(const Scene& scene, const RunOptions& options, const std::fun
         header.voxelSizeM = scene.voxelSizeM;
         header.seed = scene.seed;
         header.sceneJson = resolvedScene.dump();
-        for (const Charge& c : scene.charges) header.charges.push_back({c.positionM, c.tntKg, c.detonationTimeS, toString(c.burst)});
+        for (const Charge& c : scene.charges) header.charges.push_back({c.positionM, c.tntKg, c.detonationTimeS, enumName(c.burst)});
         history = std::make_unique<HistoryWriter>((dir / "history.h5").string(), header);
     }
     return runFrames(sim, 0, frameCount, 0, options, onFrame, std::move(history));

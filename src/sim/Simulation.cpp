@@ -1,7 +1,9 @@
 #include <spall/sim/Simulation.h>
 
+#include <spall/dynamics/Integrate.h>
+#include <spall/dynamics/Sleep.h>
 #include <spall/io/VdbIo.h>
-
+#include <spall/loads/BlastLoads.h>
 
 #include <algorithm>
 #include <cmath>
@@ -131,76 +133,93 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
     return std::max(dt * mState.penetrationStepScale, ts.minTimeStepS);
 }
 
-void Simulation::advanceTo(double target)
+
+void Simulation::advanceTo(double targetS)
 {
-    while (mState.timeS < target) {
-        const std::vector<OpenWindow> windows = mField->openWindows(mState.timeS);
-        const double remaining = target - mState.timeS;
-        double dt = chooseTimeStep(windows);
-        // Land exactly on the target without a sliver of a step just before it.
-        const bool last = dt >= remaining;
-        if (last)
-            dt = remaining;
-        else if (remaining < 2.0 * dt)
-            dt = 0.5 * remaining;
-        if (mObserver) {
-            mRecord = StepRecord{0.0, dt, false};
-            for (const Body& body : mState.bodies) mRecord.blastOpen = mRecord.blastOpen || bodyInWindows(body, *mField, windows);
-        }
-        fractureStep(windows, dt);
-        motionStep(windows, dt);
-        mState.timeS = last ? target : mState.timeS + dt;
-        ++mStats.steps;
-        mStats.minDtS = std::min(mStats.minDtS, dt);
-        if (mObserver) {
-            mRecord.timeS = mState.timeS;
-            mObserver(*this, mRecord);
-        }
+    while (mState.timeS < targetS) step(targetS);
+}
+
+void Simulation::step(double targetS)
+{
+    const std::vector<OpenWindow> windows = mField->openWindows(mState.timeS);
+    // Choose dt, landing exactly on the target without a sliver of a step just before it.
+    const double remaining = targetS - mState.timeS;
+    const double chosen = chooseTimeStep(windows);
+    const bool last = chosen >= remaining;
+    const double dt = last ? remaining : remaining < 2.0 * chosen ? 0.5 * remaining : chosen;
+    if (mObserver) {
+        mRecord = StepRecord{0.0, dt, false};
+        for (const Body& body : mState.bodies) mRecord.blastOpen = mRecord.blastOpen || bodyInWindows(body, *mField, windows);
+    }
+
+    const std::vector<char> cracked = fractureBodies(windows, dt);
+    splitBodies(cracked);
+
+    const BlastLoads blast(*mField, windows, mScene.loads);
+    const std::vector<char> loaded = blast.loadedBodies(mState.bodies);
+    wakeLoadedBodies(mState.bodies, loaded);
+    integrateBodies(mState.bodies, loaded, blast, mScene.world, mScene.timeStep.integrator, mState.timeS, dt);
+
+    const ContactSet contacts = detectContacts(mState.bodies, mScene.world, mScene.collisions, mScene.sleep);
+    solveContacts(mState.bodies, contacts, mScene.world, mScene.collisions, dt, mState.contactCache);
+    correctPositions(mState.bodies, contacts, mScene.world);
+    updateSleep(mState.bodies, contacts.touching, loaded, mScene.sleep, dt);
+    adaptStepToPenetration(contacts.maxPenetrationM);
+    if (mObserver) mRecord.solverContacts = contacts.solverContacts;
+
+    mState.timeS = last ? targetS : mState.timeS + dt;
+    ++mStats.steps;
+    mStats.minDtS = std::min(mStats.minDtS, dt);
+    if (mObserver) {
+        mRecord.timeS = mState.timeS;
+        mObserver(*this, mRecord);
     }
 }
 
-void Simulation::fractureStep(const std::vector<OpenWindow>& windows, double dt)
+std::vector<char> Simulation::fractureBodies(const std::vector<OpenWindow>& windows, double dt)
 {
-    if (windows.empty() || mScene.fracture.algorithm == FractureAlgorithm::None) return;
+    std::vector<char> cracked(mState.bodies.size(), 0);
+    if (windows.empty() || mScene.fracture.algorithm == FractureAlgorithm::None) return cracked;
     // The pressure table is built only when some body can fracture inside a window: windows
     // stay open far away long after the blast has passed every body.
     std::optional<PressureSnapshot> pressure;
-    std::vector<char> changed(mState.bodies.size(), 0);
     for (size_t i = 0; i < mState.bodies.size(); ++i) {
         Body& body = mState.bodies[i];
         if (body.linkCount == 0 && !body.anchored) continue;
         if (!bodyInWindows(body, *mField, windows)) continue;
         if (!pressure) pressure.emplace(*mField, mState.timeS);
-        body.asleep = false;
-        body.restTimeS = 0;
         const LoadResult r = loadLinks(body, mState.damage[i].get(), mScene.materials[body.materialIndex], *pressure, dt, mScene.fracture);
         mStats.brokenLinks += r.brokenLinks;
-        body.linkCount -= r.brokenLinks;
-        if (r.brokenAnchors > 0) body.anchored = hasAnchoredVoxel(*body.grid);
-        changed[i] = r.brokenLinks > 0 || r.brokenAnchors > 0;
+        cracked[i] = r.brokenLinks > 0 || r.brokenAnchors > 0;
     }
-    if (std::none_of(changed.begin(), changed.end(), [](char c) { return c; })) return;
+    return cracked;
+}
 
-    const auto momenta = [this](Eigen::Vector3d& linear, Eigen::Vector3d& angular) {
-        linear.setZero();
-        angular.setZero();
-        for (const Body& b : mState.bodies) {
-            linear += linearMomentum(b);
-            angular += angularMomentumAboutOrigin(b);
-        }
-        for (const DustRecord& d : mState.dust) {
-            linear += d.linearMomentum;
-            angular += d.angularMomentumAboutOrigin;
-        }
-    };
-    if (mObserver) momenta(mRecord.linearMomentumBeforeSplit, mRecord.angularMomentumBeforeSplit);
-    // Split only bodies that lost links or anchors, in body order; parts replace their parent.
+std::pair<Eigen::Vector3d, Eigen::Vector3d> Simulation::totalMomenta() const
+{
+    Eigen::Vector3d linear = Eigen::Vector3d::Zero(), angular = Eigen::Vector3d::Zero();
+    for (const Body& b : mState.bodies) {
+        linear += linearMomentum(b);
+        angular += angularMomentumAboutOrigin(b);
+    }
+    for (const DustRecord& d : mState.dust) {
+        linear += d.linearMomentum;
+        angular += d.angularMomentumAboutOrigin;
+    }
+    return {linear, angular};
+}
+
+void Simulation::splitBodies(const std::vector<char>& cracked)
+{
+    if (std::none_of(cracked.begin(), cracked.end(), [](char c) { return c; })) return;
+    if (mObserver) std::tie(mRecord.linearMomentumBeforeSplit, mRecord.angularMomentumBeforeSplit) = totalMomenta();
+    // Parts replace their parent.
     std::vector<Body> next;
     std::vector<DamageGrid::Ptr> nextDamage;
     next.reserve(mState.bodies.size());
     for (size_t i = 0; i < mState.bodies.size(); ++i) {
         std::vector<SplitPart> parts;
-        if (changed[i]) parts = splitBody(mState.bodies[i], mState.damage[i].get());
+        if (cracked[i]) parts = splitBody(mState.bodies[i], mState.damage[i].get());
         if (parts.empty()) {
             next.push_back(std::move(mState.bodies[i]));
             nextDamage.push_back(mState.damage[i]);
@@ -213,7 +232,7 @@ void Simulation::fractureStep(const std::vector<OpenWindow>& windows, double dt)
             const bool small = part.body.mass.voxelCount < mScene.fracture.minFragmentVoxels;
             if (small && mScene.fracture.smallFragments == SmallFragmentPolicy::Dust && !part.body.anchored) {
                 mState.dust.push_back({mState.timeS, mState.bodies[i].id, part.body.mass.voxelCount, part.body.mass.massKg,
-                                 linearMomentum(part.body), angularMomentumAboutOrigin(part.body)});
+                                       linearMomentum(part.body), angularMomentumAboutOrigin(part.body)});
                 continue;
             }
             part.body.id = mState.nextId++;
@@ -227,26 +246,32 @@ void Simulation::fractureStep(const std::vector<OpenWindow>& windows, double dt)
     mState.damage = std::move(nextDamage);
     if (mObserver) {
         mRecord.split = true;
-        momenta(mRecord.linearMomentumAfterSplit, mRecord.angularMomentumAfterSplit);
+        std::tie(mRecord.linearMomentumAfterSplit, mRecord.angularMomentumAfterSplit) = totalMomenta();
     }
 }
 
-void Simulation::motionStep(const std::vector<OpenWindow>& windows, double dt)
+void Simulation::adaptStepToPenetration(double maxPenetrationM)
 {
-    // The wrench is evaluated at each integrator stage's own time, from the field directly.
-    ExternalLoad blast;
-    blast.loaded = [&](const Body& body) { return bodyInWindows(body, *mField, windows); };
-    blast.wrench = [&](const Body& body, double t, const Eigen::Vector3d& x, const Eigen::Quaterniond& q) {
-        return blastWrench(body, x, q, *mField, windows, t, mScene.world.reflectedPressure);
-    };
-    const ContactStats contacts = stepBodies(mState.bodies, mScene.world, mScene.collisions, mScene.sleep,
-                                             mScene.timeStep.integrator, mState.timeS, dt, &mState.contactCache, &blast);
-    mStats.contacts += contacts.staticContacts + contacts.bodyContacts;
-    // The paper's adaptive step: halve while bodies interpenetrate beyond the tolerance.
-    if (contacts.maxPenetrationM > mScene.collisions.penetrationToleranceVoxels * mScene.voxelSizeM)
+    if (maxPenetrationM > mScene.collisions.penetrationToleranceVoxels * mScene.voxelSizeM)
         mState.penetrationStepScale = std::max(0.5 * mState.penetrationStepScale, 1.0 / 64.0);
     else
         mState.penetrationStepScale = std::min(2.0 * mState.penetrationStepScale, 1.0);
+}
+
+Simulation rigidBodySimulation(std::vector<Body> bodies, const WorldSettings& world, const CollisionSettings& collisions,
+                               const SleepSettings& sleep, double maxStepS, bool fixedStep)
+{
+    Scene scene;
+    scene.world = world;
+    scene.collisions = collisions;
+    scene.sleep = sleep;
+    scene.fracture.algorithm = FractureAlgorithm::None;
+    scene.timeStep.maxTimeStepS = maxStepS;
+    if (fixedStep) scene.timeStep.minTimeStepS = maxStepS;
+    if (!bodies.empty()) scene.voxelSizeM = bodies.front().voxelSizeM;
+    SimulationState state;
+    state.bodies = std::move(bodies);
+    return Simulation(scene, std::move(state));
 }
 
 }  // namespace spall

@@ -3,6 +3,7 @@
 // Formulas, coefficients and check values: shared/reference/blast-data.md (sources cited in Blast.cpp).
 #pragma once
 
+#include <spall/blast/Settings.h>
 #include <spall/core/Error.h>
 
 #include <Eigen/Core>
@@ -16,18 +17,6 @@
 
 namespace spall {
 
-enum class BurstType { FreeAir, Surface };
-enum class BlastDataset { KingeryBulmash, KinneyGraham };
-
-BurstType parseBurstType(const std::string& name);        ///< "free-air" | "surface"
-BlastDataset parseBlastDataset(const std::string& name);  ///< "kingery-bulmash" | "kinney-graham"
-std::string toString(BurstType burst);
-std::string toString(BlastDataset dataset);
-
-struct Atmosphere {
-    double pressurePa = 101325.0;   ///< ambient pressure (unit: Pa)
-    double temperatureK = 288.15;   ///< ambient temperature (unit: K)
-};
 
 /// Where a scaled distance lies relative to the dataset's fitted range.
 enum class RangeStatus { Inside, ClampedNear, ExtrapolatedFar };
@@ -82,20 +71,6 @@ inline double negativePhaseOverpressure(double negativePeakPa, double negativeDu
 double overpressureAt(const BlastParameters& p, double timeSinceDetonationS);
 
 /// A charge of TNT.
-struct Charge {
-    Eigen::Vector3d positionM = Eigen::Vector3d::Zero();
-    double tntKg = 1.0;
-    double detonationTimeS = 0.0;
-    BurstType burst = BurstType::Surface;
-};
-
-struct BlastSettings {
-    BlastDataset dataset = BlastDataset::KingeryBulmash;
-    /// Table nodes per decade of scaled distance; see docs/accuracy.md for the error it buys.
-    int tableNodesPerDecade = 128;
-    Atmosphere atmosphere;
-};
-
 /// log2(x) for finite x > 0 without a libm call: exponent bits plus a 4097-entry mantissa table
 /// with linear interpolation (absolute error below 1.1e-8).
 double fastLog2(double x);

@@ -2,7 +2,8 @@
 // fragments resting on each other in a box, and the same fragments flying apart.
 #pragma once
 
-#include <spall/dynamics/Dynamics.h>
+#include <spall/dynamics/Settings.h>
+#include <spall/voxel/Body.h>
 
 #include <cstdint>
 #include <vector>

@@ -4,31 +4,13 @@
 
 #include <spall/blast/Blast.h>
 #include <spall/fracture/Material.h>
+#include <spall/fracture/Settings.h>
 #include <spall/voxel/Body.h>
 
 #include <cstdint>
 #include <vector>
 
 namespace spall {
-
-enum class FractureAlgorithm {
-    YieldLimit,      ///< variable limit (1), with weakening (2) and orientation (3) as switched
-    DavisonStevens,  ///< damage accumulation (4)
-    None,            ///< unbreakable
-};
-FractureAlgorithm parseFractureAlgorithm(const std::string& name);
-std::string toString(FractureAlgorithm algorithm);
-
-enum class SmallFragmentPolicy { Keep, Dust };
-
-struct FractureSettings {
-    FractureAlgorithm algorithm = FractureAlgorithm::YieldLimit;
-    bool weakening = true;    ///< algorithm 2 on top of 1
-    bool orientation = true;  ///< algorithm 3 on top of 1
-    uint64_t seed = 1;        ///< yield limits derive from a hash of (seed, voxel, axis)
-    int64_t minFragmentVoxels = 1;  ///< smaller pieces follow smallFragments (unit: voxels)
-    SmallFragmentPolicy smallFragments = SmallFragmentPolicy::Keep;
-};
 
 /// Link bits 8..31 of a voxel's value: for each +x, +y, +z link, 1 + the index of the charge that
 /// first loaded it beyond its weakened limit (0: never). Kept in the link grid because it is the
@@ -56,13 +38,10 @@ struct LoadResult {
 
 /// Loads every intact link of `body` where the blast is now (`pressure`, a snapshot at the
 /// step's start) and breaks or weakens it (generate in parallel over leaves, apply in leaf
-/// order). `damage` is the per-voxel Davison–Stevens damage grid (same topology as the body;
+/// order); the body's link count and anchored flag follow. `damage` is the per-voxel Davison–Stevens damage grid (same topology as the body;
 /// only for that algorithm); `dtS` is the step it accumulates over.
 LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, const PressureSnapshot& pressure, double dtS,
                      const FractureSettings& settings);
-
-/// True when the body's bounding sphere meets some open window's distance range.
-bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows);
 
 /// A piece that left its parent.
 struct SplitPart {

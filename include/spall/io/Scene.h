@@ -2,10 +2,11 @@
 // types and out-of-range values are errors naming the file, the key and the reason.
 #pragma once
 
-#include <spall/blast/Blast.h>
-#include <spall/dynamics/Contacts.h>
-#include <spall/fracture/Fracture.h>
+#include <spall/blast/Settings.h>
+#include <spall/dynamics/Settings.h>
 #include <spall/fracture/Material.h>
+#include <spall/fracture/Settings.h>
+#include <spall/loads/Settings.h>
 #include <spall/voxel/Voxelise.h>
 
 #include <nlohmann/json.hpp>
@@ -49,6 +50,7 @@ struct Scene {
     WorldSettings world;
     SleepSettings sleep;
     BlastSettings blast;
+    LoadSettings loads;
     FractureSettings fracture;
     TimeStepSettings timeStep;
     CollisionSettings collisions;

@@ -1,15 +1,16 @@
-// The step (DESIGN §3): blast field -> link loading -> breaks -> split; face forces -> integrate
-// -> ground contacts -> sleep. Frames are written by runScene.
+// The simulation and its step: Simulation::step lists the phases of a step in order, each a call
+// into its own stage (docs/architecture.md, "The step"). Frames are written by runScene.
 #pragma once
 
 #include <spall/blast/Blast.h>
-#include <spall/dynamics/Contacts.h>
+#include <spall/dynamics/ContactSolver.h>
 #include <spall/fracture/Events.h>
 #include <spall/fracture/Fracture.h>
 #include <spall/io/Scene.h>
 #include <spall/voxel/Body.h>
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -21,7 +22,6 @@ struct StepStats {
     int64_t steps = 0;
     double minDtS = 0;
     int64_t brokenLinks = 0;
-    int64_t contacts = 0;
 };
 
 /// Everything a simulation carries from one step to the next besides its scene: what a
@@ -46,6 +46,7 @@ struct StepRecord {
     double dtS = 0;
     bool blastOpen = false;  ///< some body was inside an open pressure window during the step
     bool split = false;      ///< a body split this step
+    int64_t solverContacts = 0;  ///< contact points the solver worked on
     Eigen::Vector3d linearMomentumBeforeSplit = Eigen::Vector3d::Zero();
     Eigen::Vector3d linearMomentumAfterSplit = Eigen::Vector3d::Zero();
     Eigen::Vector3d angularMomentumBeforeSplit = Eigen::Vector3d::Zero();  ///< about the origin
@@ -66,6 +67,11 @@ public:
     /// Steps (adaptively) until time t exactly.
     void advanceTo(double timeS);
 
+    /// One step toward `targetS` (landing on it when it is near; by default the step is the one
+    /// chosen). Its phases, in order: open windows, choose dt, fracture, split, loads, integrate,
+    /// detect, solve, correct, sleep.
+    void step(double targetS = std::numeric_limits<double>::infinity());
+
     double timeS() const { return mState.timeS; }
     const std::vector<Body>& bodies() const { return mState.bodies; }
     const std::vector<FractureEvent>& fractureEvents() const { return mState.events; }
@@ -78,13 +84,19 @@ public:
     /// Called after every step (costs nothing when unset).
     void setStepObserver(std::function<void(const Simulation&, const StepRecord&)> observer) { mObserver = std::move(observer); }
 
-    /// Chooses the next step: fine while a front crosses a body, coarse in free flight, and
-    /// never letting a voxel travel more than a fraction of a voxel.
+    /// Chooses the next step: fine while a front crosses a body, coarse in free flight, never
+    /// letting a voxel travel more than a fraction of a voxel, shorter while contacts are deep.
     double chooseTimeStep(const std::vector<OpenWindow>& windows) const;
 
 private:
-    void fractureStep(const std::vector<OpenWindow>& windows, double dtS);
-    void motionStep(const std::vector<OpenWindow>& windows, double dtS);
+    /// The paper's fracture rules on every body the blast reaches; per body, whether it lost a
+    /// link or an anchor.
+    std::vector<char> fractureBodies(const std::vector<OpenWindow>& windows, double dtS);
+    /// Bodies that lost links split into their connected parts (or dust), in body order.
+    void splitBodies(const std::vector<char>& cracked);
+    /// The paper's adaptive step: halve while bodies interpenetrate beyond the tolerance.
+    void adaptStepToPenetration(double maxPenetrationM);
+    std::pair<Eigen::Vector3d, Eigen::Vector3d> totalMomenta() const;
 
     Scene mScene;
     std::unique_ptr<BlastField> mField;
@@ -93,5 +105,11 @@ private:
     std::function<void(const Simulation&, const StepRecord&)> mObserver;
     StepRecord mRecord;  ///< filled while a step runs, for the observer
 };
+
+/// Bodies alone in a world (no charges, no fracture), for the collision benchmark and tests.
+/// Steps are at most `maxStepS` and adapt as in a run (no voxel moves more than half a voxel,
+/// shorter while contacts are deep), or are exactly `maxStepS` when `fixedStep`.
+Simulation rigidBodySimulation(std::vector<Body> bodies, const WorldSettings& world, const CollisionSettings& collisions,
+                               const SleepSettings& sleep, double maxStepS, bool fixedStep = false);
 
 }  // namespace spall

@@ -1,83 +1,11 @@
-#include <spall/dynamics/Dynamics.h>
+#include <spall/dynamics/Integrate.h>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
+#include <spall/core/Parallel.h>
 
 #include <algorithm>
 #include <cmath>
 
 namespace spall {
-
-Integrator parseIntegrator(const std::string& name)
-{
-    if (name == "explicit-euler") return Integrator::ExplicitEuler;
-    if (name == "semi-implicit-euler") return Integrator::SemiImplicitEuler;
-    if (name == "rk4") return Integrator::RungeKutta4;
-    throw InputError("integrator '" + name + "' is unknown (expected explicit-euler, semi-implicit-euler or rk4)");
-}
-
-std::string toString(Integrator integrator)
-{
-    switch (integrator) {
-    case Integrator::ExplicitEuler: return "explicit-euler";
-    case Integrator::SemiImplicitEuler: return "semi-implicit-euler";
-    case Integrator::RungeKutta4: return "rk4";
-    }
-    return "semi-implicit-euler";
-}
-
-Wrench blastWrench(const Body& body, const Eigen::Vector3d& positionM, const Eigen::Quaterniond& orientation,
-                   const BlastField& field, const std::vector<OpenWindow>& windows, double timeS, bool reflectedPressure)
-{
-    Wrench total;
-    if (windows.empty() || body.exposedFaces.empty()) return total;
-    const double h = body.voxelSizeM;
-    const double faceArea = h * h;
-    const Eigen::Matrix3d rot = orientation.toRotationMatrix();
-    const double p0 = field.settings().atmosphere.pressurePa;
-    constexpr size_t kBlock = 4096;
-    const size_t blocks = (body.exposedFaces.size() + kBlock - 1) / kBlock;
-    std::vector<Wrench> partial(blocks);
-    auto sumBlock = [&](size_t b) {
-        Wrench w;
-        const size_t end = std::min(body.exposedFaces.size(), (b + 1) * kBlock);
-        for (size_t i = b * kBlock; i < end; ++i) {
-            const ExposedFace& f = body.exposedFaces[i];
-            const Eigen::Vector3d normal = rot.col(faceAxis(f.face)) * faceSign(f.face);
-            const Eigen::Vector3d arm = rot * body.voxelOffsetM(f.voxel) + 0.5 * h * normal;
-            const Eigen::Vector3d x = positionM + arm;
-            field.forEachCharge(x, timeS, windows, [&](int, double p, const Eigen::Vector3d& charge) {
-                const Eigen::Vector3d r = x - charge;
-                const double distance = r.norm();
-                if (distance <= 0) return;
-                const Eigen::Vector3d rHat = r / distance;
-                const double cosine = -normal.dot(rHat);
-                if (cosine <= 0.0) return;  // the face looks away from this charge
-                double pressure = p;
-                if (reflectedPressure && p > 0) {
-                    const double reflected = 2.0 * p * (7.0 * p0 + 4.0 * p) / (7.0 * p0 + p);
-                    pressure = p + (reflected - p) * cosine * cosine;
-                }
-                const Eigen::Vector3d force = pressure * faceArea * cosine * rHat;
-                w.forceN += force;
-                w.torqueNm += arm.cross(force);
-            });
-        }
-        partial[b] = w;
-    };
-    if (blocks == 1) {
-        sumBlock(0);
-    } else {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks), [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t b = r.begin(); b != r.end(); ++b) sumBlock(b);
-        });
-    }
-    for (const Wrench& w : partial) {
-        total.forceN += w.forceN;
-        total.torqueNm += w.torqueNm;
-    }
-    return total;
-}
 
 namespace {
 
@@ -176,6 +104,25 @@ void integrateBody(Body& body, double t, double dt, Integrator integrator, const
     body.orientation = s.q;
     body.linearVelocityMS = s.p / m;
     body.angularVelocityRadS = angularVelocity(body, s.q, s.l);
+}
+
+void integrateBodies(std::vector<Body>& bodies, const std::vector<char>& loaded, const BlastLoads& blast, const WorldSettings& world,
+                     Integrator integrator, double timeS, double dt)
+{
+    forEachIndex(bodies.size(), [&](size_t i) {
+        Body& body = bodies[i];
+        if (!movable(body)) return;
+        const double m = body.mass.massKg;
+        auto wrench = [&](double t, const Eigen::Vector3d& x, const Eigen::Quaterniond& q, const Eigen::Vector3d& v,
+                          const Eigen::Vector3d& w) {
+            Wrench total = loaded[i] ? blast.wrench(body, t, x, q) : Wrench();
+            total.forceN += m * world.gravityMS2 - world.linearDragPerS * m * v;
+            const Eigen::Matrix3d r = q.toRotationMatrix();
+            total.torqueNm -= world.angularDragPerS * (r * body.mass.inertiaKgM2 * r.transpose() * w);
+            return total;
+        };
+        integrateBody(body, timeS, dt, integrator, wrench);
+    });
 }
 
 double kineticEnergyJ(const Body& body)

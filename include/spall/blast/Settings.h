@@ -1,0 +1,44 @@
+// Settings of the blast stage: the charges, the reference dataset and the atmosphere.
+// Plain structs with defaults and a unit on every field.
+#pragma once
+
+#include <spall/core/EnumNames.h>
+
+#include <Eigen/Core>
+
+namespace spall {
+
+enum class BurstType { FreeAir, Surface };
+template <>
+struct EnumNames<BurstType> {
+    static constexpr std::pair<BurstType, const char*> kNames[] = {{BurstType::FreeAir, "free-air"}, {BurstType::Surface, "surface"}};
+};
+
+enum class BlastDataset { KingeryBulmash, KinneyGraham };
+template <>
+struct EnumNames<BlastDataset> {
+    static constexpr std::pair<BlastDataset, const char*> kNames[] = {{BlastDataset::KingeryBulmash, "kingery-bulmash"},
+                                                                      {BlastDataset::KinneyGraham, "kinney-graham"}};
+};
+
+struct Atmosphere {
+    double pressurePa = 101325.0;   ///< ambient pressure (unit: Pa)
+    double temperatureK = 288.15;   ///< ambient temperature (unit: K)
+};
+
+struct Charge {
+    Eigen::Vector3d positionM = Eigen::Vector3d::Zero();  ///< (unit: m)
+    double tntKg = 1.0;             ///< TNT-equivalent mass (unit: kg)
+    double detonationTimeS = 0.0;   ///< (unit: s)
+    BurstType burst = BurstType::Surface;
+};
+
+struct BlastSettings {
+    BlastDataset dataset = BlastDataset::KingeryBulmash;
+    /// Table nodes per decade of scaled distance; see docs/accuracy.md for the error it buys
+    /// (unit: nodes per decade).
+    int tableNodesPerDecade = 128;
+    Atmosphere atmosphere;
+};
+
+}  // namespace spall

@@ -1,0 +1,24 @@
+// Broad phase (paper section 4.2, sped up): the pairs of bodies whose bounding spheres overlap.
+#pragma once
+
+#include <spall/voxel/Body.h>
+
+#include <vector>
+
+namespace spall {
+
+/// Pair of body indices, a < b.
+struct BodyPair {
+    int a, b;
+    bool operator<(const BodyPair& o) const { return a != o.a ? a < o.a : b < o.b; }
+    bool operator==(const BodyPair& o) const { return a == o.a && b == o.b; }
+};
+
+/// True when a contact between the two bodies could change anything: at least one of them moves.
+bool pairCanInteract(const Body& a, const Body& b);
+
+/// Pairs whose bounding spheres overlap (found with a hierarchical grid) and that can interact,
+/// sorted.
+std::vector<BodyPair> findCandidatePairs(const std::vector<Body>& bodies);
+
+}  // namespace spall

@@ -1,0 +1,44 @@
+// Rigid-body motion (paper section 4.1): integrators for pose and momenta under the blast,
+// gravity and drag, and the body quantities the other phases read (speed, energy, momentum).
+#pragma once
+
+#include <spall/dynamics/Settings.h>
+#include <spall/loads/BlastLoads.h>
+#include <spall/voxel/Body.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <functional>
+#include <vector>
+
+namespace spall {
+
+/// A body the solver may move: neither anchored nor asleep.
+inline bool movable(const Body& body) { return !body.anchored && !body.asleep; }
+
+/// Upper bound of the speed of any voxel of the body (unit: m/s).
+inline double maxVoxelSpeedMS(const Body& body)
+{
+    return body.linearVelocityMS.norm() + body.angularVelocityRadS.norm() * body.boundingRadiusM;
+}
+
+/// Every force on a body at a trial state (time, pose, velocities): blast, gravity, drag.
+using WrenchFunction = std::function<Wrench(double timeS, const Eigen::Vector3d& positionM, const Eigen::Quaterniond& q,
+                                            const Eigen::Vector3d& velocityMS, const Eigen::Vector3d& angularVelocityRadS)>;
+
+/// Advances position, orientation and momenta of one body over dt. Quaternions stay unit.
+void integrateBody(Body& body, double timeS, double dtS, Integrator integrator, const WrenchFunction& wrench);
+
+/// The integrate phase: every awake, unanchored body under gravity, drag and, where `loaded`
+/// says so, the blast (evaluated at each integrator stage's own time and pose). In parallel:
+/// each task writes only its own body.
+void integrateBodies(std::vector<Body>& bodies, const std::vector<char>& loaded, const BlastLoads& blast,
+                     const WorldSettings& world, Integrator integrator, double timeS, double dtS);
+
+/// Kinetic energy (J), linear momentum (kg m/s) and angular momentum about the origin (kg m^2/s).
+double kineticEnergyJ(const Body& body);
+Eigen::Vector3d linearMomentum(const Body& body);
+Eigen::Vector3d angularMomentumAboutOrigin(const Body& body);
+
+}  // namespace spall

@@ -1,0 +1,84 @@
+// Settings of the rigid-body stage: the world bodies move in, the time step, collisions, sleep.
+// Plain structs with defaults and a unit on every field; io/SceneFields.cpp holds their table.
+#pragma once
+
+#include <spall/core/EnumNames.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <vector>
+
+namespace spall {
+
+enum class Integrator { ExplicitEuler, SemiImplicitEuler, RungeKutta4 };
+template <>
+struct EnumNames<Integrator> {
+    static constexpr std::pair<Integrator, const char*> kNames[] = {
+        {Integrator::ExplicitEuler, "explicit-euler"}, {Integrator::SemiImplicitEuler, "semi-implicit-euler"}, {Integrator::RungeKutta4, "rk4"}};
+};
+
+struct GroundPlane {
+    bool enabled = true;
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< pointing out of the ground (unit: 1, normalised)
+    double offsetM = 0.0;       ///< plane: normal . x = offset (unit: m)
+    double restitution = 0.2;   ///< (unit: fraction)
+    double friction = 0.6;      ///< Coulomb coefficient (unit: 1)
+};
+
+/// A static, unbreakable oriented box that bodies rest on and bounce off.
+struct StaticBox {
+    Eigen::Vector3d centreM = Eigen::Vector3d::Zero();                 ///< (unit: m)
+    Eigen::Vector3d halfExtentM = Eigen::Vector3d::Constant(0.5);      ///< (unit: m)
+    Eigen::Vector3d rotationDeg = Eigen::Vector3d::Zero();             ///< about x, then y, then z, world axes (unit: degrees)
+    Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();   ///< from rotationDeg
+    double restitution = 0.2;  ///< (unit: fraction)
+    double friction = 0.6;     ///< Coulomb coefficient (unit: 1)
+};
+
+struct WorldSettings {
+    Eigen::Vector3d gravityMS2 = Eigen::Vector3d(0, 0, -9.81);  ///< (unit: m/s^2)
+    double linearDragPerS = 0.0;   ///< F = -k m v (unit: 1/s)
+    double angularDragPerS = 0.0;  ///< tau = -k I w (unit: 1/s)
+    GroundPlane ground;
+    std::vector<StaticBox> colliders;
+};
+
+struct SleepSettings {
+    bool enabled = true;
+    /// Speed of the body's fastest voxel (linear plus angular times radius) below which it
+    /// rests: one number for large and small bodies alike (unit: m/s).
+    double speedMS = 0.05;
+    double timeS = 0.5;  ///< resting this long puts it to sleep (unit: s)
+};
+
+/// Adaptive time step (docs/architecture.md, "Time step").
+struct TimeStepSettings {
+    Integrator integrator = Integrator::SemiImplicitEuler;
+    double maxTimeStepS = 1.0 / 240.0;  ///< in free flight (unit: s)
+    double minTimeStepS = 1e-7;         ///< floor, so a run always progresses (unit: s)
+    double frontFraction = 0.5;         ///< shock front moves at most this many voxels per step (unit: voxels)
+    double pulseFraction = 1.0 / 32.0;  ///< steps per positive phase inside an open window (unit: fraction of T+)
+    double speedFraction = 0.5;         ///< no voxel moves more than this many voxels per step (unit: voxels)
+};
+
+enum class CollisionMethod { None, Pairwise, Buckets, TreeLookup };
+template <>
+struct EnumNames<CollisionMethod> {
+    static constexpr std::pair<CollisionMethod, const char*> kNames[] = {{CollisionMethod::None, "none"},
+                                                                         {CollisionMethod::Pairwise, "pairwise"},
+                                                                         {CollisionMethod::Buckets, "buckets"},
+                                                                         {CollisionMethod::TreeLookup, "tree-lookup"}};
+};
+
+struct CollisionSettings {
+    CollisionMethod method = CollisionMethod::TreeLookup;
+    double restitution = 0.2;   ///< between bodies (unit: fraction)
+    double friction = 0.6;      ///< between bodies, Coulomb coefficient (unit: 1)
+    int solverIterations = 12;  ///< sequential-impulse sweeps over all contacts (unit: 1)
+    /// The time step halves while any contact is deeper than this, and recovers when none is
+    /// (the paper's adaptive step) (unit: voxels).
+    double penetrationToleranceVoxels = 0.25;
+};
+
+}  // namespace spall

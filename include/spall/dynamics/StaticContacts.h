@@ -1,0 +1,23 @@
+// Contacts of bodies with the ground and the static boxes.
+#pragma once
+
+#include <spall/dynamics/Settings.h>
+#include <spall/voxel/Body.h>
+
+#include <vector>
+
+namespace spall {
+
+struct StaticContact {
+    Eigen::Vector3d arm;     ///< from the body's centre of mass to the contact point (unit: m)
+    Eigen::Vector3d normal;  ///< out of the collider
+    double depth;            ///< negative: a gap within the speculative margin (unit: m)
+    int collider;            ///< -1: the ground; else the box index
+    double restitution, friction;
+};
+
+/// Corners of the body's boundary voxels inside the ground or a static box, or within a tenth
+/// of a voxel of it, per collider and normal reduced to at most four spanning points.
+std::vector<StaticContact> findStaticContacts(const Body& body, const WorldSettings& world);
+
+}  // namespace spall

@@ -1,0 +1,40 @@
+// Settings of the fracture stage (the paper's rules, section 3.3). Plain structs with defaults
+// and a unit on every field.
+#pragma once
+
+#include <spall/core/EnumNames.h>
+
+#include <cstdint>
+
+namespace spall {
+
+enum class FractureAlgorithm {
+    YieldLimit,      ///< variable limit (1), with weakening (2) and orientation (3) as switched
+    DavisonStevens,  ///< damage accumulation (4)
+    None,            ///< unbreakable
+};
+template <>
+struct EnumNames<FractureAlgorithm> {
+    static constexpr std::pair<FractureAlgorithm, const char*> kNames[] = {{FractureAlgorithm::YieldLimit, "yield-limit"},
+                                                                           {FractureAlgorithm::DavisonStevens, "davison-stevens"},
+                                                                           {FractureAlgorithm::None, "none"}};
+};
+
+/// What happens to parts smaller than the minimum fragment size.
+enum class SmallFragmentPolicy { Keep, Dust };
+template <>
+struct EnumNames<SmallFragmentPolicy> {
+    static constexpr std::pair<SmallFragmentPolicy, const char*> kNames[] = {{SmallFragmentPolicy::Keep, "keep"},
+                                                                             {SmallFragmentPolicy::Dust, "dust"}};
+};
+
+struct FractureSettings {
+    FractureAlgorithm algorithm = FractureAlgorithm::YieldLimit;
+    bool weakening = true;    ///< algorithm 2 on top of 1
+    bool orientation = true;  ///< algorithm 3 on top of 1
+    uint64_t seed = 1;        ///< yield limits derive from a hash of (seed, voxel, axis); the scene's seed
+    int64_t minFragmentVoxels = 1;  ///< smaller pieces follow smallFragments (unit: voxels)
+    SmallFragmentPolicy smallFragments = SmallFragmentPolicy::Keep;
+};
+
+}  // namespace spall

@@ -1,0 +1,68 @@
+#include <spall/dynamics/Sleep.h>
+
+#include <spall/dynamics/Integrate.h>
+
+#include <algorithm>
+
+namespace spall {
+
+namespace {
+
+void wake(Body& body)
+{
+    body.asleep = false;
+    body.restTimeS = 0;
+}
+
+}  // namespace
+
+void wakeLoadedBodies(std::vector<Body>& bodies, const std::vector<char>& loaded)
+{
+    for (size_t i = 0; i < bodies.size(); ++i)
+        if (loaded[i]) wake(bodies[i]);
+}
+
+void wakeBodiesHitByMovers(std::vector<Body>& bodies, const std::vector<ContactManifold>& manifolds, const SleepSettings& sleep)
+{
+    auto wakes = [&](const Body& mover) { return movable(mover) && maxVoxelSpeedMS(mover) > sleep.speedMS; };
+    for (const ContactManifold& m : manifolds) {
+        Body& a = bodies[m.a];
+        Body& b = bodies[m.b];
+        for (auto [sleeper, other] : {std::pair<Body*, Body*>{&a, &b}, std::pair<Body*, Body*>{&b, &a}})
+            if (sleeper->asleep && !sleeper->anchored && wakes(*other)) wake(*sleeper);
+    }
+}
+
+void updateSleep(std::vector<Body>& bodies, const std::vector<BodyPair>& touching, const std::vector<char>& loaded,
+                 const SleepSettings& sleep, double dt)
+{
+    if (!sleep.enabled) return;
+    for (size_t i = 0; i < bodies.size(); ++i) {
+        Body& b = bodies[i];
+        if (b.anchored || b.asleep) continue;
+        b.restTimeS = (!loaded[i] && maxVoxelSpeedMS(b) < sleep.speedMS) ? b.restTimeS + dt : 0.0;
+    }
+    std::vector<int> parent(bodies.size());
+    for (size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
+    auto root = [&](int i) {
+        while (parent[i] != i) i = parent[i] = parent[parent[i]];
+        return i;
+    };
+    for (const BodyPair& p : touching)
+        if (!bodies[p.a].anchored && !bodies[p.b].anchored) {
+            const int ra = root(p.a), rb = root(p.b);
+            parent[std::max(ra, rb)] = std::min(ra, rb);
+        }
+    std::vector<char> restless(bodies.size(), 0);
+    for (size_t i = 0; i < bodies.size(); ++i)
+        if (!bodies[i].anchored && !bodies[i].asleep && bodies[i].restTimeS < sleep.timeS) restless[root(static_cast<int>(i))] = 1;
+    for (size_t i = 0; i < bodies.size(); ++i) {
+        Body& b = bodies[i];
+        if (b.anchored || b.asleep || restless[root(static_cast<int>(i))]) continue;
+        b.asleep = true;
+        b.linearVelocityMS.setZero();
+        b.angularVelocityRadS.setZero();
+    }
+}
+
+}  // namespace spall

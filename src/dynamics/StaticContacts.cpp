@@ -1,0 +1,99 @@
+#include <spall/dynamics/StaticContacts.h>
+
+#include <spall/dynamics/NarrowPhase.h>
+
+#include "VoxelContact.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace spall {
+
+namespace {
+
+using narrow::kContactMarginVoxels;
+
+/// Corners of the body's boundary voxels inside the ground or a static box.
+std::vector<StaticContact> findCorners(const Body& body, const WorldSettings& world)
+{
+    std::vector<StaticContact> contacts;
+    const Eigen::Matrix3d rot = body.orientation.toRotationMatrix();
+    const double h = body.voxelSizeM;
+    const double margin = kContactMarginVoxels * h;
+    const double voxelRadius = 0.5 * std::sqrt(3.0) * h + margin;
+    const GroundPlane& ground = world.ground;
+    const bool nearGround = ground.enabled && ground.normal.dot(body.positionM) - ground.offsetM <= body.boundingRadiusM + margin;
+    std::vector<int> nearBoxes;
+    for (size_t b = 0; b < world.colliders.size(); ++b) {
+        const StaticBox& box = world.colliders[b];
+        const Eigen::Vector3d local = box.orientation.inverse() * (body.positionM - box.centreM);
+        const Eigen::Vector3d outside = (local.cwiseAbs() - box.halfExtentM).cwiseMax(0.0);
+        if (outside.norm() <= body.boundingRadiusM + margin) nearBoxes.push_back(static_cast<int>(b));
+    }
+    if (!nearGround && nearBoxes.empty()) return contacts;
+
+    for (const openvdb::Coord& voxel : body.boundaryVoxels) {
+        const Eigen::Vector3d centreArm = rot * body.voxelOffsetM(voxel);
+        const Eigen::Vector3d centre = body.positionM + centreArm;
+        // Eight corners per voxel: a face resting on a collider gets four points, so resting
+        // bodies do not pivot about a single point.
+        auto corners = [&](auto&& visit) {
+            for (int c = 0; c < 8; ++c)
+                visit(0.5 * h * (rot.col(0) * (c & 1 ? 1 : -1) + rot.col(1) * (c & 2 ? 1 : -1) + rot.col(2) * (c & 4 ? 1 : -1)));
+        };
+        if (nearGround && ground.normal.dot(centre) - ground.offsetM < voxelRadius) {
+            corners([&](const Eigen::Vector3d& corner) {
+                const double separation = ground.normal.dot(centre + corner) - ground.offsetM;
+                if (separation < margin)
+                    contacts.push_back({centreArm + corner, ground.normal, -separation, -1, ground.restitution, ground.friction});
+            });
+        }
+        for (int b : nearBoxes) {
+            const StaticBox& box = world.colliders[b];
+            const Eigen::Matrix3d boxRot = box.orientation.toRotationMatrix();
+            const Eigen::Vector3d local = boxRot.transpose() * (centre - box.centreM);
+            if (((local.cwiseAbs() - box.halfExtentM).array() > voxelRadius).any()) continue;
+            corners([&](const Eigen::Vector3d& corner) {
+                const Eigen::Vector3d q = boxRot.transpose() * (centre + corner - box.centreM);
+                const Eigen::Vector3d penetration = box.halfExtentM - q.cwiseAbs();
+                if ((penetration.array() <= -margin).any() || (penetration.array() <= 0.0).count() > 1) return;
+                int axis = 0;
+                penetration.minCoeff(&axis);
+                const Eigen::Vector3d normal = boxRot.col(axis) * (q[axis] >= 0 ? 1.0 : -1.0);
+                contacts.push_back({centreArm + corner, normal, penetration[axis], b, box.restitution, box.friction});
+            });
+        }
+    }
+    return contacts;
+}
+
+/// Per collider and normal, the corners reduced to at most four spanning points.
+std::vector<StaticContact> reduceStaticContacts(const std::vector<StaticContact>& all)
+{
+    std::vector<StaticContact> reduced;
+    std::vector<char> done(all.size(), 0);
+    for (size_t i = 0; i < all.size(); ++i) {
+        if (done[i]) continue;
+        std::vector<size_t> group;
+        std::vector<VoxelContact> points;
+        size_t deepest = 0;
+        for (size_t j = i; j < all.size(); ++j)
+            if (!done[j] && all[j].collider == all[i].collider && all[j].normal == all[i].normal) {
+                done[j] = 1;
+                if (all[j].depth > all[group.empty() ? j : group[deepest]].depth) deepest = group.size();
+                group.push_back(j);
+                points.push_back({all[j].arm, all[j].normal, all[j].depth});
+            }
+        for (size_t k : spanningPoints(points, all[i].normal, deepest)) reduced.push_back(all[group[k]]);
+    }
+    return reduced;
+}
+
+}  // namespace
+
+std::vector<StaticContact> findStaticContacts(const Body& body, const WorldSettings& world)
+{
+    return reduceStaticContacts(findCorners(body, world));
+}
+
+}  // namespace spall
