@@ -61,19 +61,20 @@ const Material& findMaterialPreset(const std::string& name)
     throw InputError("material '" + name + "' is unknown (presets: " + known + ")");
 }
 
-void validateMaterial(const Material& m)
+const std::vector<Field<Material>>& FieldTable<Material>::fields()
 {
-    auto fail = [&m](const std::string& field, const std::string& reason) {
-        throw InputError("material '" + m.name + "': " + field + " " + reason);
+    static const std::vector<Field<Material>> table = {
+        {"density_kg_m3", &Material::densityKgM3, aboveZeroUpTo(1e12)},
+        {"mean_yield_Pa", &Material::meanYieldPa, aboveZeroUpTo(1e12)},
+        {"yield_variation", &Material::yieldVariation, fraction()},
+        {"weakening_fraction", &Material::weakeningFraction, fraction()},
+        {"orientation_factor", &Material::orientationFactor, fraction()},
+        {"damage_rate_per_s", &Material::damageRatePerS, closed(0, 1e12)},
+        {"damage_stress_scale_per_Pa", &Material::damageStressScalePerPa, closed(0, 1e12)},
     };
-    if (!(m.densityKgM3 > 0) || !std::isfinite(m.densityKgM3)) fail("density_kg_m3", "must be positive");
-    if (!(m.meanYieldPa > 0) || !std::isfinite(m.meanYieldPa)) fail("mean_yield_Pa", "must be positive");
-    if (!(m.yieldVariation >= 0 && m.yieldVariation < 1)) fail("yield_variation", "must be in [0, 1)");
-    if (!(m.weakeningFraction >= 0 && m.weakeningFraction < 1)) fail("weakening_fraction", "must be in [0, 1)");
-    if (!(m.orientationFactor >= 0 && m.orientationFactor < 1)) fail("orientation_factor", "must be in [0, 1)");
-    if (!(m.damageRatePerS >= 0) || !std::isfinite(m.damageRatePerS)) fail("damage_rate_per_s", "must be >= 0");
-    if (!(m.damageStressScalePerPa >= 0) || !std::isfinite(m.damageStressScalePerPa))
-        fail("damage_stress_scale_per_Pa", "must be >= 0");
+    return table;
 }
+
+void validateMaterial(const Material& m) { validateFields(m, "material '" + m.name + "'"); }
 
 }  // namespace spall

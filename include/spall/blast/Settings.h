@@ -3,6 +3,7 @@
 #pragma once
 
 #include <spall/core/EnumNames.h>
+#include <spall/core/Fields.h>
 
 #include <Eigen/Core>
 
@@ -39,6 +40,20 @@ struct BlastSettings {
     /// (unit: nodes per decade).
     int tableNodesPerDecade = 128;
     Atmosphere atmosphere;
+};
+
+// Keys and ranges (src/blast/Settings.cpp).
+template <>
+struct FieldTable<Atmosphere> {
+    static const std::vector<Field<Atmosphere>>& fields();
+};
+template <>
+struct FieldTable<Charge> {
+    static const std::vector<Field<Charge>>& fields();
+};
+template <>
+struct FieldTable<BlastSettings> {
+    static const std::vector<Field<BlastSettings>>& fields();
 };
 
 }  // namespace spall

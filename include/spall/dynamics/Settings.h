@@ -3,6 +3,7 @@
 #pragma once
 
 #include <spall/core/EnumNames.h>
+#include <spall/core/Fields.h>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -79,6 +80,32 @@ struct CollisionSettings {
     /// The time step halves while any contact is deeper than this, and recovers when none is
     /// (the paper's adaptive step) (unit: voxels).
     double penetrationToleranceVoxels = 0.25;
+};
+
+// Keys and ranges (src/dynamics/Settings.cpp).
+template <>
+struct FieldTable<GroundPlane> {
+    static const std::vector<Field<GroundPlane>>& fields();
+};
+template <>
+struct FieldTable<StaticBox> {
+    static const std::vector<Field<StaticBox>>& fields();
+};
+template <>
+struct FieldTable<WorldSettings> {
+    static const std::vector<Field<WorldSettings>>& fields();
+};
+template <>
+struct FieldTable<SleepSettings> {
+    static const std::vector<Field<SleepSettings>>& fields();
+};
+template <>
+struct FieldTable<TimeStepSettings> {
+    static const std::vector<Field<TimeStepSettings>>& fields();
+};
+template <>
+struct FieldTable<CollisionSettings> {
+    static const std::vector<Field<CollisionSettings>>& fields();
 };
 
 }  // namespace spall

@@ -1,6 +1,8 @@
 // Materials in physical units, with presets calibrated on published blast-damage tables.
 #pragma once
 
+#include <spall/core/Fields.h>
+
 #include <string>
 #include <vector>
 
@@ -25,7 +27,14 @@ const std::vector<Material>& materialPresets();
 /// A preset by name; throws InputError listing the known names.
 const Material& findMaterialPreset(const std::string& name);
 
-/// Throws InputError naming the field when a value is out of range.
+/// Keys and ranges of a material's numbers (src/fracture/Material.cpp); the name and the source
+/// are not among them.
+template <>
+struct FieldTable<Material> {
+    static const std::vector<Field<Material>>& fields();
+};
+
+/// Throws InputError naming the material and the field when a value is out of range.
 void validateMaterial(const Material& material);
 
 /// Builds a material whose walls start to break at the low end of a published failure range and

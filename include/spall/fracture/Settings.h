@@ -3,6 +3,7 @@
 #pragma once
 
 #include <spall/core/EnumNames.h>
+#include <spall/core/Fields.h>
 
 #include <cstdint>
 
@@ -35,6 +36,12 @@ struct FractureSettings {
     uint64_t seed = 1;        ///< yield limits derive from a hash of (seed, voxel, axis); the scene's seed
     int64_t minFragmentVoxels = 1;  ///< smaller pieces follow smallFragments (unit: voxels)
     SmallFragmentPolicy smallFragments = SmallFragmentPolicy::Keep;
+};
+
+// Keys and ranges (src/fracture/Settings.cpp).
+template <>
+struct FieldTable<FractureSettings> {
+    static const std::vector<Field<FractureSettings>>& fields();
 };
 
 }  // namespace spall

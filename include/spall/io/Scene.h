@@ -1,5 +1,6 @@
-// Scenes: JSON in SI units. Every key is documented in docs/scene-format.md; unknown keys, wrong
-// types and out-of-range values are errors naming the file, the key and the reason.
+// Scenes: JSON in SI units, read and written through each settings struct's field table
+// (core/Fields.h). Every key is documented in docs/scene-format.md; unknown keys, wrong types and
+// out-of-range values are errors naming the file, the key and the reason.
 #pragma once
 
 #include <spall/blast/Settings.h>
@@ -18,13 +19,17 @@
 namespace spall {
 
 enum class AnchorMode { None, Ground };
+template <>
+struct EnumNames<AnchorMode> {
+    static constexpr std::pair<AnchorMode, const char*> kNames[] = {{AnchorMode::None, "none"}, {AnchorMode::Ground, "ground"}};
+};
 
 struct ObjectSpec {
     std::string name;
     std::string meshPath;                 ///< resolved against the scene file; empty for primitives
-    std::optional<Primitive> primitive;
-    Eigen::Vector3d positionM = Eigen::Vector3d::Zero();     ///< where the object's local origin goes
-    Eigen::Vector3d rotationDeg = Eigen::Vector3d::Zero();   ///< about x, then y, then z (world axes)
+    std::optional<Primitive> primitive;   ///< read and written by hand: its keys depend on its shape
+    Eigen::Vector3d positionM = Eigen::Vector3d::Zero();     ///< where the object's local origin goes (unit: m)
+    Eigen::Vector3d rotationDeg = Eigen::Vector3d::Zero();   ///< about x, then y, then z, world axes (unit: degrees)
     std::string material = "brick-masonry";
     AnchorMode anchor = AnchorMode::None;
 };
@@ -42,11 +47,11 @@ struct OutputSettings {
 
 struct Scene {
     std::string sourceName = "<built-in default>";
-    double voxelSizeM = 0.05;
-    double durationS = 4.0;
-    double frameRateHz = 24.0;
-    uint64_t seed = 1;
-    int64_t maxVoxels = 20'000'000;
+    double voxelSizeM = 0.05;   ///< (unit: m)
+    double durationS = 4.0;     ///< (unit: s)
+    double frameRateHz = 24.0;  ///< (unit: 1/s)
+    uint64_t seed = 1;          ///< every random choice derives from it (fracture.seed is a copy)
+    int64_t maxVoxels = 20'000'000;  ///< voxelising more is an error (unit: voxels)
     WorldSettings world;
     SleepSettings sleep;
     BlastSettings blast;
@@ -57,11 +62,25 @@ struct Scene {
     std::vector<Material> materials;  ///< presets plus the scene's own
     std::vector<ObjectSpec> objects;
     std::vector<Charge> charges;
-    std::vector<Eigen::Vector3d> colliderRotationsDeg;  ///< as given, for writing the scene back
     OutputSettings output;
 
     int frameCount() const { return static_cast<int>(std::floor(durationS * frameRateHz + 1e-9)) + 1; }
     const Material& material(const std::string& name) const;
+};
+
+// Keys and ranges (src/io/Scene.cpp). A scene's own table holds its top-level numbers; its
+// settings structs, lists and materials have tables of their own.
+template <>
+struct FieldTable<ObjectSpec> {
+    static const std::vector<Field<ObjectSpec>>& fields();
+};
+template <>
+struct FieldTable<OutputSettings> {
+    static const std::vector<Field<OutputSettings>>& fields();
+};
+template <>
+struct FieldTable<Scene> {
+    static const std::vector<Field<Scene>>& fields();
 };
 
 /// Rotation about the world x, then y, then z axes (degrees), as scenes give it.
@@ -77,7 +96,8 @@ Scene parseScene(const std::string& text, const std::string& sourceName, const s
 /// Reads and parses a scene file.
 Scene loadScene(const std::string& path);
 
-/// The scene with every default filled in, in the same format (parses back to the same scene).
+/// The scene with every default filled in, in the same format (parses back to the same scene;
+/// a checkpoint stores it so).
 nlohmann::json sceneToJson(const Scene& scene);
 
 }  // namespace spall

@@ -1,6 +1,8 @@
 // Settings of the load stage: how the blast pressure becomes forces on faces.
 #pragma once
 
+#include <spall/core/Fields.h>
+
 namespace spall {
 
 struct LoadSettings {
@@ -8,6 +10,12 @@ struct LoadSettings {
     /// angle of incidence) instead of the paper's side-on pressure: a face that stops the flow
     /// feels the reflected wave, 2 to 8 times the side-on one (docs/architecture.md).
     bool reflectedPressure = true;
+};
+
+// Keys and ranges (src/loads/Settings.cpp).
+template <>
+struct FieldTable<LoadSettings> {
+    static const std::vector<Field<LoadSettings>>& fields();
 };
 
 }  // namespace spall

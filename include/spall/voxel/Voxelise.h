@@ -1,6 +1,7 @@
 // Solid voxelisation of meshes (through assimp and OpenVDB's mesh-to-volume) and of primitives.
 #pragma once
 
+#include <spall/core/EnumNames.h>
 #include <spall/core/Error.h>
 #include <spall/voxel/Body.h>
 
@@ -17,6 +18,11 @@ struct VoxeliseSettings {
 };
 
 enum class PrimitiveShape { Box, Sphere, Cylinder };
+template <>
+struct EnumNames<PrimitiveShape> {
+    static constexpr std::pair<PrimitiveShape, const char*> kNames[] = {
+        {PrimitiveShape::Box, "box"}, {PrimitiveShape::Sphere, "sphere"}, {PrimitiveShape::Cylinder, "cylinder"}};
+};
 
 /// A primitive centred on the object's origin: a box of full extents sizeM, a sphere of radius
 /// sizeM.x(), or a cylinder along z of radius sizeM.x() and height sizeM.z().

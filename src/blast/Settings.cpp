@@ -1,0 +1,34 @@
+#include <spall/blast/Settings.h>
+
+namespace spall {
+
+const std::vector<Field<Atmosphere>>& FieldTable<Atmosphere>::fields()
+{
+    static const std::vector<Field<Atmosphere>> table = {
+        {"atmosphere.pressure_Pa", &Atmosphere::pressurePa, aboveZeroUpTo(1e8)},
+        {"atmosphere.temperature_K", &Atmosphere::temperatureK, aboveZeroUpTo(1e4)},
+    };
+    return table;
+}
+
+const std::vector<Field<Charge>>& FieldTable<Charge>::fields()
+{
+    static const std::vector<Field<Charge>> table = {
+        {"position_m", &Charge::positionM},
+        {"tnt_kg", &Charge::tntKg, aboveZeroUpTo(1e9)},
+        {"detonation_time_s", &Charge::detonationTimeS, closed(0, 1e5)},
+        {"burst", choice(&Charge::burst)},
+    };
+    return table;
+}
+
+const std::vector<Field<BlastSettings>>& FieldTable<BlastSettings>::fields()
+{
+    static const std::vector<Field<BlastSettings>> table = {
+        {"blast.dataset", choice(&BlastSettings::dataset)},
+        {"blast.table_nodes_per_decade", &BlastSettings::tableNodesPerDecade, closed(2, 100000)},
+    };
+    return table;
+}
+
+}  // namespace spall
