@@ -103,7 +103,6 @@ ZRange fittedRange(BlastDataset dataset, BurstType burst)
 }
 
 double rankineHugoniotShockSpeed(double ps, double p0) { return kSoundSpeedMS * std::sqrt(1.0 + 6.0 * ps / (7.0 * p0)); }
-double rankineHugoniotReflected(double ps, double p0) { return 2.0 * ps * (7.0 * p0 + 4.0 * ps) / (7.0 * p0 + ps); }
 
 /// Granström's negative peak (blast-data.md §4): 0.35/Z bar beyond Z = 3.5, 0.1 bar nearer.
 double granstromNegativePeakPa(double z) { return z > 3.5 ? 0.35e5 / z : 0.1e5; }
@@ -328,6 +327,17 @@ BlastParameters scaledBlastDirect(BlastDataset dataset, BurstType burst, double 
     return out;
 }
 
+SachsScaling::SachsScaling(double tntKg, const Atmosphere& atmosphere)
+{
+    const double pRatio = atmosphere.pressurePa / kSeaLevelPressurePa;
+    const double tRatio = kSeaLevelTemperatureK / atmosphere.temperatureK;
+    lengthScale = std::cbrt(pRatio) / std::cbrt(tntKg);
+    timeScale = std::cbrt(tntKg) / std::cbrt(pRatio) * std::sqrt(tRatio);
+    pressureScale = pRatio;
+    impulseScale = std::cbrt(tntKg) * std::cbrt(pRatio * pRatio) * std::sqrt(tRatio);
+    speedScale = std::sqrt(atmosphere.temperatureK / kSeaLevelTemperatureK);
+}
+
 BlastParameters blastParameters(BlastDataset dataset, BurstType burst, double tntKg, double distanceM,
                                 const Atmosphere& atmosphere)
 {
@@ -343,38 +353,23 @@ BlastParameters blastParameters(BlastDataset dataset, BurstType burst, double tn
     requirePositive(atmosphere.pressurePa, "ambient pressure_Pa");
     requirePositive(atmosphere.temperatureK, "ambient temperature_K");
 
-    // Sachs scaling (blast-data.md §5).
-    const double pRatio = atmosphere.pressurePa / kSeaLevelPressurePa;
-    const double tRatio = kSeaLevelTemperatureK / atmosphere.temperatureK;
-    const double w13 = std::cbrt(tntKg);
-    const double z = distanceM * std::cbrt(pRatio) / w13;
-    const double timeScale = w13 / std::cbrt(pRatio) * std::sqrt(tRatio);
-    const double impulseScale = w13 * std::cbrt(pRatio * pRatio) * std::sqrt(tRatio);
+    const SachsScaling sachs(tntKg, atmosphere);
+    const double z = distanceM * sachs.lengthScale;
     const BlastParameters s = scaledBlastDirect(dataset, burst, z);
 
     BlastParameters p;
     p.scaledDistanceMKg13 = z;
-    p.peakOverpressurePa = s.peakOverpressurePa * pRatio;
-    p.arrivalTimeS = s.arrivalTimeS * timeScale;
-    p.positiveDurationS = s.positiveDurationS * timeScale;
-    p.positiveImpulsePaS = s.positiveImpulsePaS * impulseScale;
+    p.peakOverpressurePa = s.peakOverpressurePa * sachs.pressureScale;
+    p.arrivalTimeS = s.arrivalTimeS * sachs.timeScale;
+    p.positiveDurationS = s.positiveDurationS * sachs.timeScale;
+    p.positiveImpulsePaS = s.positiveImpulsePaS * sachs.impulseScale;
     p.decayCoefficient = s.decayCoefficient;
-    p.negativePeakPa = std::min(s.negativePeakPa * pRatio, 0.99 * atmosphere.pressurePa);
-    p.negativeDurationS = s.negativeDurationS * timeScale;
-    p.reflectedPressurePa = s.reflectedPressurePa * pRatio;
-    p.shockSpeedMS = s.shockSpeedMS * std::sqrt(atmosphere.temperatureK / kSeaLevelTemperatureK);
+    p.negativePeakPa = s.negativePeakPa * sachs.pressureScale;
+    p.negativeDurationS = s.negativeDurationS * sachs.timeScale;
+    p.reflectedPressurePa = s.reflectedPressurePa * sachs.pressureScale;
+    p.shockSpeedMS = s.shockSpeedMS * sachs.speedScale;
     p.status = s.status;
     return p;
-}
-
-double overpressureAt(const BlastParameters& p, double t)
-{
-    const double s = t - p.arrivalTimeS;
-    if (s < 0.0) return 0.0;
-    if (s <= p.positiveDurationS) return friedlanderOverpressure(p.peakOverpressurePa, p.positiveDurationS, p.decayCoefficient, s);
-    const double tau = s - p.positiveDurationS;
-    if (tau < p.negativeDurationS) return negativePhaseOverpressure(p.negativePeakPa, p.negativeDurationS, tau);
-    return 0.0;
 }
 
 namespace {
@@ -446,24 +441,24 @@ BlastField::BlastField(std::vector<Charge> charges, const BlastSettings& setting
 {
     const Atmosphere& a = settings.atmosphere;
     if (!(a.pressurePa > 0) || !(a.temperatureK > 0)) throw InputError("atmosphere pressure_Pa and temperature_K must be positive");
+    mSpeedScale = SachsScaling(1.0, a).speedScale;
     mTables.reserve(2);
     mTables.emplace_back(settings.dataset, BurstType::FreeAir, settings.tableNodesPerDecade);
     mTables.emplace_back(settings.dataset, BurstType::Surface, settings.tableNodesPerDecade);
-    const double pRatio = a.pressurePa / kSeaLevelPressurePa;
-    const double tRatio = kSeaLevelTemperatureK / a.temperatureK;
     for (size_t i = 0; i < mCharges.size(); ++i) {
         const Charge& c = mCharges[i];
         if (!(c.tntKg > 0.0) || !std::isfinite(c.tntKg))
             throw InputError("charge " + std::to_string(i) + ": tnt_kg must be positive and finite");
         if (!c.positionM.allFinite() || !std::isfinite(c.detonationTimeS))
             throw InputError("charge " + std::to_string(i) + ": position_m and detonation_time_s must be finite");
+        const SachsScaling sachs(c.tntKg, a);
         PerCharge pc;
         pc.table = &mTables[c.burst == BurstType::FreeAir ? 0 : 1];
         pc.detonationTimeS = c.detonationTimeS;
-        pc.lengthScale = std::cbrt(pRatio) / std::cbrt(c.tntKg);
+        pc.lengthScale = sachs.lengthScale;
         pc.log2LengthScale = std::log2(pc.lengthScale);
-        pc.timeScale = std::cbrt(c.tntKg) / std::cbrt(pRatio) * std::sqrt(tRatio);
-        pc.pressureScale = pRatio;
+        pc.timeScale = sachs.timeScale;
+        pc.pressureScale = sachs.pressureScale;
         mPerCharge.push_back(pc);
     }
 }
@@ -511,8 +506,7 @@ double BlastField::shockSpeedMS(int charge, double distanceM) const
     const PerCharge& c = mPerCharge[charge];
     const BlastTable::Node n = c.table->lookupLog2(std::log2(distanceM) + c.log2LengthScale);
     // Sound speed, and with it the shock speed, scales with sqrt(T); T > 0 is checked on construction.
-    return rankineHugoniotShockSpeed(n.peakOverpressurePa, kSeaLevelPressurePa) *
-           std::sqrt(mSettings.atmosphere.temperatureK / kSeaLevelTemperatureK);
+    return rankineHugoniotShockSpeed(n.peakOverpressurePa, kSeaLevelPressurePa) * mSpeedScale;
 }
 
 }  // namespace spall

@@ -34,34 +34,13 @@ struct LinkEvent {
     int16_t charge; ///< for Weaken
 };
 
-/// Loads at one point: total overpressure and the charge that contributes most.
-struct PointLoad {
-    double pressurePa = 0;
-    int dominant = -1;
-    size_t dominantWindow = 0;
-    /// Unit radius vector from the dominant charge (computed only when a limit needs it).
-    Eigen::Vector3d direction(const PressureSnapshot& pressure, const Eigen::Vector3d& x) const
-    {
-        if (dominant < 0) return Eigen::Vector3d::Zero();
-        const Eigen::Vector3d r = x - pressure.chargePositionM(dominantWindow);
-        const double n = r.norm();
-        return n > 0 ? Eigen::Vector3d(r / n) : Eigen::Vector3d::Zero();
-    }
-};
-
-PointLoad pointLoad(const PressureSnapshot& pressure, const Eigen::Vector3d& x)
+/// The unit radius vector from the sample's dominant charge to x (zero when there is none).
+Eigen::Vector3d waveDirection(const PressureSnapshot& pressure, const PressureSample& load, const Eigen::Vector3d& x)
 {
-    PointLoad load;
-    double dominantPa = 0.0;
-    pressure.forEachCharge(x, [&](size_t window, int charge, double p) {
-        load.pressurePa += p;
-        if (p > dominantPa) {
-            dominantPa = p;
-            load.dominant = charge;
-            load.dominantWindow = window;
-        }
-    });
-    return load;
+    if (load.dominantCharge < 0) return Eigen::Vector3d::Zero();
+    const Eigen::Vector3d r = x - pressure.chargePositionM(load.dominantWindow);
+    const double n = r.norm();
+    return n > 0 ? Eigen::Vector3d(r / n) : Eigen::Vector3d::Zero();
 }
 
 }  // namespace
@@ -118,16 +97,16 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
             const openvdb::Coord local = ijk - leaf.origin();
             const Eigen::Vector3d x = originM + rotH * Eigen::Vector3d(local.x(), local.y(), local.z());
             if (bits & kAnchorBit) {
-                const PointLoad load = pointLoad(pressure, x);
-                if (load.pressurePa >= baseYieldLimit(material, settings.seed, ijk, 3))
+                const PressureSample load = pressure.sample(x);
+                if (load.overpressurePa >= baseYieldLimit(material, settings.seed, ijk, 3))
                     out.push_back({ijk, EventKind::BreakAnchor, 0, 0});
             }
             if (davisonStevens) {
                 // Rate form of Davison–Stevens (paper eq. 2.2, 3.2): dD/dt = B D* (exp(C s) - 1),
                 // s = max(p - mean yield, 0); the paper's per-step B equals B dt here.
                 if (!(bits & kAllLinks) || !damageLeaf) continue;
-                const PointLoad load = pointLoad(pressure, x);
-                const double sigma = std::max(load.pressurePa - material.meanYieldPa, 0.0);
+                const PressureSample load = pressure.sample(x);
+                const double sigma = std::max(load.overpressurePa - material.meanYieldPa, 0.0);
                 if (sigma <= 0.0) continue;
                 const double before = damageLeaf->getValue(it.pos());
                 const double rate = material.damageRatePerS * kMaxDamage * std::expm1(std::min(stressScale * sigma, 50.0));
@@ -138,7 +117,7 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
                 // Break the intact links most aligned with the wave first (ties: face order).
                 std::array<std::pair<double, int>, kFaceCount> order;
                 int count = 0;
-                const Eigen::Vector3d direction = load.direction(pressure, x);
+                const Eigen::Vector3d direction = waveDirection(pressure, load, x);
                 for (int f = 0; f < kFaceCount; ++f) {
                     if (bits & (1 << f)) order[count++] = {-std::abs((rot * faceNormal(f)).dot(direction)), f};
                 }
@@ -153,17 +132,17 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
                 const int face = 2 * axis + 1;
                 if (!(bits & (1 << face))) continue;
                 const Eigen::Vector3d midpoint = x + 0.5 * rotH.col(axis);
-                const PointLoad load = pointLoad(pressure, midpoint);
+                const PressureSample load = pressure.sample(midpoint);
                 // Below the least limit any link can have, nothing can happen: skip the hash.
-                if (load.pressurePa < leastEffectivePa || load.pressurePa <= 0.0) continue;
+                if (load.overpressurePa < leastEffectivePa || load.overpressurePa <= 0.0) continue;
                 double limit = baseYieldLimit(material, settings.seed, ijk, axis);
-                if (orientationFactor > 0) limit *= 1.0 - orientationFactor * std::abs(rot.col(axis).dot(load.direction(pressure, midpoint)));
+                if (orientationFactor > 0) limit *= 1.0 - orientationFactor * std::abs(rot.col(axis).dot(waveDirection(pressure, load, midpoint)));
                 const int weakenedBy = weakenedByCharge(bits, axis);
-                const bool weakenedEarlier = weakening > 0 && weakenedBy >= 0 && weakenedBy != load.dominant;
-                if (load.pressurePa >= (weakenedEarlier ? (1.0 - weakening) * limit : limit)) {
+                const bool weakenedEarlier = weakening > 0 && weakenedBy >= 0 && weakenedBy != load.dominantCharge;
+                if (load.overpressurePa >= (weakenedEarlier ? (1.0 - weakening) * limit : limit)) {
                     out.push_back({ijk, EventKind::BreakLink, static_cast<int8_t>(face), 0});
-                } else if (weakening > 0 && weakenedBy < 0 && load.pressurePa >= (1.0 - weakening) * limit) {
-                    out.push_back({ijk, EventKind::Weaken, static_cast<int8_t>(axis), static_cast<int16_t>(load.dominant)});
+                } else if (weakening > 0 && weakenedBy < 0 && load.overpressurePa >= (1.0 - weakening) * limit) {
+                    out.push_back({ijk, EventKind::Weaken, static_cast<int8_t>(axis), static_cast<int16_t>(load.dominantCharge)});
                 }
             }
         }
@@ -173,7 +152,6 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
     auto acc = body.grid->getAccessor();
     for (size_t n = 0; n < events.size(); ++n) {
         result.skippedLeaves += skipped[n];
-        result.visitedLeaves += !skipped[n];
         for (const LinkEvent& e : events[n]) {
             switch (e.kind) {
             case EventKind::BreakLink: result.brokenLinks += breakLink(acc, e.ijk, e.face); break;
@@ -181,7 +159,6 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
                 const int32_t bits = acc.getValue(e.ijk);
                 const int shift = kWeakenedShift + 8 * e.face;
                 acc.setValueOn(e.ijk, (bits & ~(0xff << shift)) | (((e.charge + 1) & 0xff) << shift));
-                ++result.weakenedLinks;
                 break;
             }
             case EventKind::BreakAnchor:

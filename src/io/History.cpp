@@ -453,6 +453,9 @@ History readHistory(const std::string& path)
     Reader r(path);
     History h;
     h.formatVersion = r.attribute<int>("format_version", H5T_NATIVE_INT);
+    if (h.formatVersion != kHistoryFormatVersion)
+        throw IoError(path + ": history format version " + std::to_string(h.formatVersion) + " is not the supported " +
+                      std::to_string(kHistoryFormatVersion));
     h.runComplete = r.attribute<int>("run_complete", H5T_NATIVE_INT) != 0;
     h.voxelSizeM = r.attribute<double>("voxel_size_m", H5T_NATIVE_DOUBLE);
     h.seed = r.attribute<uint64_t>("seed", H5T_NATIVE_UINT64);

@@ -1,5 +1,7 @@
 #include <spall/io/Png.h>
 
+#include <spall/core/AtomicFile.h>
+
 #include <spall/core/Error.h>
 
 #include <png.h>
@@ -105,40 +107,36 @@ void Image::text(int x, int y, const std::string& s, Rgb c, int scale)
 
 void writePng(const std::string& path, const Image& image)
 {
-    const std::string temporary = path + ".partial";
-    FILE* file = std::fopen(temporary.c_str(), "wb");
-    if (!file) throw IoError(path + ": cannot write");
-    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
-    png_infop info = png ? png_create_info_struct(png) : nullptr;
-    if (!png || !info || setjmp(png_jmpbuf(png))) {
-        png_destroy_write_struct(&png, &info);
-        std::fclose(file);
-        std::filesystem::remove(temporary);
-        throw IoError(path + ": PNG encoding failed");
-    }
-    png_init_io(png, file);
-    png_set_IHDR(png, info, image.width(), image.height(), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-                 PNG_FILTER_TYPE_DEFAULT);
-    png_write_info(png, info);
-    std::vector<uint8_t> row(size_t(image.width()) * 3);
-    for (int y = 0; y < image.height(); ++y) {
-        for (int x = 0; x < image.width(); ++x) {
-            const Rgb c = image.get(x, y);
-            row[3 * x] = c.r;
-            row[3 * x + 1] = c.g;
-            row[3 * x + 2] = c.b;
+    writeFileAtomically(path, [&](std::ostream& out) {
+        png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+        png_infop info = png ? png_create_info_struct(png) : nullptr;
+        if (!png || !info || setjmp(png_jmpbuf(png))) {
+            png_destroy_write_struct(&png, &info);
+            throw IoError(path + ": PNG encoding failed");
         }
-        png_write_row(png, row.data());
-    }
-    png_write_end(png, nullptr);
-    png_destroy_write_struct(&png, &info);
-    const bool ok = std::fclose(file) == 0;
-    std::error_code ec;
-    if (ok) std::filesystem::rename(temporary, path, ec);
-    if (!ok || ec) {
-        std::filesystem::remove(temporary, ec);
-        throw IoError(path + ": cannot finish writing the PNG");
-    }
+        // libpng writes through these into the stream, which writeFileAtomically checks.
+        png_set_write_fn(
+            png, &out,
+            [](png_structp p, png_bytep data, png_size_t length) {
+                static_cast<std::ostream*>(png_get_io_ptr(p))->write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(length));
+            },
+            [](png_structp p) { static_cast<std::ostream*>(png_get_io_ptr(p))->flush(); });
+        png_set_IHDR(png, info, image.width(), image.height(), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+                     PNG_FILTER_TYPE_DEFAULT);
+        png_write_info(png, info);
+        std::vector<uint8_t> row(size_t(image.width()) * 3);
+        for (int y = 0; y < image.height(); ++y) {
+            for (int x = 0; x < image.width(); ++x) {
+                const Rgb c = image.get(x, y);
+                row[3 * x] = c.r;
+                row[3 * x + 1] = c.g;
+                row[3 * x + 2] = c.b;
+            }
+            png_write_row(png, row.data());
+        }
+        png_write_end(png, nullptr);
+        png_destroy_write_struct(&png, &info);
+    });
 }
 
 Image plotCurve(const std::vector<double>& x, const std::vector<double>& y, const std::string& xLabel, const std::string& yLabel,

@@ -1,5 +1,7 @@
 #include <spall/io/VdbIo.h>
 
+#include <spall/core/AtomicFile.h>
+
 #include <spall/core/Error.h>
 
 #include <openvdb/io/Archive.h>
@@ -42,33 +44,11 @@ public:
 void writeGridsAtomically(const std::string& path, const openvdb::GridPtrVec& grids, const openvdb::MetaMap& fileMetadata)
 {
     initialiseOpenVdb();
-    const std::string temporary = path + ".partial." + std::to_string(::getpid());
-    const auto discard = [&] {
-        std::error_code ec;
-        std::filesystem::remove(temporary, ec);
-    };
-    try {
-        std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-        if (!out) throw IoError(path + ": cannot create " + temporary);
+    writeFileAtomically(path, [&](std::ostream& out) {
         CheckedVdbWriter writer;
         writer.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
         writer.writeTo(out, grids, fileMetadata);
-        out.flush();
-        out.close();
-        if (out.fail()) throw IoError(path + ": cannot write (disk full?); nothing was left in its place");
-    } catch (const IoError&) {
-        discard();
-        throw;
-    } catch (const std::exception& e) {
-        discard();
-        throw IoError(path + ": cannot write: " + e.what());
-    }
-    std::error_code ec;
-    std::filesystem::rename(temporary, path, ec);
-    if (ec) {
-        discard();
-        throw IoError(path + ": cannot rename the finished file into place: " + ec.message());
-    }
+    });
 }
 
 void writeVoxelisedBody(const std::string& path, const LinkGrid& grid, double voxelSizeM, const std::string& source,

@@ -56,7 +56,7 @@ Wrench BlastLoads::wrench(const Body& body, double timeS, const Eigen::Vector3d&
                 if (cosine <= 0.0) return;  // the face looks away from this charge
                 double pressure = p;
                 if (mSettings.reflectedPressure && p > 0) {
-                    const double reflected = 2.0 * p * (7.0 * p0 + 4.0 * p) / (7.0 * p0 + p);
+                    const double reflected = rankineHugoniotReflected(p, p0);
                     pressure = p + (reflected - p) * cosine * cosine;
                 }
                 const Eigen::Vector3d force = pressure * faceArea * cosine * rHat;

@@ -1,5 +1,6 @@
 #include <spall/sim/Checkpoint.h>
 
+#include <spall/core/AtomicFile.h>
 #include <spall/io/VdbIo.h>
 
 #include <openvdb/io/Stream.h>
@@ -205,22 +206,8 @@ void writeCheckpoint(const std::string& path, const Checkpoint& c)
     w.text(vdb.str(), "grids");
     buffer.write(kMagic, sizeof kMagic);  // a trailer: a file cut short is recognised
 
-    const std::string temporary = path + ".partial";
-    {
-        std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-        const std::string bytes = buffer.str();
-        out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-        out.flush();
-        if (!out) {
-            out.close();
-            std::error_code ec;
-            std::filesystem::remove(temporary, ec);
-            throw IoError(path + ": cannot write the checkpoint (disk full or not writable?)");
-        }
-    }
-    std::error_code ec;
-    std::filesystem::rename(temporary, path, ec);
-    if (ec) throw IoError(path + ": cannot rename the checkpoint into place: " + ec.message());
+    const std::string bytes = buffer.str();
+    writeFileAtomically(path, [&](std::ostream& out) { out.write(bytes.data(), static_cast<std::streamsize>(bytes.size())); });
 }
 
 Checkpoint readCheckpoint(const std::string& path)

@@ -1,5 +1,7 @@
 #include <spall/sim/Run.h>
 
+#include <spall/core/AtomicFile.h>
+
 #include <spall/dynamics/Integrate.h>
 #include <spall/io/History.h>
 #include <spall/io/VdbIo.h>
@@ -14,27 +16,6 @@
 
 namespace spall {
 
-namespace {
-
-void writeTextAtomically(const std::filesystem::path& path, const std::string& text)
-{
-    const std::filesystem::path temporary = path.string() + ".partial";
-    {
-        std::ofstream out(temporary);
-        out << text;
-        out.flush();
-        if (!out) {
-            std::error_code ec;
-            std::filesystem::remove(temporary, ec);
-            throw IoError(path.string() + ": cannot write (disk full or not writable?)");
-        }
-    }
-    std::error_code ec;
-    std::filesystem::rename(temporary, path, ec);
-    if (ec) throw IoError(path.string() + ": cannot rename into place: " + ec.message());
-}
-
-}  // namespace
 
 namespace {
 
@@ -146,7 +127,7 @@ RunReport runScene(const Scene& scene, const RunOptions& options, const std::fun
     // A checkpoint of an earlier run in the same directory must not be resumed into this one.
     fs::remove(dir / kCheckpointFileName, ec);
     const nlohmann::json resolvedScene = sceneToJson(scene);
-    writeTextAtomically(dir / "scene.json", resolvedScene.dump(2) + "\n");
+    writeFileAtomically((dir / "scene.json").string(), [&](std::ostream& out) { out << resolvedScene.dump(2) << "\n"; });
 
     Simulation sim(scene);
     const int frameCount = options.maxFrames >= 0 ? std::min(options.maxFrames, scene.frameCount()) : scene.frameCount();

@@ -67,8 +67,39 @@ inline double negativePhaseOverpressure(double negativePeakPa, double negativeDu
     return -negativePeakPa * 6.75 * x * (1.0 - x) * (1.0 - x);
 }
 
-/// Overpressure history at one point: zero before arrival, Friedlander, negative phase, zero.
-double overpressureAt(const BlastParameters& p, double timeSinceDetonationS);
+/// The whole pulse at time s after arrival: zero before it, the Friedlander positive phase for
+/// T+, the negative phase for T-, zero after (unit: Pa). The one pulse every path evaluates.
+inline double pulseOverpressure(double peakPa, double positiveDurationS, double decayCoefficient, double negativePeakPa,
+                                double negativeDurationS, double s)
+{
+    if (s < 0.0) return 0.0;
+    if (s <= positiveDurationS) return friedlanderOverpressure(peakPa, positiveDurationS, decayCoefficient, s);
+    const double tau = s - positiveDurationS;
+    if (tau < negativeDurationS) return negativePhaseOverpressure(negativePeakPa, negativeDurationS, tau);
+    return 0.0;
+}
+
+/// Overpressure history at one point from its parameters (time since detonation).
+inline double overpressureAt(const BlastParameters& p, double timeSinceDetonationS)
+{
+    return pulseOverpressure(p.peakOverpressurePa, p.positiveDurationS, p.decayCoefficient, p.negativePeakPa, p.negativeDurationS,
+                             timeSinceDetonationS - p.arrivalTimeS);
+}
+
+/// Normal reflection of a shock of side-on overpressure ps in an ideal gas (gamma = 1.4) at
+/// ambient pressure p0 (Rankine–Hugoniot; blast-data.md §6) (unit: Pa).
+inline double rankineHugoniotReflected(double ps, double p0) { return 2.0 * ps * (7.0 * p0 + 4.0 * ps) / (7.0 * p0 + ps); }
+
+/// Sachs scaling of a charge in an atmosphere (blast-data.md §5): from the reference 1 kg charge
+/// at sea level to this one.
+struct SachsScaling {
+    double lengthScale;    ///< Z / R (unit: kg^(-1/3))
+    double timeScale;      ///< real time / scaled time (unit: kg^(1/3))
+    double pressureScale;  ///< p0 / sea-level p0
+    double impulseScale;   ///< real impulse / scaled impulse
+    double speedScale;     ///< sqrt(T0 / sea-level T0)
+    SachsScaling(double tntKg, const Atmosphere& atmosphere);
+};
 
 /// A charge of TNT.
 /// log2(x) for finite x > 0 without a libm call: exponent bits plus a 4097-entry mantissa table
@@ -102,13 +133,11 @@ public:
                 a.negativePeakPa + w * (b.negativePeakPa - a.negativePeakPa),
                 a.windowEndS + w * (b.windowEndS - a.windowEndS)};
     }
-    double scaledDistanceMin() const { return std::exp2(mLog2ZMin); }
     double scaledDistanceMax() const { return std::exp2(mLog2ZMin + double(mNodes.size() - 1) / mNodesPerLog2); }
     /// Scaled distance of the shock front at scaled time tau (s/kg^(1/3)).
     double frontScaledDistance(double tauS) const;
     /// Largest scaled distance at which the window [ta, ta+T++T-] has closed by tau.
     double rearScaledDistance(double tauS) const;
-    size_t nodeCount() const { return mNodes.size(); }
 
 private:
     double scaledDistanceOfNode(double u) const { return std::exp2(mLog2ZMin + u / mNodesPerLog2); }
@@ -125,11 +154,24 @@ struct OpenWindow {
     double maxDistanceM = 0;
 };
 
-/// Overpressure at one point from all charges, with the charge that contributes most.
+/// Overpressure at one point from all charges, with the dominant charge: the one whose
+/// overpressure there is the largest positive (the wave that pushes hardest; none in a pure
+/// negative phase). Weakening and orientation (fracture) follow the dominant charge.
 struct PressureSample {
     double overpressurePa = 0;
     int dominantCharge = -1;
+    size_t dominantWindow = 0;  ///< its window's index among those sampled
     double dominantOverpressurePa = 0;
+
+    void add(size_t window, int charge, double p)
+    {
+        overpressurePa += p;
+        if (p > dominantOverpressurePa) {
+            dominantOverpressurePa = p;
+            dominantCharge = charge;
+            dominantWindow = window;
+        }
+    }
 };
 
 /// The pressure field of all charges. Thread-safe for concurrent queries.
@@ -152,16 +194,11 @@ public:
     PressureSample sample(const Eigen::Vector3d& pointM, double timeS, const std::vector<OpenWindow>& windows) const
     {
         PressureSample out;
-        for (const OpenWindow& w : windows) {
-            const PerCharge& c = mPerCharge[w.charge];
+        for (size_t i = 0; i < windows.size(); ++i) {
+            const OpenWindow& w = windows[i];
             const double r2 = (pointM - mCharges[w.charge].positionM).squaredNorm();
             if (r2 < w.minDistanceM * w.minDistanceM || r2 > w.maxDistanceM * w.maxDistanceM) continue;
-            const double p = chargeOverpressure(c, r2, timeS);
-            out.overpressurePa += p;
-            if (std::abs(p) > std::abs(out.dominantOverpressurePa)) {
-                out.dominantOverpressurePa = p;
-                out.dominantCharge = w.charge;
-            }
+            out.add(i, w.charge, chargeOverpressure(mPerCharge[w.charge], r2, timeS));
         }
         return out;
     }
@@ -211,14 +248,9 @@ private:
     {
         const double tau = (timeS - c.detonationTimeS) / c.timeScale;
         const BlastTable::Node n = c.table->lookupLog2(0.5 * fastLog2(r2) + c.log2LengthScale);
-        const double s = tau - n.arrivalTimeS;
-        if (s < 0.0) return 0.0;
-        if (s <= n.positiveDurationS)
-            return c.pressureScale * friedlanderOverpressure(n.peakOverpressurePa, n.positiveDurationS, n.decayCoefficient, s);
-        const double tauNeg = s - n.positiveDurationS;
-        if (tauNeg < mNegativeDurationScaledS)
-            return c.pressureScale * negativePhaseOverpressure(n.negativePeakPa, mNegativeDurationScaledS, tauNeg);
-        return 0.0;
+        // In scaled units: the table's pulse, then the pressure scale.
+        return c.pressureScale * pulseOverpressure(n.peakOverpressurePa, n.positiveDurationS, n.decayCoefficient, n.negativePeakPa,
+                                                   mNegativeDurationScaledS, tau - n.arrivalTimeS);
     }
 
     std::vector<Charge> mCharges;
@@ -226,6 +258,7 @@ private:
     std::vector<BlastTable> mTables;  ///< [0] free air, [1] surface
     std::vector<PerCharge> mPerCharge;
     double mNegativeDurationScaledS;
+    double mSpeedScale = 1;  ///< sound and shock speeds scale with sqrt(T) (Sachs)
 };
 
 /// The pressure field frozen at one instant, for the many points a step queries at the same
@@ -266,13 +299,7 @@ public:
     PressureSample sample(const Eigen::Vector3d& pointM) const
     {
         PressureSample out;
-        forEachCharge(pointM, [&](size_t, int charge, double p) {
-            out.overpressurePa += p;
-            if (std::abs(p) > std::abs(out.dominantOverpressurePa)) {
-                out.dominantOverpressurePa = p;
-                out.dominantCharge = charge;
-            }
-        });
+        forEachCharge(pointM, [&](size_t window, int charge, double p) { out.add(window, charge, p); });
         return out;
     }
 

@@ -31,9 +31,7 @@ inline double baseYieldLimit(const Material& m, uint64_t seed, const openvdb::Co
 struct LoadResult {
     int64_t brokenLinks = 0;
     int64_t brokenAnchors = 0;
-    int64_t weakenedLinks = 0;
-    int64_t visitedLeaves = 0;
-    int64_t skippedLeaves = 0;
+    int64_t skippedLeaves = 0;  ///< not visited: the pressure there cannot change anything
 };
 
 /// Loads every intact link of `body` where the blast is now (`pressure`, a snapshot at the

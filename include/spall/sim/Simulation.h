@@ -57,7 +57,7 @@ class Simulation {
 public:
     /// Voxelises every object and places it (throws InputError for bad input, e.g. a charge
     /// inside an object).
-    explicit Simulation(const Scene& scene, Interrupter* interrupter = nullptr);
+    explicit Simulation(const Scene& scene);
     /// Continues from a saved state; `scene` is the simulation's own (Simulation::scene()).
     Simulation(const Scene& scene, SimulationState state);
 
