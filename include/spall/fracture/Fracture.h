@@ -12,12 +12,6 @@
 
 namespace spall {
 
-/// Link bits 8..31 of a voxel's value: for each +x, +y, +z link, 1 + the index of the charge that
-/// first loaded it beyond its weakened limit (0: never). Kept in the link grid because it is the
-/// link's own state, and so it follows the voxel through every split for free.
-inline constexpr int kWeakenedShift = 8;
-inline int weakenedByCharge(int32_t bits, int axis) { return ((bits >> (kWeakenedShift + 8 * axis)) & 0xff) - 1; }
-
 /// Deterministic uniform number in [0, 1) from (seed, voxel, axis) (splitmix64 mixing).
 double linkRandom(uint64_t seed, const openvdb::Coord& ijk, int axis);
 

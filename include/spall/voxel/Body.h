@@ -6,6 +6,8 @@
 // geometry and the exported index-to-world map is exact.
 #pragma once
 
+#include <spall/voxel/LinkBits.h>
+
 #include <openvdb/openvdb.h>
 
 #include <Eigen/Core>
@@ -38,29 +40,6 @@ void copyActiveTopology(TargetTreeT& target, const SourceTreeT& source, typename
     }
 }
 
-
-/// Face (and link) directions: bit f of a voxel's value is the link across face f.
-enum Face : int { kNegX = 0, kPosX = 1, kNegY = 2, kPosY = 3, kNegZ = 4, kPosZ = 5 };
-inline constexpr int kFaceCount = 6;
-inline constexpr int32_t kAllLinks = 0x3f;
-/// Bond to the world (an anchor); a body holding any anchored voxel is static.
-inline constexpr int32_t kAnchorBit = 0x40;
-
-inline int oppositeFace(int face) { return face ^ 1; }
-inline int faceAxis(int face) { return face >> 1; }
-inline int faceSign(int face) { return (face & 1) ? 1 : -1; }
-inline openvdb::Coord faceOffset(int face)
-{
-    openvdb::Coord c(0, 0, 0);
-    c[faceAxis(face)] = faceSign(face);
-    return c;
-}
-inline Eigen::Vector3d faceNormal(int face)
-{
-    Eigen::Vector3d n = Eigen::Vector3d::Zero();
-    n[faceAxis(face)] = faceSign(face);
-    return n;
-}
 
 /// Mass properties of voxels taken as solid cubes of side h.
 struct MassProperties {
