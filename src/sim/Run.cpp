@@ -19,71 +19,125 @@ namespace spall {
 
 namespace {
 
+/// A frame's history: per-frame totals and per-body rows, with the events and dust since the
+/// last frame written.
+class HistoryRecorder {
+public:
+    HistoryRecorder(std::unique_ptr<HistoryWriter> writer, const Simulation& sim)
+        : mWriter(std::move(writer)), mEventsWritten(sim.fractureEvents().size()), mDustWritten(sim.dust().size())
+    {
+    }
+
+    void record(const Simulation& sim, double t, const StepStats& stats)
+    {
+        if (!mWriter) return;
+        FrameRow row;
+        row.timeS = t;
+        row.brokenLinks = stats.brokenLinks;
+        row.steps = stats.steps;
+        row.minDtS = stats.steps > 0 ? stats.minDtS : 0.0;
+        row.bodyCount = static_cast<int64_t>(sim.bodies().size());
+        std::vector<BodyRow> rows;
+        rows.reserve(sim.bodies().size());
+        for (const Body& b : sim.bodies()) {
+            row.kineticEnergyJ += kineticEnergyJ(b);
+            row.linearMomentum += linearMomentum(b);
+            row.angularMomentum += angularMomentumAboutOrigin(b);
+            row.voxelCount += b.mass.voxelCount;
+            rows.push_back({b.id, b.parentId, b.positionM, Eigen::Vector4d(b.orientation.w(), b.orientation.x(), b.orientation.y(), b.orientation.z()),
+                            b.linearVelocityMS, b.angularVelocityRadS, b.mass.massKg, b.mass.voxelCount, b.asleep, b.anchored});
+        }
+        const auto& events = sim.fractureEvents();
+        const auto& dust = sim.dust();
+        for (const DustRecord& d : dust) row.dustMassKg += d.massKg;
+        mWriter->appendFrame(row, rows, {events.begin() + mEventsWritten, events.end()}, {dust.begin() + mDustWritten, dust.end()});
+        mEventsWritten = events.size();
+        mDustWritten = dust.size();
+    }
+
+    void finish()
+    {
+        if (mWriter) mWriter->finish();
+    }
+
+private:
+    std::unique_ptr<HistoryWriter> mWriter;
+    size_t mEventsWritten, mDustWritten;
+};
+
+/// The preview: the bodies of a few frames spread over the run, rendered as a contact sheet.
+/// Copies share the grids, whose active voxels never change once a body exists.
+class PreviewRecorder {
+public:
+    PreviewRecorder(const RunOptions& options, int frameCount, const Scene& scene)
+        : mPath(options.previewPath), mFrames(options.previewFrames), mSettings{640, 360, scene.world.ground.offsetM}
+    {
+        if (mPath.empty() || mFrames <= 0) return;
+        const int n = std::min(mFrames, frameCount);
+        for (int i = 0; i < n; ++i) mChosen.push_back(n == 1 ? frameCount - 1 : int(std::lround(double(i) * (frameCount - 1) / (n - 1))));
+    }
+
+    void record(int frame, double t, const std::vector<Body>& bodies)
+    {
+        if (std::find(mChosen.begin(), mChosen.end(), frame) == mChosen.end()) return;
+        mBodies.push_back(bodies);
+        mTimes.push_back(t);
+    }
+
+    /// After a resumed run the frames before the resume point are no longer in memory: they are
+    /// read back from the frame files (when there are any).
+    void write(bool resumedAndComplete, bool framesOnDisk, const std::string& directory) const
+    {
+        if (mPath.empty() || mFrames <= 0) return;
+        if (resumedAndComplete) {
+            if (framesOnDisk) writeContactSheet(directory, mPath, mFrames, mSettings);
+            return;
+        }
+        if (mBodies.empty()) return;
+        const Camera camera = frameCamera({fragmentsOf(mBodies.front()), fragmentsOf(mBodies.back())}, mSettings);
+        std::vector<Image> images;
+        for (const auto& bodies : mBodies) images.push_back(renderFragments(fragmentsOf(bodies), camera, mSettings));
+        writePng(mPath, contactSheet(images, mTimes, images.size() <= 4 ? int(images.size()) : 3));
+    }
+
+private:
+    std::string mPath;
+    int mFrames;
+    RenderSettings mSettings;
+    std::vector<int> mChosen;
+    std::vector<std::vector<Body>> mBodies;
+    std::vector<double> mTimes;
+};
+
 /// Writes frames firstFrame .. frameCount-1 of a simulation that stands at firstFrame's start.
+/// After each frame's outputs, a checkpoint when output.checkpoint_every_s of wall-clock time
+/// has passed since the last, or when the callback asks to stop.
 RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t stepsSoFar, const RunOptions& options,
-                    const std::function<bool(const RunProgress&)>& onFrame, std::unique_ptr<HistoryWriter> history)
+                    const std::function<bool(const RunProgress&)>& onFrame, std::unique_ptr<HistoryWriter> historyWriter)
 {
     const auto start = std::chrono::steady_clock::now();
     auto lastCheckpoint = start;
-    namespace fs = std::filesystem;
     const Scene& scene = sim.scene();
-    const fs::path dir = options.outputDirectory;
-    const fs::path checkpointPath = dir / kCheckpointFileName;
+    const std::filesystem::path dir = options.outputDirectory;
+    const std::filesystem::path checkpointPath = dir / kCheckpointFileName;
     const std::string checkpointScene = sceneToJson(scene).dump();
     std::unique_ptr<FrameWriter> frames;
     if (scene.output.vdb) frames = std::make_unique<FrameWriter>(dir.string(), scene.output.densityGrid);
-
+    HistoryRecorder history(std::move(historyWriter), sim);
+    PreviewRecorder preview(options, frameCount, scene);
     RunReport report;
     report.totalSteps = stepsSoFar;
-    size_t eventsWritten = sim.fractureEvents().size(), dustWritten = sim.dust().size();
-    // Preview: the bodies of a few frames spread over the run. Copies share the grids, whose
-    // active voxels never change once a body exists.
-    std::vector<int> previewFrames;
-    std::vector<std::vector<Body>> previewBodies;
-    std::vector<double> previewTimes;
-    const bool preview = !options.previewPath.empty() && options.previewFrames > 0;
-    if (preview) {
-        const int n = std::min(options.previewFrames, frameCount);
-        for (int i = 0; i < n; ++i) previewFrames.push_back(n == 1 ? frameCount - 1 : int(std::lround(double(i) * (frameCount - 1) / (n - 1))));
-    }
     for (int f = firstFrame; f < frameCount; ++f) {
         const double t = f / scene.frameRateHz;
         sim.advanceTo(t);
         const StepStats stats = sim.takeStepStats();
         report.totalSteps += stats.steps;
         if (frames) frames->write({f, t}, sim.bodies());
-        if (history) {
-            FrameRow row;
-            row.timeS = t;
-            row.brokenLinks = stats.brokenLinks;
-            row.steps = stats.steps;
-            row.minDtS = stats.steps > 0 ? stats.minDtS : 0.0;
-            row.bodyCount = static_cast<int64_t>(sim.bodies().size());
-            std::vector<BodyRow> rows;
-            rows.reserve(sim.bodies().size());
-            for (const Body& b : sim.bodies()) {
-                row.kineticEnergyJ += kineticEnergyJ(b);
-                row.linearMomentum += linearMomentum(b);
-                row.angularMomentum += angularMomentumAboutOrigin(b);
-                row.voxelCount += b.mass.voxelCount;
-                rows.push_back({b.id, b.parentId, b.positionM,
-                                Eigen::Vector4d(b.orientation.w(), b.orientation.x(), b.orientation.y(), b.orientation.z()),
-                                b.linearVelocityMS, b.angularVelocityRadS, b.mass.massKg, b.mass.voxelCount, b.asleep, b.anchored});
-            }
-            const auto& events = sim.fractureEvents();
-            const auto& dust = sim.dust();
-            for (const DustRecord& d : dust) row.dustMassKg += d.massKg;
-            history->appendFrame(row, rows, {events.begin() + eventsWritten, events.end()}, {dust.begin() + dustWritten, dust.end()});
-            eventsWritten = events.size();
-            dustWritten = dust.size();
-        }
-        if (std::find(previewFrames.begin(), previewFrames.end(), f) != previewFrames.end()) {
-            previewBodies.push_back(sim.bodies());
-            previewTimes.push_back(t);
-        }
+        history.record(sim, t, stats);
+        preview.record(f, t, sim.bodies());
         report.framesWritten = f + 1;
         const auto now = std::chrono::steady_clock::now();
-        RunProgress progress{f, frameCount, t, sim.bodies().size(), report.totalSteps, std::chrono::duration<double>(now - start).count()};
+        const RunProgress progress{f, frameCount, t, sim.bodies().size(), report.totalSteps, std::chrono::duration<double>(now - start).count()};
         const bool stop = onFrame && !onFrame(progress) && f + 1 < frameCount;
         // The checkpoint goes after the frame's outputs: whatever it says is written, is.
         const double every = scene.output.checkpointEveryS;
@@ -94,20 +148,11 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
         if (stop) break;
     }
     report.complete = report.framesWritten == frameCount;
-    const RenderSettings previewSettings{640, 360, scene.world.ground.offsetM};
-    if (preview && report.complete && firstFrame > 0) {
-        // Frames before the resume point are no longer in memory: read them back.
-        if (frames) writeContactSheet(dir.string(), options.previewPath, options.previewFrames, previewSettings);
-    } else if (!previewBodies.empty()) {
-        const Camera camera = frameCamera({fragmentsOf(previewBodies.front()), fragmentsOf(previewBodies.back())}, previewSettings);
-        std::vector<Image> images;
-        for (const auto& bodies : previewBodies) images.push_back(renderFragments(fragmentsOf(bodies), camera, previewSettings));
-        writePng(options.previewPath, contactSheet(images, previewTimes, images.size() <= 4 ? int(images.size()) : 3));
-    }
+    preview.write(report.complete && firstFrame > 0, frames != nullptr, dir.string());
     if (report.complete) {
-        if (history) history->finish();
+        history.finish();
         std::error_code ec;
-        fs::remove(checkpointPath, ec);  // the run is whole; nothing to resume
+        std::filesystem::remove(checkpointPath, ec);  // the run is whole; nothing to resume
     }
     report.finalBodies = sim.bodies().size();
     report.fractureEvents = static_cast<int64_t>(sim.fractureEvents().size());
