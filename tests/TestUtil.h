@@ -31,4 +31,14 @@ inline LinkGrid::Ptr boxGrid(int nx, int ny, int nz, double h = 1.0)
     return g;
 }
 
+/// A solid box body of nx*ny*nz voxels of side h, its centre of mass at `positionM`.
+inline Body boxBody(int nx, int ny, int nz, double h, double densityKgM3, const Eigen::Vector3d& positionM = Eigen::Vector3d::Zero(),
+                    const Eigen::Quaterniond& orientation = Eigen::Quaterniond::Identity())
+{
+    Body b = makeBody(boxGrid(nx, ny, nz, h), h, densityKgM3);
+    b.positionM = positionM;
+    b.orientation = orientation;
+    return b;
+}
+
 }  // namespace spall::test

@@ -114,13 +114,17 @@ TEST(Components, SplitPartsKeepTheIndexSpaceAndMass)
         for (int y = 0; y < 10; ++y) breakLink(acc, Coord(x, y, 4), kPosZ);  // a horizontal cut
     const auto parts = splitByLabels(*g, labelComponents(*g));
     ASSERT_EQ(parts.size(), 2u);
-    const MassProperties whole = computeMassProperties(*g, 0.1, 1.0);
-    const MassProperties a = computeMassProperties(*parts[0], 0.1, 1.0);
-    const MassProperties b = computeMassProperties(*parts[1], 0.1, 1.0);
-    EXPECT_NEAR(a.massKg + b.massKg, whole.massKg, 1e-12);
-    const Eigen::Vector3d c = (a.massKg * a.centreOfMassLocalM + b.massKg * b.centreOfMassLocalM) / whole.massKg;
-    EXPECT_NEAR((c - whole.centreOfMassLocalM).norm(), 0.0, 1e-12);
-    EXPECT_TRUE(parts[0]->evalActiveVoxelBoundingBox().min().z() == 0 || parts[1]->evalActiveVoxelBoundingBox().min().z() == 0);
+    // Each part is its slab, in the parent's index space: z 0..4 and z 5..9, 500 voxels each, with
+    // the mass and centre of a 1 x 1 x 0.5 m slab of unit density (centres at index 2 and 7).
+    std::vector<std::pair<openvdb::CoordBBox, MassProperties>> found;
+    for (const auto& part : parts) found.push_back({part->evalActiveVoxelBoundingBox(), computeMassProperties(*part, 0.1, 1.0)});
+    std::sort(found.begin(), found.end(), [](const auto& x, const auto& y) { return x.first.min().z() < y.first.min().z(); });
+    for (int k = 0; k < 2; ++k) {
+        EXPECT_EQ(found[k].first, openvdb::CoordBBox(Coord(0, 0, 5 * k), Coord(9, 9, 5 * k + 4))) << k;
+        EXPECT_EQ(found[k].second.voxelCount, 500) << k;
+        EXPECT_NEAR(found[k].second.massKg, 0.5, 1e-12) << k;
+        EXPECT_LT((found[k].second.centreOfMassLocalM - Eigen::Vector3d(0.45, 0.45, 0.2 + 0.5 * k)).norm(), 1e-12) << k;
+    }
 }
 
 TEST(Components, CheckerboardCutsGiveManyPiecesIdenticallyForAnyThreadCount)

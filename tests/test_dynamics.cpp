@@ -11,11 +11,6 @@ using namespace spall;
 
 namespace {
 
-Body box(int nx, int ny, int nz, double h, double density = 1000.0)
-{
-    return makeBody(test::boxGrid(nx, ny, nz, h), h, density);
-}
-
 WrenchFunction gravityOnly(const Body& body, const Eigen::Vector3d& g)
 {
     const double m = body.mass.massKg;
@@ -39,7 +34,7 @@ TEST(Integrators, BallisticFlightMatchesClosedForm)
     const double t = dt * steps;
     const Eigen::Vector3d exact = x0 + v0 * t + 0.5 * g * t * t;
     for (Integrator integrator : {Integrator::ExplicitEuler, Integrator::SemiImplicitEuler, Integrator::RungeKutta4}) {
-        Body b = box(2, 2, 2, 0.1);
+        Body b = test::boxBody(2, 2, 2, 0.1, 1000.0);
         b.positionM = x0;
         b.linearVelocityMS = v0;
         const WrenchFunction f = gravityOnly(b, g);
@@ -51,14 +46,35 @@ TEST(Integrators, BallisticFlightMatchesClosedForm)
     }
 }
 
-TEST(Integrators, TorqueFreeAsymmetricBodyConservesAngularMomentumAndFlips)
+TEST(Integrators, SymmetricTopFollowsTheAnalyticTorqueFreeSolution)
+{
+    // A 2 x 2 x 4 voxel box (I1 = I2 != I3 about its centre) spun about an axis off its symmetry
+    // axis: in the body frame w3 stays constant and (w1, w2) turns at Omega = (I3 - I1) / I1 w3
+    // (Euler's equations; e.g. Goldstein, Classical Mechanics, 5.6). Moments of inertia of the
+    // solid cuboid, m (b^2 + c^2) / 12, written out here.
+    const double h = 0.1, density = 1000.0;
+    const double m = 16 * h * h * h * density, sx = 2 * h, sz = 4 * h;
+    const double i1 = m * (sx * sx + sz * sz) / 12, i3 = m * (sx * sx + sx * sx) / 12;
+    const double a = 1.5, w3 = 8.0, omega = (i3 - i1) / i1 * w3, duration = 2.0;
+    const Eigen::Vector3d exact(a * std::cos(omega * duration), a * std::sin(omega * duration), w3);
+    for (Integrator integrator : {Integrator::SemiImplicitEuler, Integrator::RungeKutta4}) {
+        Body b = test::boxBody(2, 2, 4, h, density);
+        b.angularVelocityRadS = Eigen::Vector3d(a, 0, w3);  // the body starts unrotated: body frame = world frame
+        const int steps = 4000;
+        for (int i = 0; i < steps; ++i) integrateBody(b, i * duration / steps, duration / steps, integrator, kNoForce);
+        const Eigen::Vector3d bodyOmega = b.orientation.inverse() * b.angularVelocityRadS;
+        const double error = (bodyOmega - exact).norm() / exact.norm();
+        EXPECT_LT(error, integrator == Integrator::RungeKutta4 ? 1e-8 : 2e-2) << enumName(integrator);
+    }
+}
+
+TEST(Integrators, TorqueFreeAsymmetricBodyFlipsAndKeepsItsEnergy)
 {
     // Principal moments differ (3 x 2 x 1 box); spin about the intermediate axis (y) with a small
-    // perturbation: the body tumbles (the spin about y reverses), L stays fixed.
+    // perturbation: the body tumbles (the spin about y reverses) and keeps its kinetic energy.
     for (Integrator integrator : {Integrator::SemiImplicitEuler, Integrator::RungeKutta4}) {
-        Body b = box(6, 4, 2, 0.1);
+        Body b = test::boxBody(6, 4, 2, 0.1, 1000.0);
         b.angularVelocityRadS = Eigen::Vector3d(0.01, 5.0, 0.01);
-        const Eigen::Vector3d l0 = b.worldInertiaKgM2() * b.angularVelocityRadS;
         const double e0 = kineticEnergyJ(b);
         double minBodyY = 1e300, maxDrift = 0;
         const double dt = 5e-4;
@@ -69,8 +85,6 @@ TEST(Integrators, TorqueFreeAsymmetricBodyConservesAngularMomentumAndFlips)
             maxDrift = std::max(maxDrift, std::abs(kineticEnergyJ(b) - e0) / e0);
             EXPECT_NEAR(b.orientation.norm(), 1.0, 1e-12);
         }
-        const Eigen::Vector3d l = b.worldInertiaKgM2() * b.angularVelocityRadS;
-        EXPECT_LT((l - l0).norm(), 1e-9 * l0.norm()) << enumName(integrator);
         EXPECT_LT(maxDrift, integrator == Integrator::RungeKutta4 ? 1e-6 : 2e-2) << enumName(integrator);
         EXPECT_LT(minBodyY, -4.0) << "the intermediate-axis flip did not appear with " << enumName(integrator);
     }
@@ -81,7 +95,7 @@ TEST(BlastForce, FriedlanderPulseGivesTheAnalyticImpulse)
     // One 0.1 m cube 25 m from 10 kg: side-on pressure on the face looking at the charge only.
     BlastSettings bs;
     const BlastField field({Charge{Eigen::Vector3d(-25, 0, 0), 10.0, 0.0, BurstType::FreeAir}}, bs);
-    Body b = box(1, 1, 1, 0.1, 2000.0);
+    Body b = test::boxBody(1, 1, 1, 0.1, 2000.0);
     b.positionM = Eigen::Vector3d::Zero();
     const BlastParameters p = field.tableParameters(0, 24.95);
     const double positive = p.peakOverpressurePa * p.positiveDurationS * friedlanderImpulseFraction(p.decayCoefficient);
@@ -104,7 +118,7 @@ TEST(BlastForce, StressFromOneGramToOneTonne)
     for (double w : {0.001, 0.1, 10.0, 1000.0}) {
         BlastSettings bs;
         const BlastField field({Charge{Eigen::Vector3d(-0.5, 0.05, 0.02), w, 0.0, BurstType::FreeAir}}, bs);
-        Body b = box(2, 2, 2, 0.05, 2000.0);
+        Body b = test::boxBody(2, 2, 2, 0.05, 2000.0);
         b.positionM = Eigen::Vector3d::Zero();
         const double h = 0.05;
         double t = 0;
@@ -143,7 +157,7 @@ Body stepAlone(Body b, const WorldSettings& world, double dt, int steps, double*
 
 TEST(Ground, DroppedBoxComesToRestOnTheGroundAndSleeps)
 {
-    Body b = box(4, 3, 2, 0.1, 1500.0);
+    Body b = test::boxBody(4, 3, 2, 0.1, 1500.0);
     b.positionM = Eigen::Vector3d(0, 0, 1.0);
     b.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 1, 0).normalized()));
     b.linearVelocityMS = Eigen::Vector3d(1.0, 0, 0);
@@ -166,7 +180,7 @@ TEST(Colliders, BodyComesToRestOnAStaticBox)
     table.halfExtentM = Eigen::Vector3d(0.5, 0.5, 0.05);
     table.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.35, Eigen::Vector3d::UnitZ()));
     world.colliders.push_back(table);
-    Body b = box(3, 3, 2, 0.1, 1500.0);
+    Body b = test::boxBody(3, 3, 2, 0.1, 1500.0);
     b.positionM = Eigen::Vector3d(0.05, -0.05, 1.6);
     b = stepAlone(b, world, 1.0 / 480, 480 * 5);
     EXPECT_TRUE(b.asleep);

@@ -10,13 +10,6 @@ using openvdb::Coord;
 
 namespace {
 
-Body blockBody(int nx, int ny, int nz, double h, const Eigen::Vector3d& centre)
-{
-    Body b = makeBody(test::boxGrid(nx, ny, nz, h), h, 2000.0);
-    b.positionM = centre;
-    return b;
-}
-
 Material plainMaterial(double meanYieldPa)
 {
     Material m;
@@ -48,7 +41,7 @@ TEST(Fracture, BreaksExactlyTheLinksAboveTheirLimit)
 {
     BlastSettings bs;
     const BlastField field({Charge{Eigen::Vector3d(0, 0, 0), 2.0, 0.0, BurstType::FreeAir}}, bs);
-    Body body = blockBody(20, 6, 6, 0.1, Eigen::Vector3d(3.0, 0, 0));
+    Body body = test::boxBody(20, 6, 6, 0.1, 2000.0, Eigen::Vector3d(3.0, 0, 0));
     Material m = findMaterialPreset("brick-masonry");
     FractureSettings s;
     s.orientation = false;
@@ -83,7 +76,7 @@ TEST(Fracture, StrongerChargeBreaksMore)
     int64_t previous = -1;
     for (double w : {0.1, 0.15, 0.22}) {
         const BlastField field({Charge{Eigen::Vector3d(0, -2.0, 0), w, 0.0, BurstType::FreeAir}}, bs);
-        Body body = blockBody(30, 2, 20, 0.1, Eigen::Vector3d(0, 0, 0));
+        Body body = test::boxBody(30, 2, 20, 0.1, 2000.0, Eigen::Vector3d(0, 0, 0));
         const int64_t broken = loadOver(body, nullptr, m, field, 0.0, 0.03, 600, s);
         EXPECT_GT(broken, previous) << w;
         previous = broken;
@@ -104,7 +97,7 @@ TEST(Fracture, TwoSubCriticalChargesBreakOnlyWithWeakening)
     for (bool weakening : {false, true}) {
         FractureSettings s;
         s.weakening = weakening;
-        Body body = blockBody(2, 1, 1, 0.05, Eigen::Vector3d(0, 0, 0));
+        Body body = test::boxBody(2, 1, 1, 0.05, 2000.0, Eigen::Vector3d(0, 0, 0));
         const double arrival = field.tableParameters(0, 10.0).arrivalTimeS;
         int64_t broken = loadOver(body, nullptr, m, field, arrival - 1e-4, arrival + 2e-3, 400, s);
         EXPECT_EQ(broken, 0) << "one charge alone never breaks it";
@@ -122,7 +115,7 @@ TEST(Fracture, OrientationBreaksMoreAlongTheWave)
     m.yieldVariation = 0.0;
     FractureSettings s;
     s.weakening = false;
-    Body body = blockBody(4, 4, 4, 0.05, Eigen::Vector3d(0, 0, 0));
+    Body body = test::boxBody(4, 4, 4, 0.05, 2000.0, Eigen::Vector3d(0, 0, 0));
     loadOver(body, nullptr, m, field, 0.0, 0.1, 2000, s);
     int64_t intact[3] = {0, 0, 0};
     for (auto it = body.grid->cbeginValueOn(); it; ++it)
@@ -141,7 +134,7 @@ TEST(Fracture, DavisonStevensConvergesAsTheStepShrinks)
     s.algorithm = FractureAlgorithm::DavisonStevens;
     std::vector<int64_t> counts;
     for (int steps : {250, 500, 1000, 2000}) {
-        Body body = blockBody(20, 2, 10, 0.1, Eigen::Vector3d(0, 0, 0));
+        Body body = test::boxBody(20, 2, 10, 0.1, 2000.0, Eigen::Vector3d(0, 0, 0));
         auto damage = DamageGrid::create(0.0f);
         copyActiveTopology(damage->tree(), body.grid->constTree(), 0.0f);
         counts.push_back(loadOver(body, damage.get(), m, field, 0.0, 0.012, steps, s));
@@ -154,7 +147,7 @@ TEST(Fracture, DavisonStevensConvergesAsTheStepShrinks)
 
 TEST(Fracture, SplitConservesMomentumExactly)
 {
-    Body body = blockBody(12, 5, 7, 0.1, Eigen::Vector3d(1.0, 2.0, 3.0));
+    Body body = test::boxBody(12, 5, 7, 0.1, 2000.0, Eigen::Vector3d(1.0, 2.0, 3.0));
     body.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, -2, 0.5).normalized()));
     body.linearVelocityMS = Eigen::Vector3d(3.0, -1.0, 2.5);
     body.angularVelocityRadS = Eigen::Vector3d(4.0, 1.5, -2.0);
@@ -193,7 +186,7 @@ TEST(Fracture, OneAndTwoThreadsGiveIdenticalResults)
     std::vector<LinkGrid::Ptr> results;
     for (int threads : {1, 2}) {
         tbb::global_control c(tbb::global_control::max_allowed_parallelism, threads);
-        Body body = blockBody(40, 4, 30, 0.05, Eigen::Vector3d(0, 0, 0));
+        Body body = test::boxBody(40, 4, 30, 0.05, 2000.0, Eigen::Vector3d(0, 0, 0));
         loadOver(body, nullptr, m, field, 0.0, 0.01, 200, s);
         results.push_back(body.grid);
     }

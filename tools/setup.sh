@@ -6,7 +6,7 @@ packages=(
   libbullet-dev libopenvdb-dev libboost-dev libboost-iostreams-dev libblosc-dev libtbb-dev
   libeigen3-dev libhdf5-dev libgtest-dev libgmock-dev libbenchmark-dev
   libassimp-dev libcli11-dev nlohmann-json3-dev libpng-dev
-  python3-openvdb python3-h5py python3-numpy python3-matplotlib libopenvdb-tools hdf5-tools
+  python3-openvdb python3-h5py python3-numpy python3-matplotlib python3-pil libopenvdb-tools hdf5-tools
 )
 missing=()
 for p in "${packages[@]}"; do
