@@ -177,7 +177,7 @@ private:
 
 /// Applies the events in leaf order (the result does not depend on how they were generated);
 /// the body's link count and anchored flag follow.
-LoadResult applyLinkEvents(Body& body, DamageGrid* damage, const std::vector<std::vector<LinkEvent>>& events)
+LoadResult applyLinkEvents(Body& body, const std::vector<std::vector<LinkEvent>>& events)
 {
     LoadResult result;
     auto acc = body.grid->getAccessor();
@@ -190,7 +190,7 @@ LoadResult applyLinkEvents(Body& body, DamageGrid* damage, const std::vector<std
                 acc.setValueOn(e.ijk, acc.getValue(e.ijk) & ~kAnchorBit);
                 ++result.brokenAnchors;
                 break;
-            case EventKind::SetDamage: damage->tree().setValueOnly(e.ijk, e.damage); break;
+            case EventKind::SetDamage: body.damage->tree().setValueOnly(e.ijk, e.damage); break;
             }
         }
     }
@@ -201,7 +201,7 @@ LoadResult applyLinkEvents(Body& body, DamageGrid* damage, const std::vector<std
 
 }  // namespace
 
-LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, const PressureSnapshot& pressure, double dtS,
+LoadResult loadLinks(Body& body, const Material& material, const PressureSnapshot& pressure, double dtS,
                      const FractureSettings& settings)
 {
     if (settings.algorithm == FractureAlgorithm::None || pressure.empty()) return {};
@@ -212,47 +212,63 @@ LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, c
     // Generate: each task writes only its own leaf's events.
     leaves.foreach ([&](const LinkLeaf& leaf, size_t n) {
         if (rules.leafCanChange(leaf))
-            rules.leafEvents(leaf, damage, events[n]);
+            rules.leafEvents(leaf, body.damage.get(), events[n]);
         else
             skipped[n] = 1;
     });
-    LoadResult result = applyLinkEvents(body, damage, events);
+    LoadResult result = applyLinkEvents(body, events);
     result.skippedLeaves = std::count(skipped.begin(), skipped.end(), 1);
     return result;
 }
 
-std::vector<SplitPart> splitBody(const Body& body, const DamageGrid* damage)
+DamageGrid::Ptr zeroDamageLike(const LinkGrid& grid)
 {
-    const ComponentLabels labels = labelComponents(*body.grid);
-    std::vector<SplitPart> parts;
-    if (labels.componentCount <= 1) return parts;
-    std::vector<LinkGrid::Ptr> grids = splitByLabels(*body.grid, labels);
+    auto damage = DamageGrid::create(0.0f);
+    damage->setTransform(grid.transform().copy());
+    copyActiveTopology(damage->tree(), grid.constTree(), 0.0f);
+    return damage;
+}
 
-    std::vector<DamageGrid::Ptr> damageParts(grids.size());
-    if (damage) {
-        for (auto& d : damageParts) {
-            d = DamageGrid::create(0.0f);
-            d->setTransform(damage->transform().copy());
-            d->setName(damage->getName());
-        }
-        for (size_t n = 0; n < labels.leaves.size(); ++n) {
-            const LinkLeaf& leaf = *labels.leaves[n];
-            const auto* source = damage->constTree().probeConstLeaf(leaf.origin());
-            for (auto it = leaf.cbeginValueOn(); it; ++it) {
-                const uint32_t label = labels.labelOfSlot[n * LinkLeaf::SIZE + it.pos()];
-                damageParts[label]->tree().touchLeaf(leaf.origin())->setValueOn(it.pos(), source ? source->getValue(it.pos()) : 0.0f);
-            }
+namespace {
+
+/// The parent's damage, cut along the same labels as its voxels.
+std::vector<DamageGrid::Ptr> splitDamage(const DamageGrid& damage, const ComponentLabels& labels, size_t partCount)
+{
+    std::vector<DamageGrid::Ptr> parts(partCount);
+    for (auto& d : parts) {
+        d = DamageGrid::create(0.0f);
+        d->setTransform(damage.transform().copy());
+        d->setName(damage.getName());
+    }
+    for (size_t n = 0; n < labels.leaves.size(); ++n) {
+        const LinkLeaf& leaf = *labels.leaves[n];
+        const auto* source = damage.constTree().probeConstLeaf(leaf.origin());
+        for (auto it = leaf.cbeginValueOn(); it; ++it) {
+            const uint32_t label = labels.labelOfSlot[n * LinkLeaf::SIZE + it.pos()];
+            parts[label]->tree().touchLeaf(leaf.origin())->setValueOn(it.pos(), source ? source->getValue(it.pos()) : 0.0f);
         }
     }
+    return parts;
+}
 
+}  // namespace
+
+std::vector<Body> splitBody(const Body& body)
+{
+    const ComponentLabels labels = labelComponents(*body.grid);
+    std::vector<Body> parts;
+    if (labels.componentCount <= 1) return parts;
+    std::vector<LinkGrid::Ptr> grids = splitByLabels(*body.grid, labels);
+    std::vector<DamageGrid::Ptr> damage(grids.size());
+    if (body.damage) damage = splitDamage(*body.damage, labels, grids.size());
     const Eigen::Matrix3d rot = body.orientation.toRotationMatrix();
     parts.reserve(grids.size());
     for (size_t i = 0; i < grids.size(); ++i) {
-        SplitPart part;
-        Body& child = part.body;
+        Body child;
         child.parentId = body.id;
         child.materialIndex = body.materialIndex;
         child.grid = grids[i];
+        child.damage = damage[i];
         child.voxelSizeM = body.voxelSizeM;
         child.densityKgM3 = body.densityKgM3;
         refreshDerivedData(child);
@@ -262,8 +278,7 @@ std::vector<SplitPart> splitBody(const Body& body, const DamageGrid* damage)
         child.positionM = body.positionM + offset;
         child.angularVelocityRadS = body.angularVelocityRadS;
         child.linearVelocityMS = body.linearVelocityMS + body.angularVelocityRadS.cross(offset);
-        part.damage = damageParts[i];
-        parts.push_back(std::move(part));
+        parts.push_back(std::move(child));
     }
     return parts;
 }

@@ -133,21 +133,13 @@ void transferFields(Archive& a, C& c, std::vector<uint8_t>& hasDamage)
         a.pod(b.materialIndex, "material");
         a.pod(b.voxelSizeM, "voxel size");
         a.pod(b.densityKgM3, "density");
-        a.pod(b.linkCount, "link count");
-        a.flag(b.anchored, "anchored");
         a.vec(b.positionM, "position");
         a.doubles(b.orientation.coeffs().data(), 4, "orientation");
         a.vec(b.linearVelocityMS, "velocity");
         a.vec(b.angularVelocityRadS, "angular velocity");
         a.flag(b.asleep, "asleep");
         a.pod(b.restTimeS, "rest time");
-        // Mass properties as they were: recomputing them gives the same bits, but a checkpoint
-        // should not depend on that.
-        a.pod(b.mass.voxelCount, "voxel count");
-        a.pod(b.mass.massKg, "mass");
-        a.vec(b.mass.centreOfMassLocalM, "centre of mass");
-        a.doubles(b.mass.inertiaKgM2.data(), 9, "inertia");
-        a.pod(b.boundingRadiusM, "bounding radius");
+        // Mass, faces, bounds, link count and anchoring are derived from the grid on reading.
         if constexpr (Archive::kReading) hasDamage.resize(index + 1);
         a.pod(hasDamage[index++], "damage flag");
     });
@@ -181,7 +173,7 @@ void writeCheckpoint(const std::string& path, const Checkpoint& c)
 {
     const SimulationState& s = c.state;
     std::vector<uint8_t> hasDamage(s.bodies.size());
-    for (size_t i = 0; i < s.bodies.size(); ++i) hasDamage[i] = i < s.damage.size() && s.damage[i] != nullptr;
+    for (size_t i = 0; i < s.bodies.size(); ++i) hasDamage[i] = s.bodies[i].damage != nullptr;
 
     std::ostringstream buffer(std::ios::binary);
     Writer w(buffer);
@@ -195,7 +187,7 @@ void writeCheckpoint(const std::string& path, const Checkpoint& c)
         links->setName(gridName("links", i));
         grids.push_back(links);
         if (hasDamage[i]) {
-            auto damage = s.damage[i]->copyGrid();
+            auto damage = s.bodies[i].damage->copyGrid();
             damage->setName(gridName("damage", i));
             grids.push_back(damage);
         }
@@ -250,17 +242,14 @@ Checkpoint readCheckpoint(const std::string& path)
     }
     std::unordered_map<std::string, openvdb::GridBase::Ptr> byName;
     for (const auto& g : *grids) byName[g->getName()] = g;
-    s.damage.resize(s.bodies.size());
     for (size_t i = 0; i < s.bodies.size(); ++i) {
         Body& b = s.bodies[i];
         b.grid = openvdb::gridPtrCast<LinkGrid>(byName[gridName("links", i)]);
         if (!b.grid) r.fail("the link grid of body " + std::to_string(i) + " is missing");
-        b.exposedFaces = collectExposedFaces(*b.grid);
-        b.boundaryVoxels = boundaryVoxelsOf(b.exposedFaces);
-        b.indexBounds = b.grid->evalActiveVoxelBoundingBox();
+        refreshDerivedData(b);
         if (hasDamage[i]) {
-            s.damage[i] = openvdb::gridPtrCast<DamageGrid>(byName[gridName("damage", i)]);
-            if (!s.damage[i]) r.fail("the damage grid of body " + std::to_string(i) + " is missing");
+            b.damage = openvdb::gridPtrCast<DamageGrid>(byName[gridName("damage", i)]);
+            if (!b.damage) r.fail("the damage grid of body " + std::to_string(i) + " is missing");
         }
     }
     return c;

@@ -68,13 +68,7 @@ Simulation::Simulation(const Scene& scene) : mScene(scene)
                 throw InputError(scene.sourceName + ": charges[" + std::to_string(c) + "].position_m: the charge is inside object '" + spec.name + "'");
         }
         mState.initialVoxels += body.mass.voxelCount;
-        mState.damage.push_back(nullptr);
-        if (scene.fracture.algorithm == FractureAlgorithm::DavisonStevens) {
-            auto damage = DamageGrid::create(0.0f);
-            damage->setTransform(body.grid->transform().copy());
-            copyActiveTopology(damage->tree(), body.grid->constTree(), 0.0f);
-            mState.damage.back() = damage;
-        }
+        if (scene.fracture.algorithm == FractureAlgorithm::DavisonStevens) body.damage = zeroDamageLike(*body.grid);
         mState.bodies.push_back(std::move(body));
     }
     mStats.minDtS = scene.timeStep.maxTimeStepS;
@@ -84,7 +78,6 @@ Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene
 {
     initialiseOpenVdb();
     mField = std::make_unique<BlastField>(scene.charges, scene.blast);
-    mState.damage.resize(mState.bodies.size());
     mStats.minDtS = scene.timeStep.maxTimeStepS;
 }
 
@@ -188,7 +181,7 @@ std::vector<char> Simulation::fractureBodies(const std::vector<OpenWindow>& wind
         if (body.linkCount == 0 && !body.anchored) continue;
         if (!bodyInWindows(body, *mField, windows)) continue;
         if (!pressure) pressure.emplace(*mField, mState.timeS);
-        const LoadResult r = loadLinks(body, mState.damage[i].get(), mScene.materials[body.materialIndex], *pressure, dt, mScene.fracture);
+        const LoadResult r = loadLinks(body, mScene.materials[body.materialIndex], *pressure, dt, mScene.fracture);
         mStats.brokenLinks += r.brokenLinks;
         cracked[i] = r.brokenLinks > 0 || r.brokenAnchors > 0;
     }
@@ -215,35 +208,31 @@ void Simulation::splitBodies(const std::vector<char>& cracked)
     if (mObserver) std::tie(mRecord.linearMomentumBeforeSplit, mRecord.angularMomentumBeforeSplit) = totalMomenta();
     // Parts replace their parent.
     std::vector<Body> next;
-    std::vector<DamageGrid::Ptr> nextDamage;
     next.reserve(mState.bodies.size());
     for (size_t i = 0; i < mState.bodies.size(); ++i) {
-        std::vector<SplitPart> parts;
-        if (cracked[i]) parts = splitBody(mState.bodies[i], mState.damage[i].get());
+        std::vector<Body> parts;
+        if (cracked[i]) parts = splitBody(mState.bodies[i]);
         if (parts.empty()) {
             next.push_back(std::move(mState.bodies[i]));
-            nextDamage.push_back(mState.damage[i]);
             continue;
         }
         FractureEvent event;
         event.timeS = mState.timeS;
         event.parentId = mState.bodies[i].id;
-        for (SplitPart& part : parts) {
-            const bool small = part.body.mass.voxelCount < mScene.fracture.minFragmentVoxels;
-            if (small && mScene.fracture.smallFragments == SmallFragmentPolicy::Dust && !part.body.anchored) {
-                mState.dust.push_back({mState.timeS, mState.bodies[i].id, part.body.mass.voxelCount, part.body.mass.massKg,
-                                       linearMomentum(part.body), angularMomentumAboutOrigin(part.body)});
+        for (Body& part : parts) {
+            const bool small = part.mass.voxelCount < mScene.fracture.minFragmentVoxels;
+            if (small && mScene.fracture.smallFragments == SmallFragmentPolicy::Dust && !part.anchored) {
+                mState.dust.push_back({mState.timeS, mState.bodies[i].id, part.mass.voxelCount, part.mass.massKg, linearMomentum(part),
+                                       angularMomentumAboutOrigin(part)});
                 continue;
             }
-            part.body.id = mState.nextId++;
-            event.childIds.push_back(part.body.id);
-            next.push_back(std::move(part.body));
-            nextDamage.push_back(part.damage);
+            part.id = mState.nextId++;
+            event.childIds.push_back(part.id);
+            next.push_back(std::move(part));
         }
         mState.events.push_back(std::move(event));
     }
     mState.bodies = std::move(next);
-    mState.damage = std::move(nextDamage);
     if (mObserver) {
         mRecord.split = true;
         std::tie(mRecord.linearMomentumAfterSplit, mRecord.angularMomentumAfterSplit) = totalMomenta();

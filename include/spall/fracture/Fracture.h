@@ -30,20 +30,18 @@ struct LoadResult {
 
 /// Loads every intact link of `body` where the blast is now (`pressure`, a snapshot at the
 /// step's start) and breaks or weakens it (generate in parallel over leaves, apply in leaf
-/// order); the body's link count and anchored flag follow. `damage` is the per-voxel Davison–Stevens damage grid (same topology as the body;
-/// only for that algorithm); `dtS` is the step it accumulates over.
-LoadResult loadLinks(Body& body, DamageGrid* damage, const Material& material, const PressureSnapshot& pressure, double dtS,
+/// order); the body's link count and anchored flag follow. Davison–Stevens accumulates the
+/// body's damage grid over `dtS`.
+LoadResult loadLinks(Body& body, const Material& material, const PressureSnapshot& pressure, double dtS,
                      const FractureSettings& settings);
 
-/// A piece that left its parent.
-struct SplitPart {
-    Body body;
-    DamageGrid::Ptr damage;
-};
+/// A zero damage grid with the body grid's topology (Davison–Stevens only).
+DamageGrid::Ptr zeroDamageLike(const LinkGrid& grid);
 
-/// Splits a body into the connected components of its intact links. Each part gets the parent's
-/// velocity field at its own centre of mass (v + w x dc, same w), so momentum is conserved.
-/// Returns an empty vector when the body is still one piece. Part ids are left to the caller.
-std::vector<SplitPart> splitBody(const Body& body, const DamageGrid* damage);
+/// Splits a body into the connected components of its intact links, each with its voxels'
+/// damage. Each part gets the parent's velocity field at its own centre of mass (v + w x dc,
+/// same w), so momentum is conserved. Returns an empty vector when the body is still one piece.
+/// Part ids are left to the caller.
+std::vector<Body> splitBody(const Body& body);
 
 }  // namespace spall

@@ -28,7 +28,6 @@ struct StepStats {
 /// checkpoint stores so that a resumed run continues bit for bit.
 struct SimulationState {
     std::vector<Body> bodies;
-    std::vector<DamageGrid::Ptr> damage;  ///< per body, Davison–Stevens only (else null)
     std::vector<FractureEvent> events;
     std::vector<DustRecord> dust;
     double timeS = 0;

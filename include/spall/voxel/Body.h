@@ -64,6 +64,9 @@ struct Body {
     int64_t parentId = -1;
     int materialIndex = 0;
     LinkGrid::Ptr grid;
+    /// Per-voxel Davison–Stevens damage, same topology as the grid; only for that fracture rule
+    /// (else null). It follows the voxels through every split.
+    DamageGrid::Ptr damage;
     double voxelSizeM = 0.1;
     double densityKgM3 = 1000.0;
     MassProperties mass;
@@ -127,7 +130,9 @@ std::vector<openvdb::Coord> boundaryVoxelsOf(const std::vector<ExposedFace>& fac
 /// True when some voxel holds the anchor bit.
 bool hasAnchoredVoxel(const LinkGrid& grid);
 
-/// Fills mass properties, bounding radius, anchoring and exposed faces from the grid.
+/// Fills everything derived from the grid — mass properties, exposed faces, boundary voxels,
+/// bounds, bounding radius, link count, anchored flag — the one function that does (on creation,
+/// on a split, on reading a checkpoint).
 void refreshDerivedData(Body& body);
 
 /// A body from a grid placed so that its local frame maps to the world by translation only.
