@@ -97,14 +97,18 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
     for (const Body& body : mState.bodies) {
         for (const OpenWindow& w : windows) {
             const double d = (body.positionM - mField->charges()[w.charge].positionM).norm();
-            const double near = std::max(d - body.boundingRadiusM, 0.0), far = d + body.boundingRadiusM;
-            if (far < w.minDistanceM || near > w.maxDistanceM) continue;
-            if (w.maxDistanceM >= near - h && w.maxDistanceM <= far + h) {
+            const double nearM = std::max(d - body.boundingRadiusM, h), farM = d + body.boundingRadiusM;
+            if (farM < w.minDistanceM || nearM > w.maxDistanceM) continue;
+            // Where the front is, from the arrival times at the body's nearest and farthest
+            // points (the window's edge is padded by a table cell, which is metres wide far out).
+            const double arrivalNear = mField->window(w.charge, nearM).first, arrivalFar = mField->window(w.charge, farM).first;
+            if (mState.timeS < arrivalNear) continue;  // not there yet: the arrival rule below lands on it
+            if (mState.timeS <= arrivalFar) {
                 // The front is crossing this body.
-                dt = std::min(dt, ts.frontFraction * h / mField->shockSpeedMS(w.charge, std::max(w.maxDistanceM, h)));
+                dt = std::min(dt, ts.frontFraction * h / mField->shockSpeedMS(w.charge, nearM));
             } else {
                 // Behind the front: resolve the pulse at the body's nearest point.
-                const BlastParameters p = mField->tableParameters(w.charge, std::max(near, h));
+                const BlastParameters p = mField->tableParameters(w.charge, nearM);
                 dt = std::min(dt, ts.pulseFraction * p.positiveDurationS);
             }
         }
