@@ -1,0 +1,99 @@
+// `spall blast`: blast-wave parameters of a charge at a distance, and its pressure history.
+#include "Commands.h"
+
+#include <spall/blast/Blast.h>
+#include <spall/core/Error.h>
+#include <spall/io/Png.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+
+namespace {
+
+/// An enum-valued option; a bad value is an error naming the option.
+template <typename E>
+E parseOption(const std::string& option, const std::string& value)
+{
+    try {
+        return spall::parseEnum<E>(value);
+    } catch (const spall::InputError& e) {
+        throw spall::InputError(option + ": " + e.what());
+    }
+}
+
+}  // namespace
+
+int runBlast(double tntKg, double distanceM, const std::string& burstName, const std::string& datasetName, bool json,
+             const std::string& curvePath)
+{
+    const auto burst = parseOption<spall::BurstType>("--burst", burstName);
+    const auto dataset = parseOption<spall::BlastDataset>("--dataset", datasetName);
+    const spall::BlastParameters p = spall::blastParameters(dataset, burst, tntKg, distanceM);
+    std::string warning;
+    if (p.status == spall::RangeStatus::ClampedNear)
+        warning = "scaled distance is nearer than the dataset's fits reach: values are held at the fits' near end";
+    else if (p.status == spall::RangeStatus::ExtrapolatedFar)
+        warning = "scaled distance is beyond the dataset's fits: values are extrapolated (power laws, sound speed)";
+    if (!warning.empty()) std::cerr << "spall blast: warning: " << warning << "\n";
+
+    if (!curvePath.empty()) {
+        const bool png = curvePath.size() > 4 && curvePath.substr(curvePath.size() - 4) == ".png";
+        const double end = p.arrivalTimeS + 1.2 * (p.positiveDurationS + p.negativeDurationS);
+        const int samples = 2000;
+        std::vector<double> times, pressures;
+        for (int i = 0; i <= samples; ++i) {
+            times.push_back(end * i / samples);
+            pressures.push_back(spall::overpressureAt(p, times.back()));
+        }
+        if (png) {
+            std::vector<double> ms(times.size()), kPa(pressures.size());
+            for (size_t i = 0; i < times.size(); ++i) {
+                ms[i] = times[i] * 1e3;
+                kPa[i] = pressures[i] * 1e-3;
+            }
+            char title[160];
+            std::snprintf(title, sizeof title, "%g kg TNT at %g m (Z %.3g)", tntKg, distanceM, p.scaledDistanceMKg13);
+            spall::writePng(curvePath, spall::plotCurve(ms, kPa, "time after detonation (ms)", "overpressure (kPa)", title));
+        } else {
+            std::ofstream out(curvePath);
+            if (!out) throw spall::IoError(curvePath + ": cannot write");
+            out << "time_s,overpressure_Pa\n";
+            for (size_t i = 0; i < times.size(); ++i) out << times[i] << "," << pressures[i] << "\n";
+            if (!out) throw spall::IoError(curvePath + ": write failed");
+        }
+    }
+    if (json) {
+        nlohmann::json j = {{"tnt_kg", tntKg},
+                            {"distance_m", distanceM},
+                            {"burst", burstName},
+                            {"dataset", datasetName},
+                            {"scaled_distance_m_kg13", p.scaledDistanceMKg13},
+                            {"peak_overpressure_Pa", p.peakOverpressurePa},
+                            {"arrival_time_s", p.arrivalTimeS},
+                            {"positive_duration_s", p.positiveDurationS},
+                            {"decay_coefficient", p.decayCoefficient},
+                            {"positive_impulse_Pa_s", p.positiveImpulsePaS},
+                            {"negative_peak_Pa", p.negativePeakPa},
+                            {"negative_duration_s", p.negativeDurationS},
+                            {"reflected_pressure_Pa", p.reflectedPressurePa},
+                            {"shock_speed_m_s", p.shockSpeedMS}};
+        if (!warning.empty()) j["warning"] = warning;
+        std::cout << j.dump(2) << "\n";
+        return 0;
+    }
+    std::printf("%g kg TNT, %s burst, at %g m (%s)\n", tntKg, burstName.c_str(), distanceM, datasetName.c_str());
+    std::printf("  scaled distance       %12.5g m/kg^(1/3)\n", p.scaledDistanceMKg13);
+    std::printf("  peak overpressure     %12.5g kPa\n", p.peakOverpressurePa * 1e-3);
+    std::printf("  arrival time          %12.5g ms\n", p.arrivalTimeS * 1e3);
+    std::printf("  positive duration     %12.5g ms\n", p.positiveDurationS * 1e3);
+    std::printf("  positive impulse      %12.5g kPa ms\n", p.positiveImpulsePaS);
+    std::printf("  decay coefficient b   %12.5g\n", p.decayCoefficient);
+    std::printf("  negative peak         %12.5g kPa\n", p.negativePeakPa * 1e-3);
+    std::printf("  negative duration     %12.5g ms\n", p.negativeDurationS * 1e3);
+    std::printf("  reflected pressure    %12.5g kPa\n", p.reflectedPressurePa * 1e-3);
+    std::printf("  shock speed           %12.5g m/s\n", p.shockSpeedMS);
+    return 0;
+}

@@ -1,0 +1,111 @@
+// `spall voxelise`: a mesh or a primitive into a solid .vdb body.
+#include "Commands.h"
+
+#include <spall/core/Error.h>
+#include <spall/io/VdbIo.h>
+#include <spall/voxel/Voxelise.h>
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
+namespace {
+
+/// Percent progress on stderr, at most a few updates per second.
+class ProgressPrinter : public spall::Interrupter {
+public:
+    ProgressPrinter(std::string label, bool quiet) : mLabel(std::move(label)), mQuiet(quiet) {}
+    ~ProgressPrinter() override
+    {
+        if (mPrinted) std::fprintf(stderr, "\r%s done\n", mLabel.c_str());
+    }
+    bool wasInterrupted(int percent) override
+    {
+        if (mQuiet || percent < 0) return false;
+        const auto now = std::chrono::steady_clock::now();
+        if (mPrinted && now - mLast < std::chrono::milliseconds(250) && percent < 100) return false;
+        mLast = now;
+        mPrinted = true;
+        std::fprintf(stderr, "\r%s %3d%%", mLabel.c_str(), percent);
+        return false;
+    }
+
+private:
+    std::string mLabel;
+    bool mQuiet;
+    bool mPrinted = false;
+    std::chrono::steady_clock::time_point mLast;
+};
+
+spall::Primitive parsePrimitive(const std::string& spec)
+{
+    // box:X,Y,Z | sphere:R | cylinder:R,H (metres)
+    const auto colon = spec.find(':');
+    const std::string kind = spec.substr(0, colon);
+    std::vector<double> v;
+    if (colon != std::string::npos) {
+        std::stringstream ss(spec.substr(colon + 1));
+        std::string item;
+        while (std::getline(ss, item, ',')) {
+            try {
+                v.push_back(std::stod(item));
+            } catch (const std::exception&) {
+                throw spall::InputError("primitive '" + spec + "': '" + item + "' is not a number");
+            }
+        }
+    }
+    spall::Primitive p;
+    if (kind == "box" && v.size() == 3) {
+        p.shape = spall::PrimitiveShape::Box;
+        p.sizeM = {v[0], v[1], v[2]};
+    } else if (kind == "sphere" && v.size() == 1) {
+        p.shape = spall::PrimitiveShape::Sphere;
+        p.sizeM = {v[0], v[0], v[0]};
+    } else if (kind == "cylinder" && v.size() == 2) {
+        p.shape = spall::PrimitiveShape::Cylinder;
+        p.sizeM = {v[0], v[0], v[1]};
+    } else {
+        throw spall::InputError("primitive '" + spec + "' is not box:X,Y,Z, sphere:R or cylinder:R,H (metres)");
+    }
+    return p;
+}
+
+}  // namespace
+
+int runVoxelise(const std::string& input, const std::string& primitiveSpec, const std::string& output,
+                double voxelSize, int64_t maxVoxels, bool quiet)
+{
+    spall::VoxeliseSettings settings;
+    settings.voxelSizeM = voxelSize;
+    settings.maxVoxels = maxVoxels;
+    spall::VoxeliseResult result;
+    std::string source;
+    const auto start = std::chrono::steady_clock::now();
+    if (!primitiveSpec.empty()) {
+        source = primitiveSpec;
+        result = spall::voxelisePrimitive(parsePrimitive(primitiveSpec), settings);
+    } else {
+        source = input;
+        std::vector<std::string> notes;
+        const spall::TriangleMesh mesh = spall::loadMesh(input, &notes);
+        ProgressPrinter progress("voxelising " + input, quiet);
+        result = spall::voxeliseMesh(mesh, settings, input, &progress);
+        result.notes.insert(result.notes.begin(), notes.begin(), notes.end());
+    }
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    spall::writeVoxelisedBody(output, *result.grid, voxelSize, source);
+
+    const spall::MassProperties mp = spall::computeMassProperties(*result.grid, voxelSize, 1000.0);
+    const openvdb::CoordBBox box = result.grid->evalActiveVoxelBoundingBox();
+    for (const auto& note : result.notes) std::cerr << "spall voxelise: note: " << source << ": " << note << "\n";
+    std::cout << "voxelised " << source << " at " << voxelSize << " m\n"
+              << "  voxels:        " << result.voxelCount << "\n"
+              << "  links:         " << spall::countLinks(*result.grid) << "\n"
+              << "  volume:        " << mp.voxelCount * voxelSize * voxelSize * voxelSize << " m^3\n"
+              << "  extent:        " << box.dim().x() * voxelSize << " x " << box.dim().y() * voxelSize << " x "
+              << box.dim().z() * voxelSize << " m\n"
+              << "  throughput:    " << (seconds > 0 ? result.voxelCount / seconds : 0.0) << " voxels/s\n"
+              << "  written:       " << output << "\n";
+    return 0;
+}
