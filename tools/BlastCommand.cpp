@@ -1,6 +1,8 @@
 // `spall blast`: blast-wave parameters of a charge at a distance, and its pressure history.
 #include "Commands.h"
 
+#include <memory>
+
 #include <spall/blast/Blast.h>
 #include <spall/core/Error.h>
 #include <spall/io/Png.h>
@@ -24,7 +26,6 @@ E parseOption(const std::string& option, const std::string& value)
     }
 }
 
-}  // namespace
 
 int runBlast(double tntKg, double distanceM, const std::string& burstName, const std::string& datasetName, bool json,
              const std::string& curvePath)
@@ -96,4 +97,24 @@ int runBlast(double tntKg, double distanceM, const std::string& burstName, const
     std::printf("  reflected pressure    %12.5g kPa\n", p.reflectedPressurePa * 1e-3);
     std::printf("  shock speed           %12.5g m/s\n", p.shockSpeedMS);
     return 0;
+}
+
+}  // namespace
+
+void addBlastCommand(CLI::App& app, CommandAction& action)
+{
+    struct Options {
+        double tntKg = 0, distanceM = 0;
+        std::string burst = "free-air", dataset = "kingery-bulmash", curve;
+        bool json = false;
+    };
+    auto o = std::make_shared<Options>();
+    auto* sub = app.add_subcommand("blast", "Print blast-wave parameters of a TNT charge at a distance");
+    sub->add_option("--tnt-kg", o->tntKg, "Charge mass (kg TNT)")->required();
+    sub->add_option("--distance-m", o->distanceM, "Distance from the charge (m)")->required();
+    sub->add_option("--burst", o->burst, "free-air | surface");
+    sub->add_option("--dataset", o->dataset, "kingery-bulmash | kinney-graham");
+    sub->add_flag("--json", o->json, "JSON with SI units in every key");
+    sub->add_option("--curve", o->curve, "Write the pressure history: .csv, or .png for a plot");
+    sub->callback([o, &action] { action = [o] { return runBlast(o->tntKg, o->distanceM, o->burst, o->dataset, o->json, o->curve); }; });
 }

@@ -1,15 +1,21 @@
 // `spall inspect`: a summary of a run's history.
 #include "Commands.h"
 
+#include <memory>
+
 #include <spall/core/Error.h>
 #include <spall/io/History.h>
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <filesystem>
 #include <cstdio>
 #include <iostream>
 #include <map>
+
+namespace {
+
 
 int runInspect(const std::string& path, bool json, int frameArg, int64_t bodyArg)
 {
@@ -106,4 +112,29 @@ int runInspect(const std::string& path, bool json, int frameArg, int64_t bodyArg
                         row["position_m"][2].get<double>(), row["speed_m_s"].get<double>(), row["asleep"].get<bool>() ? "  asleep" : "");
     }
     return 0;
+}
+
+}  // namespace
+
+void addInspectCommand(CLI::App& app, CommandAction& action)
+{
+    struct Options {
+        std::string path;
+        bool json = false;
+        int frame = -1;
+        int64_t body = -1;
+    };
+    auto o = std::make_shared<Options>();
+    auto* sub = app.add_subcommand("inspect", "Summarise a run's history.h5");
+    sub->add_option("history", o->path, "OUTDIR/history.h5 (or OUTDIR)")->required();
+    sub->add_flag("--json", o->json, "JSON output");
+    sub->add_option("--frame", o->frame, "Frame to summarise (default: the last)");
+    sub->add_option("--body", o->body, "Follow one body through the run");
+    sub->callback([o, &action] {
+        action = [o] {
+            std::string path = o->path;
+            if (std::filesystem::is_directory(path)) path = (std::filesystem::path(path) / "history.h5").string();
+            return runInspect(path, o->json, o->frame, o->body);
+        };
+    });
 }

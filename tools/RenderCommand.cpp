@@ -1,6 +1,8 @@
 // `spall render`: preview pictures of a run's frames.
 #include "Commands.h"
 
+#include <memory>
+
 #include <spall/core/Error.h>
 #include <spall/io/Png.h>
 #include <spall/io/VdbIo.h>
@@ -24,7 +26,6 @@ spall::RenderSettings parseSize(const std::string& size)
     return s;
 }
 
-}  // namespace
 
 int runRender(const std::string& outDir, int frame, bool all, bool sheet, std::string pictureDir, const std::string& size)
 {
@@ -60,4 +61,24 @@ int runRender(const std::string& outDir, int frame, bool all, bool sheet, std::s
         std::printf("%s\n", out.c_str());
     }
     return 0;
+}
+
+}  // namespace
+
+void addRenderCommand(CLI::App& app, CommandAction& action)
+{
+    struct Options {
+        std::string directory, output, size = "960x540";
+        int frame = -1;
+        bool all = false, sheet = false;
+    };
+    auto o = std::make_shared<Options>();
+    auto* sub = app.add_subcommand("render", "Render preview pictures (PNG) of a run's frames");
+    sub->add_option("outdir", o->directory, "A spall run's output directory")->required();
+    sub->add_option("--frame", o->frame, "Frame number (default: the last)");
+    sub->add_flag("--all", o->all, "Every frame");
+    sub->add_flag("--sheet", o->sheet, "A contact sheet of nine frames across the run");
+    sub->add_option("-o,--output", o->output, "Where the pictures go (default: the output directory)");
+    sub->add_option("--size", o->size, "WIDTHxHEIGHT in pixels");
+    sub->callback([o, &action] { action = [o] { return runRender(o->directory, o->frame, o->all, o->sheet, o->output, o->size); }; });
 }

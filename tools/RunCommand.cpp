@@ -20,7 +20,6 @@ std::atomic<bool> gStopRequested{false};
 
 extern "C" void requestStop(int) { gStopRequested = true; }
 
-}  // namespace
 
 int runRun(const std::string& scenePath, const std::string& outDir, bool resume, int threads, int64_t seed, int frames, bool quiet,
            bool preview)
@@ -83,4 +82,36 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
     }
     if (preview) std::printf("preview: %s\n", options.previewPath.c_str());
     return 0;
+}
+
+}  // namespace
+
+void addRunCommand(CLI::App& app, CommandAction& action)
+{
+    struct Options {
+        std::string scene, output = "out", resume;
+        int threads = 0, frames = -1;
+        int64_t seed = -1;
+        bool quiet = false, noPreview = false;
+    };
+    auto o = std::make_shared<Options>();
+    auto* sub = app.add_subcommand("run", "Simulate a scene (default: the built-in wall demo) and write frames and history");
+    sub->add_option("scene", o->scene, "Scene JSON (docs/scene-format.md); omit for the built-in default");
+    sub->add_option("-o,--output", o->output, "Output directory");
+    sub->add_option("--threads", o->threads, "Worker threads (0: all cores); output does not depend on it")->check(CLI::NonNegativeNumber);
+    sub->add_option("--seed", o->seed, "Override the scene's seed")->check(CLI::NonNegativeNumber);
+    sub->add_option("--frames", o->frames, "Stop after this many frames")->check(CLI::NonNegativeNumber);
+    sub->add_flag("--quiet", o->quiet, "No progress bar");
+    sub->add_flag("--no-preview", o->noPreview, "Do not render OUTDIR/preview.png");
+    sub->add_option("--resume", o->resume, "Continue the interrupted run in this output directory from its checkpoint")
+        ->excludes(sub->get_option("scene"))
+        ->excludes("--seed")
+        ->excludes("--frames")
+        ->excludes("--output");
+    sub->callback([o, &action] {
+        action = [o] {
+            const bool resume = !o->resume.empty();
+            return runRun(o->scene, resume ? o->resume : o->output, resume, o->threads, o->seed, o->frames, o->quiet, !o->noPreview);
+        };
+    });
 }

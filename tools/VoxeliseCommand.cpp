@@ -1,6 +1,8 @@
 // `spall voxelise`: a mesh or a primitive into a solid .vdb body.
 #include "Commands.h"
 
+#include <memory>
+
 #include <spall/core/Error.h>
 #include <spall/io/VdbIo.h>
 #include <spall/voxel/Voxelise.h>
@@ -71,7 +73,6 @@ spall::Primitive parsePrimitive(const std::string& spec)
     return p;
 }
 
-}  // namespace
 
 int runVoxelise(const std::string& input, const std::string& primitiveSpec, const std::string& output,
                 double voxelSize, int64_t maxVoxels, bool quiet)
@@ -108,4 +109,31 @@ int runVoxelise(const std::string& input, const std::string& primitiveSpec, cons
               << "  throughput:    " << (seconds > 0 ? result.voxelCount / seconds : 0.0) << " voxels/s\n"
               << "  written:       " << output << "\n";
     return 0;
+}
+
+}  // namespace
+
+void addVoxeliseCommand(CLI::App& app, CommandAction& action)
+{
+    struct Options {
+        std::string input, primitive, output;
+        double voxelSizeM = 0.05;
+        int64_t maxVoxels = 200'000'000;
+        bool quiet = false;
+    };
+    auto o = std::make_shared<Options>();
+    auto* sub = app.add_subcommand("voxelise", "Voxelise a mesh or a primitive into a solid .vdb body");
+    sub->alias("voxelize");
+    sub->add_option("input", o->input, "Mesh file (OBJ, STL, PLY, OFF, glTF, ...)");
+    sub->add_option("--primitive", o->primitive, "Instead of a mesh: box:X,Y,Z | sphere:R | cylinder:R,H (m)");
+    sub->add_option("-o,--output", o->output, "Output .vdb")->required();
+    sub->add_option("--voxel-size", o->voxelSizeM, "Voxel edge (m)")->required();
+    sub->add_option("--max-voxels", o->maxVoxels, "Refuse results with more voxels than this");
+    sub->add_flag("--quiet", o->quiet, "No progress on stderr");
+    sub->callback([o, &action] {
+        action = [o] {
+            if (o->input.empty() == o->primitive.empty()) throw spall::InputError("give either a mesh file or --primitive, not both or neither");
+            return runVoxelise(o->input, o->primitive, o->output, o->voxelSizeM, o->maxVoxels, o->quiet);
+        };
+    });
 }
