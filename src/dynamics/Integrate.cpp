@@ -39,6 +39,42 @@ Eigen::Quaterniond rotateBy(const Eigen::Quaterniond& q, const Eigen::Vector3d& 
     return (Eigen::Quaterniond(Eigen::AngleAxisd(angle, w.normalized())) * q).normalized();
 }
 
+/// Classic fourth-order Runge–Kutta over the whole state; the quaternion is normalised at the end.
+RigidState rungeKutta4Step(const Body& body, const RigidState& s0, double t, double dt, const WrenchFunction& wrench)
+{
+    const double m = body.mass.massKg;
+    RigidState s = s0;
+    struct Derivative {
+        Eigen::Vector3d dx;
+        Eigen::Quaterniond dq;
+        Eigen::Vector3d dp, dl;
+    };
+    auto derivative = [&](double time, const RigidState& st) {
+        const Eigen::Vector3d v = st.p / m;
+        const Eigen::Vector3d w = angularVelocity(body, st.q.normalized(), st.l);
+        const Wrench f = wrench(time, st.x, st.q.normalized(), v, w);
+        return Derivative{v, quaternionRate(st.q, w), f.forceN, f.torqueNm};
+    };
+    auto advance = [](const RigidState& st, const Derivative& d, double h) {
+        RigidState out = st;
+        out.x += h * d.dx;
+        out.q.coeffs() += h * d.dq.coeffs();
+        out.p += h * d.dp;
+        out.l += h * d.dl;
+        return out;
+    };
+    const Derivative k1 = derivative(t, s);
+    const Derivative k2 = derivative(t + dt / 2, advance(s, k1, dt / 2));
+    const Derivative k3 = derivative(t + dt / 2, advance(s, k2, dt / 2));
+    const Derivative k4 = derivative(t + dt, advance(s, k3, dt));
+    s.x += dt / 6 * (k1.dx + 2 * k2.dx + 2 * k3.dx + k4.dx);
+    s.q.coeffs() += dt / 6 * (k1.dq.coeffs() + 2 * k2.dq.coeffs() + 2 * k3.dq.coeffs() + k4.dq.coeffs());
+    s.q.normalize();
+    s.p += dt / 6 * (k1.dp + 2 * k2.dp + 2 * k3.dp + k4.dp);
+    s.l += dt / 6 * (k1.dl + 2 * k2.dl + 2 * k3.dl + k4.dl);
+    return s;
+}
+
 }  // namespace
 
 void integrateBody(Body& body, double t, double dt, Integrator integrator, const WrenchFunction& wrench)
@@ -68,37 +104,7 @@ void integrateBody(Body& body, double t, double dt, Integrator integrator, const
         s.q = rotateBy(s.q, angularVelocity(body, s.q, s.l), dt);
         break;
     }
-    case Integrator::RungeKutta4: {
-        struct Derivative {
-            Eigen::Vector3d dx;
-            Eigen::Quaterniond dq;
-            Eigen::Vector3d dp, dl;
-        };
-        auto derivative = [&](double time, const RigidState& st) {
-            const Eigen::Vector3d v = st.p / m;
-            const Eigen::Vector3d w = angularVelocity(body, st.q.normalized(), st.l);
-            const Wrench f = wrench(time, st.x, st.q.normalized(), v, w);
-            return Derivative{v, quaternionRate(st.q, w), f.forceN, f.torqueNm};
-        };
-        auto advance = [](const RigidState& st, const Derivative& d, double h) {
-            RigidState out = st;
-            out.x += h * d.dx;
-            out.q.coeffs() += h * d.dq.coeffs();
-            out.p += h * d.dp;
-            out.l += h * d.dl;
-            return out;
-        };
-        const Derivative k1 = derivative(t, s);
-        const Derivative k2 = derivative(t + dt / 2, advance(s, k1, dt / 2));
-        const Derivative k3 = derivative(t + dt / 2, advance(s, k2, dt / 2));
-        const Derivative k4 = derivative(t + dt, advance(s, k3, dt));
-        s.x += dt / 6 * (k1.dx + 2 * k2.dx + 2 * k3.dx + k4.dx);
-        s.q.coeffs() += dt / 6 * (k1.dq.coeffs() + 2 * k2.dq.coeffs() + 2 * k3.dq.coeffs() + k4.dq.coeffs());
-        s.q.normalize();
-        s.p += dt / 6 * (k1.dp + 2 * k2.dp + 2 * k3.dp + k4.dp);
-        s.l += dt / 6 * (k1.dl + 2 * k2.dl + 2 * k3.dl + k4.dl);
-        break;
-    }
+    case Integrator::RungeKutta4: s = rungeKutta4Step(body, s, t, dt, wrench); break;
     }
     body.positionM = s.x;
     body.orientation = s.q;

@@ -37,29 +37,22 @@ inline void unite(std::vector<uint32_t>& parent, uint32_t a, uint32_t b)
 
 }  // namespace
 
-ComponentLabels labelComponents(const LinkGrid& grid)
+namespace {
+
+using Slots = std::vector<uint32_t>;  ///< union-find parent per slot (leafIndex * 512 + offset)
+using NeighbourLeaves = std::vector<std::array<uint32_t, 3>>;  ///< per leaf: its +x, +y, +z neighbour (kNone: absent)
+
+/// Pass 1 (parallel, each task touches only its own leaf's slots): unions inside a leaf, and the
+/// neighbour leaves. Offsets are x*64 + y*8 + z, so +x, +y, +z neighbours are +64, +8, +1.
+NeighbourLeaves uniteInsideLeaves(const LinkTree& tree, const std::vector<const LinkLeaf*>& leaves, Slots& parent)
 {
-    ComponentLabels result;
-    openvdb::tree::LeafManager<const LinkTree> manager(grid.constTree());
-    const size_t leafCount = manager.leafCount();
-    result.leaves.resize(leafCount);
-    for (size_t n = 0; n < leafCount; ++n) result.leaves[n] = &manager.leaf(n);
-    if (leafCount == 0) return result;
-
     std::unordered_map<const LinkLeaf*, uint32_t> leafIndex;
-    leafIndex.reserve(leafCount * 2);
-    for (size_t n = 0; n < leafCount; ++n) leafIndex.emplace(result.leaves[n], static_cast<uint32_t>(n));
-
-    std::vector<uint32_t> parent(leafCount * kSlotsPerLeaf, kNone);
-    // Index of the +x, +y, +z neighbour leaf of every leaf (kNone when absent).
-    std::vector<std::array<uint32_t, 3>> nextLeaf(leafCount);
-    const LinkTree& tree = grid.constTree();
-
-    // Pass 1 (parallel, each task touches only its own leaf's slots): unions inside a leaf.
-    // Offsets are x*64 + y*8 + z, so +x, +y, +z neighbours are +64, +8, +1.
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, leafCount), [&](const tbb::blocked_range<size_t>& r) {
+    leafIndex.reserve(leaves.size() * 2);
+    for (size_t n = 0; n < leaves.size(); ++n) leafIndex.emplace(leaves[n], static_cast<uint32_t>(n));
+    NeighbourLeaves nextLeaf(leaves.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves.size()), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t n = r.begin(); n != r.end(); ++n) {
-            const LinkLeaf& leaf = *result.leaves[n];
+            const LinkLeaf& leaf = *leaves[n];
             const uint32_t base = static_cast<uint32_t>(n) * kSlotsPerLeaf;
             for (auto it = leaf.cbeginValueOn(); it; ++it) parent[base + it.pos()] = base + it.pos();
             for (auto it = leaf.cbeginValueOn(); it; ++it) {
@@ -77,12 +70,15 @@ ComponentLabels labelComponents(const LinkGrid& grid)
             }
         }
     });
+    return nextLeaf;
+}
 
-    // Pass 2 (serial): links that cross into the +x, +y, +z neighbour leaf.
-    for (size_t n = 0; n < leafCount; ++n) {
-        const LinkLeaf& leaf = *result.leaves[n];
+/// Pass 2 (serial): links that cross into the +x, +y, +z neighbour leaf.
+void uniteAcrossLeaves(const std::vector<const LinkLeaf*>& leaves, const NeighbourLeaves& nextLeaf, Slots& parent)
+{
+    for (size_t n = 0; n < leaves.size(); ++n) {
         const uint32_t base = static_cast<uint32_t>(n) * kSlotsPerLeaf;
-        for (auto it = leaf.cbeginValueOn(); it; ++it) {
+        for (auto it = leaves[n]->cbeginValueOn(); it; ++it) {
             const uint32_t off = static_cast<uint32_t>(it.pos());
             const int32_t bits = it.getValue();
             const uint32_t x = off >> 6, y = (off >> 3) & 7, z = off & 7;
@@ -94,9 +90,12 @@ ComponentLabels labelComponents(const LinkGrid& grid)
                 unite(parent, base + off, nextLeaf[n][2] * kSlotsPerLeaf + (off - 7));
         }
     }
+}
 
-    // Pass 3: a root is its component's first slot, so numbering roots in slot order gives labels
-    // in order of first appearance.
+/// Pass 3: a root is its component's first slot, so numbering roots in slot order gives labels
+/// in order of first appearance.
+void numberComponents(const Slots& parent, size_t leafCount, ComponentLabels& result)
+{
     std::vector<uint32_t> labelOfRoot(parent.size(), kNone);
     uint32_t count = 0;
     for (uint32_t i = 0; i < parent.size(); ++i) {
@@ -115,6 +114,22 @@ ComponentLabels labelComponents(const LinkGrid& grid)
             }
         }
     });
+}
+
+}  // namespace
+
+ComponentLabels labelComponents(const LinkGrid& grid)
+{
+    ComponentLabels result;
+    openvdb::tree::LeafManager<const LinkTree> manager(grid.constTree());
+    const size_t leafCount = manager.leafCount();
+    result.leaves.resize(leafCount);
+    for (size_t n = 0; n < leafCount; ++n) result.leaves[n] = &manager.leaf(n);
+    if (leafCount == 0) return result;
+    Slots parent(leafCount * kSlotsPerLeaf, kNone);
+    const NeighbourLeaves nextLeaf = uniteInsideLeaves(grid.constTree(), result.leaves, parent);
+    uniteAcrossLeaves(result.leaves, nextLeaf, parent);
+    numberComponents(parent, leafCount, result);
     return result;
 }
 
