@@ -22,7 +22,8 @@ bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<
 std::vector<char> BlastLoads::loadedBodies(const std::vector<Body>& bodies) const
 {
     std::vector<char> loaded(bodies.size(), 0);
-    forEachIndex(bodies.size(), [&](size_t i) { loaded[i] = !bodies[i].anchored && bodyInWindows(bodies[i], mField, mWindows); });
+    forEachIndex(bodies.size(), [&](size_t i) { loaded[i] = !bodies[i].anchored && bodyInWindows(bodies[i], mField, mWindows); },
+                 kCheapGrain);
     return loaded;
 }
 

@@ -93,34 +93,42 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
 {
     const TimeStepSettings& ts = mScene.timeStep;
     const double h = mScene.voxelSizeM;
+    const double t = mState.timeS;
     double dt = ts.maxTimeStepS;
+    // Per charge, for the body at hand: its nearest and farthest distance and the blast at the
+    // nearest point (looked up once, read by both rules below).
+    struct Reach {
+        double nearM, farM, arrivalNearS;
+        BlastParameters atNear;
+    };
+    std::vector<Reach> reach(mField->charges().size());
     for (const Body& body : mState.bodies) {
+        for (size_t c = 0; c < reach.size(); ++c) {
+            const double d = (body.positionM - mField->charges()[c].positionM).norm();
+            Reach& r = reach[c];
+            r.nearM = std::max(d - body.boundingRadiusM, h);
+            r.farM = d + body.boundingRadiusM;
+            r.atNear = mField->tableParameters(static_cast<int>(c), r.nearM);
+            r.arrivalNearS = mField->charges()[c].detonationTimeS + r.atNear.arrivalTimeS;
+        }
         for (const OpenWindow& w : windows) {
-            const double d = (body.positionM - mField->charges()[w.charge].positionM).norm();
-            const double nearM = std::max(d - body.boundingRadiusM, h), farM = d + body.boundingRadiusM;
-            if (farM < w.minDistanceM || nearM > w.maxDistanceM) continue;
+            const Reach& r = reach[w.charge];
+            if (r.farM < w.minDistanceM || r.nearM > w.maxDistanceM) continue;
             // Where the front is, from the arrival times at the body's nearest and farthest
             // points (the window's edge is padded by a table cell, which is metres wide far out).
-            const double arrivalNear = mField->window(w.charge, nearM).first, arrivalFar = mField->window(w.charge, farM).first;
-            if (mState.timeS < arrivalNear) continue;  // not there yet: the arrival rule below lands on it
-            if (mState.timeS <= arrivalFar) {
-                // The front is crossing this body.
-                dt = std::min(dt, ts.frontFraction * h / mField->shockSpeedMS(w.charge, nearM));
-            } else {
-                // Behind the front: resolve the pulse at the body's nearest point.
-                const BlastParameters p = mField->tableParameters(w.charge, nearM);
-                dt = std::min(dt, ts.pulseFraction * p.positiveDurationS);
-            }
+            if (t < r.arrivalNearS) continue;  // not there yet: the arrival rule below lands on it
+            if (t <= mField->window(w.charge, r.farM).first)
+                dt = std::min(dt, ts.frontFraction * h / mField->shockSpeedMS(w.charge, r.nearM));  // the front is crossing the body
+            else
+                dt = std::min(dt, ts.pulseFraction * r.atNear.positiveDurationS);  // behind it: resolve the pulse at the nearest point
         }
         // Never step far over the moment a front first reaches the body: land on it, or at most
         // a crossing step past it (landing on every arrival of every charge at every fragment
         // would take steps as short as the gaps between those moments).
-        for (size_t c = 0; c < mField->charges().size(); ++c) {
-            const double d = (body.positionM - mField->charges()[c].positionM).norm();
-            const double nearM = std::max(d - body.boundingRadiusM, h);
-            const double arrival = mField->window(static_cast<int>(c), nearM).first;
-            if (arrival > mState.timeS && arrival - mState.timeS < dt)
-                dt = std::min(dt, std::max(arrival - mState.timeS, ts.frontFraction * h / mField->shockSpeedMS(static_cast<int>(c), nearM)));
+        for (size_t c = 0; c < reach.size(); ++c) {
+            const double arrival = reach[c].arrivalNearS;
+            if (arrival > t && arrival - t < dt)
+                dt = std::min(dt, std::max(arrival - t, ts.frontFraction * h / mField->shockSpeedMS(static_cast<int>(c), reach[c].nearM)));
         }
         if (!body.anchored && !body.asleep) {
             const double speed = maxVoxelSpeedMS(body);
