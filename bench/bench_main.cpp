@@ -171,7 +171,7 @@ void BM_Loading_Links256(benchmark::State& state)
 {
     auto g = block(256);
     Body body = makeBody(g, 0.01, 2000.0);
-    body.positionM = Eigen::Vector3d(0, 0, 0);
+    body.motion.positionM = Eigen::Vector3d(0, 0, 0);
     BlastSettings bs;
     // 100 kg 40 m away: the front has just passed the far corner (41.3 m), and the pressure
     // across the block varies by less than the links' spread of limits (a factor of 3).

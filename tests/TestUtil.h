@@ -36,8 +36,8 @@ inline Body boxBody(int nx, int ny, int nz, double h, double densityKgM3, const 
                     const Eigen::Quaterniond& orientation = Eigen::Quaterniond::Identity())
 {
     Body b = makeBody(boxGrid(nx, ny, nz, h), h, densityKgM3);
-    b.positionM = positionM;
-    b.orientation = orientation;
+    b.motion.positionM = positionM;
+    b.motion.orientation = orientation;
     return b;
 }
 

@@ -173,20 +173,20 @@ public:
         Eigen::Vector3d linear = Eigen::Vector3d::Zero();
         for (const Body& b : sim.bodies()) {
             const std::string id = "body " + std::to_string(b.id);
-            if (!b.positionM.allFinite() || !b.linearVelocityMS.allFinite() || !b.angularVelocityRadS.allFinite() ||
-                !b.orientation.coeffs().allFinite())
+            if (!b.motion.positionM.allFinite() || !b.motion.linearVelocityMS.allFinite() || !b.motion.angularVelocityRadS.allFinite() ||
+                !b.motion.orientation.coeffs().allFinite())
                 fail(id + " has a NaN or Inf");
-            if (std::abs(b.orientation.norm() - 1.0) > 1e-9) fail(id + ": |q| = " + std::to_string(b.orientation.norm()));
+            if (std::abs(b.motion.orientation.norm() - 1.0) > 1e-9) fail(id + ": |q| = " + std::to_string(b.motion.orientation.norm()));
             voxels += b.mass.voxelCount;
             massKg += b.mass.massKg;
             kineticJ += kineticEnergyJ(b);
-            energyJ += kineticEnergyJ(b) - b.mass.massKg * mGravity.dot(b.positionM);
+            energyJ += kineticEnergyJ(b) - b.mass.massKg * mGravity.dot(b.motion.positionM);
             linear += linearMomentum(b);
-            momentumScale += b.mass.massKg * b.linearVelocityMS.norm();
+            momentumScale += b.mass.massKg * b.motion.linearVelocityMS.norm();
             if (mGround.enabled) {
                 // The lowest voxel corner, with a voxel of slack for the contact tolerance.
                 const double h = b.voxelSizeM;
-                const double height = mGround.normal.dot(b.positionM) - mGround.offsetM;
+                const double height = mGround.normal.dot(b.motion.positionM) - mGround.offsetM;
                 if (height + b.boundingRadiusM < -h) fail(id + " is entirely below the ground");
                 if (height < b.boundingRadiusM + h) {
                     for (const openvdb::Coord& v : b.boundaryVoxels) {

@@ -156,8 +156,8 @@ TEST(Components, CheckerboardCutsGiveManyPiecesIdenticallyForAnyThreadCount)
 TEST(Body, IndexToWorldMatchesPose)
 {
     Body b = makeBody(test::boxGrid(3, 2, 5, 0.2), 0.2, 1000.0);
-    b.positionM = Eigen::Vector3d(1.0, -2.0, 3.0);
-    b.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()));
+    b.motion.positionM = Eigen::Vector3d(1.0, -2.0, 3.0);
+    b.motion.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()));
     const auto xf = b.indexToWorld();
     for (const Coord c : {Coord(0, 0, 0), Coord(2, 1, 4), Coord(1, 0, 3)}) {
         const openvdb::Vec3d w = xf->indexToWorld(c);

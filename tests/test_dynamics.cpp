@@ -35,14 +35,14 @@ TEST(Integrators, BallisticFlightMatchesClosedForm)
     const Eigen::Vector3d exact = x0 + v0 * t + 0.5 * g * t * t;
     for (Integrator integrator : {Integrator::ExplicitEuler, Integrator::SemiImplicitEuler, Integrator::RungeKutta4}) {
         Body b = test::boxBody(2, 2, 2, 0.1, 1000.0);
-        b.positionM = x0;
-        b.linearVelocityMS = v0;
+        b.motion.positionM = x0;
+        b.motion.linearVelocityMS = v0;
         const WrenchFunction f = gravityOnly(b, g);
         for (int i = 0; i < steps; ++i) integrateBody(b, i * dt, dt, integrator, f);
         // Euler methods are first order: position error g t dt / 2 exactly; RK4 is exact for a parabola.
         const double expected = integrator == Integrator::RungeKutta4 ? 0.0 : 0.5 * g.norm() * t * dt;
-        EXPECT_NEAR((b.positionM - exact).norm(), expected, 1e-9 + 1e-6 * expected) << enumName(integrator);
-        EXPECT_NEAR((b.linearVelocityMS - (v0 + g * t)).norm(), 0.0, 1e-9) << enumName(integrator);
+        EXPECT_NEAR((b.motion.positionM - exact).norm(), expected, 1e-9 + 1e-6 * expected) << enumName(integrator);
+        EXPECT_NEAR((b.motion.linearVelocityMS - (v0 + g * t)).norm(), 0.0, 1e-9) << enumName(integrator);
     }
 }
 
@@ -59,10 +59,10 @@ TEST(Integrators, SymmetricTopFollowsTheAnalyticTorqueFreeSolution)
     const Eigen::Vector3d exact(a * std::cos(omega * duration), a * std::sin(omega * duration), w3);
     for (Integrator integrator : {Integrator::SemiImplicitEuler, Integrator::RungeKutta4}) {
         Body b = test::boxBody(2, 2, 4, h, density);
-        b.angularVelocityRadS = Eigen::Vector3d(a, 0, w3);  // the body starts unrotated: body frame = world frame
+        b.motion.angularVelocityRadS = Eigen::Vector3d(a, 0, w3);  // the body starts unrotated: body frame = world frame
         const int steps = 4000;
         for (int i = 0; i < steps; ++i) integrateBody(b, i * duration / steps, duration / steps, integrator, kNoForce);
-        const Eigen::Vector3d bodyOmega = b.orientation.inverse() * b.angularVelocityRadS;
+        const Eigen::Vector3d bodyOmega = b.motion.orientation.inverse() * b.motion.angularVelocityRadS;
         const double error = (bodyOmega - exact).norm() / exact.norm();
         EXPECT_LT(error, integrator == Integrator::RungeKutta4 ? 1e-8 : 2e-2) << enumName(integrator);
     }
@@ -74,16 +74,16 @@ TEST(Integrators, TorqueFreeAsymmetricBodyFlipsAndKeepsItsEnergy)
     // perturbation: the body tumbles (the spin about y reverses) and keeps its kinetic energy.
     for (Integrator integrator : {Integrator::SemiImplicitEuler, Integrator::RungeKutta4}) {
         Body b = test::boxBody(6, 4, 2, 0.1, 1000.0);
-        b.angularVelocityRadS = Eigen::Vector3d(0.01, 5.0, 0.01);
+        b.motion.angularVelocityRadS = Eigen::Vector3d(0.01, 5.0, 0.01);
         const double e0 = kineticEnergyJ(b);
         double minBodyY = 1e300, maxDrift = 0;
         const double dt = 5e-4;
         for (int i = 0; i < 10000; ++i) {
             integrateBody(b, i * dt, dt, integrator, kNoForce);
-            const Eigen::Vector3d bodyOmega = b.orientation.inverse() * b.angularVelocityRadS;
+            const Eigen::Vector3d bodyOmega = b.motion.orientation.inverse() * b.motion.angularVelocityRadS;
             minBodyY = std::min(minBodyY, bodyOmega.y());
             maxDrift = std::max(maxDrift, std::abs(kineticEnergyJ(b) - e0) / e0);
-            EXPECT_NEAR(b.orientation.norm(), 1.0, 1e-12);
+            EXPECT_NEAR(b.motion.orientation.norm(), 1.0, 1e-12);
         }
         EXPECT_LT(maxDrift, integrator == Integrator::RungeKutta4 ? 1e-6 : 2e-2) << enumName(integrator);
         EXPECT_LT(minBodyY, -4.0) << "the intermediate-axis flip did not appear with " << enumName(integrator);
@@ -96,7 +96,7 @@ TEST(BlastForce, FriedlanderPulseGivesTheAnalyticImpulse)
     BlastSettings bs;
     const BlastField field({Charge{Eigen::Vector3d(-25, 0, 0), 10.0, 0.0, BurstType::FreeAir}}, bs);
     Body b = test::boxBody(1, 1, 1, 0.1, 2000.0);
-    b.positionM = Eigen::Vector3d::Zero();
+    b.motion.positionM = Eigen::Vector3d::Zero();
     const BlastParameters p = field.tableParameters(0, 24.95);
     const double positive = p.peakOverpressurePa * p.positiveDurationS * friedlanderImpulseFraction(p.decayCoefficient);
     const double negative = 9.0 / 16.0 * p.negativePeakPa * p.negativeDurationS;
@@ -108,9 +108,9 @@ TEST(BlastForce, FriedlanderPulseGivesTheAnalyticImpulse)
                                      const Eigen::Vector3d&) { return BlastLoads(field, windows, LoadSettings{false}).wrench(b, time, x, q); };
         integrateBody(b, t, dt, Integrator::RungeKutta4, f);
     }
-    EXPECT_NEAR(b.linearVelocityMS.x(), expected, 0.01 * std::abs(expected));
-    EXPECT_NEAR(b.linearVelocityMS.y(), 0.0, 1e-9);
-    EXPECT_NEAR(b.angularVelocityRadS.norm(), 0.0, 1e-9);
+    EXPECT_NEAR(b.motion.linearVelocityMS.x(), expected, 0.01 * std::abs(expected));
+    EXPECT_NEAR(b.motion.linearVelocityMS.y(), 0.0, 1e-9);
+    EXPECT_NEAR(b.motion.angularVelocityRadS.norm(), 0.0, 1e-9);
 }
 
 TEST(BlastForce, StressFromOneGramToOneTonne)
@@ -119,7 +119,7 @@ TEST(BlastForce, StressFromOneGramToOneTonne)
         BlastSettings bs;
         const BlastField field({Charge{Eigen::Vector3d(-0.5, 0.05, 0.02), w, 0.0, BurstType::FreeAir}}, bs);
         Body b = test::boxBody(2, 2, 2, 0.05, 2000.0);
-        b.positionM = Eigen::Vector3d::Zero();
+        b.motion.positionM = Eigen::Vector3d::Zero();
         const double h = 0.05;
         double t = 0;
         for (int i = 0; i < 20000 && t < 0.05; ++i) {
@@ -133,14 +133,14 @@ TEST(BlastForce, StressFromOneGramToOneTonne)
             dt = std::min({dt, 0.5 * h / field.shockSpeedMS(0, 0.5), p.positiveDurationS / 32});
             const WrenchFunction f = [&](double time, const Eigen::Vector3d& x, const Eigen::Quaterniond& q, const Eigen::Vector3d&,
                                          const Eigen::Vector3d&) { return BlastLoads(field, windows, LoadSettings{true}).wrench(b, time, x, q); };
-            const Eigen::Vector3d before = b.positionM;
+            const Eigen::Vector3d before = b.motion.positionM;
             integrateBody(b, t, dt, Integrator::SemiImplicitEuler, f);
             t += dt;
-            ASSERT_TRUE(b.positionM.allFinite() && b.linearVelocityMS.allFinite() && b.angularVelocityRadS.allFinite()) << w;
-            ASSERT_NEAR(b.orientation.norm(), 1.0, 1e-12);
-            EXPECT_LE((b.positionM - before).norm(), 0.5 * h * 1.5 + 1e-12) << "w = " << w;
+            ASSERT_TRUE(b.motion.positionM.allFinite() && b.motion.linearVelocityMS.allFinite() && b.motion.angularVelocityRadS.allFinite()) << w;
+            ASSERT_NEAR(b.motion.orientation.norm(), 1.0, 1e-12);
+            EXPECT_LE((b.motion.positionM - before).norm(), 0.5 * h * 1.5 + 1e-12) << "w = " << w;
         }
-        EXPECT_GT(b.linearVelocityMS.x(), 0.0) << w;
+        EXPECT_GT(b.motion.linearVelocityMS.x(), 0.0) << w;
     }
 }
 
@@ -148,9 +148,9 @@ TEST(BlastForce, StressFromOneGramToOneTonne)
 Body stepAlone(Body b, const WorldSettings& world, double dt, int steps, double* lowestZ = nullptr)
 {
     Simulation sim = rigidBodySimulation({std::move(b)}, world, CollisionSettings(), SleepSettings(), dt, true);
-    for (int i = 0; i < steps && !sim.bodies()[0].asleep; ++i) {
+    for (int i = 0; i < steps && !sim.bodies()[0].motion.asleep; ++i) {
         sim.step();
-        if (lowestZ) *lowestZ = std::min(*lowestZ, sim.bodies()[0].positionM.z());
+        if (lowestZ) *lowestZ = std::min(*lowestZ, sim.bodies()[0].motion.positionM.z());
     }
     return sim.bodies()[0];
 }
@@ -158,14 +158,14 @@ Body stepAlone(Body b, const WorldSettings& world, double dt, int steps, double*
 TEST(Ground, DroppedBoxComesToRestOnTheGroundAndSleeps)
 {
     Body b = test::boxBody(4, 3, 2, 0.1, 1500.0);
-    b.positionM = Eigen::Vector3d(0, 0, 1.0);
-    b.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 1, 0).normalized()));
-    b.linearVelocityMS = Eigen::Vector3d(1.0, 0, 0);
+    b.motion.positionM = Eigen::Vector3d(0, 0, 1.0);
+    b.motion.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 1, 0).normalized()));
+    b.motion.linearVelocityMS = Eigen::Vector3d(1.0, 0, 0);
     double lowest = 1e300;
     b = stepAlone(b, WorldSettings(), 1.0 / 480, 480 * 6, &lowest);
-    EXPECT_TRUE(b.asleep);
+    EXPECT_TRUE(b.motion.asleep);
     // It rests on one of its faces: the centre is half a thickness (0.1, 0.15 or 0.2 m) up.
-    const double z = b.positionM.z();
+    const double z = b.motion.positionM.z();
     EXPECT_TRUE(std::abs(z - 0.1) < 0.01 || std::abs(z - 0.15) < 0.01 || std::abs(z - 0.2) < 0.01) << z;
     EXPECT_GT(lowest, 0.05);
 }
@@ -181,8 +181,8 @@ TEST(Colliders, BodyComesToRestOnAStaticBox)
     table.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.35, Eigen::Vector3d::UnitZ()));
     world.colliders.push_back(table);
     Body b = test::boxBody(3, 3, 2, 0.1, 1500.0);
-    b.positionM = Eigen::Vector3d(0.05, -0.05, 1.6);
+    b.motion.positionM = Eigen::Vector3d(0.05, -0.05, 1.6);
     b = stepAlone(b, world, 1.0 / 480, 480 * 5);
-    EXPECT_TRUE(b.asleep);
-    EXPECT_NEAR(b.positionM.z(), 1.0 + 0.1, 0.01) << "resting on the table top, half its 0.2 m height up";
+    EXPECT_TRUE(b.motion.asleep);
+    EXPECT_NEAR(b.motion.positionM.z(), 1.0 + 0.1, 0.01) << "resting on the table top, half its 0.2 m height up";
 }

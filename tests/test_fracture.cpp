@@ -168,9 +168,9 @@ TEST(Fracture, DavisonStevensDamageIsTheIntegralOfItsRate)
 TEST(Fracture, SplitConservesMomentumExactly)
 {
     Body body = test::boxBody(12, 5, 7, 0.1, 2000.0, Eigen::Vector3d(1.0, 2.0, 3.0));
-    body.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, -2, 0.5).normalized()));
-    body.linearVelocityMS = Eigen::Vector3d(3.0, -1.0, 2.5);
-    body.angularVelocityRadS = Eigen::Vector3d(4.0, 1.5, -2.0);
+    body.motion.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, -2, 0.5).normalized()));
+    body.motion.linearVelocityMS = Eigen::Vector3d(3.0, -1.0, 2.5);
+    body.motion.angularVelocityRadS = Eigen::Vector3d(4.0, 1.5, -2.0);
     auto acc = body.grid->getAccessor();
     for (int y = 0; y < 5; ++y)
         for (int z = 0; z < 7; ++z) {
@@ -184,13 +184,13 @@ TEST(Fracture, SplitConservesMomentumExactly)
     Eigen::Vector3d p = Eigen::Vector3d::Zero(), l = Eigen::Vector3d::Zero();
     int64_t voxels = 0;
     for (const Body& c : parts) {
-        p += c.mass.massKg * c.linearVelocityMS;
-        l += c.worldInertiaKgM2() * c.angularVelocityRadS + c.positionM.cross(c.mass.massKg * c.linearVelocityMS);
+        p += c.mass.massKg * c.motion.linearVelocityMS;
+        l += c.worldInertiaKgM2() * c.motion.angularVelocityRadS + c.motion.positionM.cross(c.mass.massKg * c.motion.linearVelocityMS);
         voxels += c.mass.voxelCount;
         EXPECT_EQ(c.parentId, body.id);
     }
-    const Eigen::Vector3d p0 = body.mass.massKg * body.linearVelocityMS;
-    const Eigen::Vector3d l0 = body.worldInertiaKgM2() * body.angularVelocityRadS + body.positionM.cross(p0);
+    const Eigen::Vector3d p0 = body.mass.massKg * body.motion.linearVelocityMS;
+    const Eigen::Vector3d l0 = body.worldInertiaKgM2() * body.motion.angularVelocityRadS + body.motion.positionM.cross(p0);
     EXPECT_EQ(voxels, body.mass.voxelCount);
     EXPECT_LT((p - p0).norm(), 1e-12 * p0.norm());
     EXPECT_LT((l - l0).norm(), 1e-12 * l0.norm());

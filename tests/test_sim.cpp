@@ -67,6 +67,11 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "collisions": {"method": "sweep"}})").find("collisions.method"),
               std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "seed": -1})").find("seed: must be an integer that fits in 64 bits, not negative"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "collisions": {"solver_iterations": 4294967297}})")
+                  .find("collisions.solver_iterations: must be an integer that fits in 32 bits"),
+              std::string::npos);
     EXPECT_EQ(errorOf(defaultSceneJson()), "");
 }
 
@@ -165,15 +170,15 @@ TEST(Simulation, ConservesVoxelsAndGivesTheSameResultForAnyThreadCount)
         std::vector<double> state;
         for (const Body& b : sim.bodies()) {
             total += b.mass.voxelCount;
-            ASSERT_TRUE(b.positionM.allFinite() && b.linearVelocityMS.allFinite());
-            ASSERT_NEAR(b.orientation.norm(), 1.0, 1e-12);
+            ASSERT_TRUE(b.motion.positionM.allFinite() && b.motion.linearVelocityMS.allFinite());
+            ASSERT_NEAR(b.motion.orientation.norm(), 1.0, 1e-12);
             for (int k = 0; k < 3; ++k) {
-                state.push_back(b.positionM[k]);
-                state.push_back(b.linearVelocityMS[k]);
+                state.push_back(b.motion.positionM[k]);
+                state.push_back(b.motion.linearVelocityMS[k]);
             }
             state.push_back(double(b.id));
             if (!b.anchored) {
-                EXPECT_GT(b.positionM.z(), 0.0);
+                EXPECT_GT(b.motion.positionM.z(), 0.0);
             }
         }
         EXPECT_EQ(total, voxels);
@@ -203,11 +208,11 @@ void expectSameBodies(const std::vector<Body>& a, const std::vector<Body>& b)
     ASSERT_EQ(a.size(), b.size());
     for (size_t i = 0; i < a.size(); ++i) {
         EXPECT_EQ(a[i].id, b[i].id);
-        EXPECT_EQ(a[i].positionM, b[i].positionM) << i;
-        EXPECT_EQ(a[i].orientation.coeffs(), b[i].orientation.coeffs()) << i;
-        EXPECT_EQ(a[i].linearVelocityMS, b[i].linearVelocityMS) << i;
-        EXPECT_EQ(a[i].angularVelocityRadS, b[i].angularVelocityRadS) << i;
-        EXPECT_EQ(a[i].asleep, b[i].asleep) << i;
+        EXPECT_EQ(a[i].motion.positionM, b[i].motion.positionM) << i;
+        EXPECT_EQ(a[i].motion.orientation.coeffs(), b[i].motion.orientation.coeffs()) << i;
+        EXPECT_EQ(a[i].motion.linearVelocityMS, b[i].motion.linearVelocityMS) << i;
+        EXPECT_EQ(a[i].motion.angularVelocityRadS, b[i].motion.angularVelocityRadS) << i;
+        EXPECT_EQ(a[i].motion.asleep, b[i].motion.asleep) << i;
         EXPECT_EQ(a[i].linkCount, b[i].linkCount) << i;
         ASSERT_EQ(a[i].grid->activeVoxelCount(), b[i].grid->activeVoxelCount()) << i;
         auto acc = b[i].grid->getConstAccessor();

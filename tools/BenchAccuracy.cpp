@@ -56,20 +56,20 @@ void integratorStudy(std::vector<Row>& rows)
         for (int n = 15; n <= 3840; n *= 2) {
             Body b = voxelBox(2, 2, 2, 0.1, 1000.0);
             const Eigen::Vector3d g(0, 0, -9.81), v0(4, -2, 12);
-            b.positionM = Eigen::Vector3d::Zero();
-            b.linearVelocityMS = v0;
+            b.motion.positionM = Eigen::Vector3d::Zero();
+            b.motion.linearVelocityMS = v0;
             const double m = b.mass.massKg, dt = 1.0 / n;
             const WrenchFunction gravity = [m, g](double, const Eigen::Vector3d&, const Eigen::Quaterniond&, const Eigen::Vector3d&,
                                                   const Eigen::Vector3d&) { return Wrench{m * g, Eigen::Vector3d::Zero()}; };
             const auto start = Clock::now();
             for (int i = 0; i < n; ++i) integrateBody(b, i * dt, dt, integrator, gravity);
-            const double error = (b.positionM - (v0 + 0.5 * g)).norm();
+            const double error = (b.motion.positionM - (v0 + 0.5 * g)).norm();
             rows.push_back({"integrator", "ballistic", name, dt, "position_error_m", error, secondsSince(start)});
         }
         // Torque-free asymmetric body spinning near its major axis for 2 s: energy is conserved.
         for (int n = 60; n <= 15360; n *= 2) {
             Body b = voxelBox(6, 4, 2, 0.1, 1000.0);
-            b.angularVelocityRadS = Eigen::Vector3d(0.5, 0.3, 6.0);
+            b.motion.angularVelocityRadS = Eigen::Vector3d(0.5, 0.3, 6.0);
             const double e0 = kineticEnergyJ(b), dt = 2.0 / n;
             const auto start = Clock::now();
             for (int i = 0; i < n; ++i) integrateBody(b, i * dt, dt, integrator, kNoForce);
@@ -85,7 +85,7 @@ void integratorStudy(std::vector<Row>& rows)
                                9.0 / 16.0 * p.negativePeakPa * p.negativeDurationS;
         for (int n = 4; n <= 1024; n *= 2) {
             Body b = voxelBox(1, 1, 1, 0.1, 2000.0);
-            b.positionM = Eigen::Vector3d::Zero();
+            b.motion.positionM = Eigen::Vector3d::Zero();
             const double expected = impulse * 0.01 / b.mass.massKg, dt = p.positiveDurationS / n;
             const auto start = Clock::now();
             // From the arrival, as the simulation steps (it lands on arrivals): the error is then
@@ -98,7 +98,7 @@ void integratorStudy(std::vector<Row>& rows)
                 integrateBody(b, t, dt, integrator, f);
             }
             rows.push_back({"integrator", "friedlander pulse", name, dt, "relative_velocity_error",
-                            std::abs(b.linearVelocityMS.x() - expected) / std::abs(expected), secondsSince(start)});
+                            std::abs(b.motion.linearVelocityMS.x() - expected) / std::abs(expected), secondsSince(start)});
         }
     }
 }
@@ -188,7 +188,7 @@ SceneResult runScene(const nlohmann::json& scene, double durationS)
     for (int f = 0; f * (1.0 / s.frameRateHz) <= durationS + 1e-12; ++f) {
         sim.advanceTo(f / s.frameRateHz);
         std::vector<std::pair<double, Eigen::Vector3d>> bodies;
-        for (const Body& b : sim.bodies()) bodies.push_back({b.mass.massKg, b.positionM});
+        for (const Body& b : sim.bodies()) bodies.push_back({b.mass.massKg, b.motion.positionM});
         std::stable_sort(bodies.begin(), bodies.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
         r.frames.push_back(std::move(bodies));
     }

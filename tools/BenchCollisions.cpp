@@ -89,15 +89,15 @@ public:
             compound->calculateLocalInertia(body.mass.massKg, inertia);
             btTransform pose;
             pose.setIdentity();
-            pose.setOrigin(btVector3(body.positionM.x(), body.positionM.y(), body.positionM.z()));
-            pose.setRotation(btQuaternion(body.orientation.x(), body.orientation.y(), body.orientation.z(), body.orientation.w()));
+            pose.setOrigin(btVector3(body.motion.positionM.x(), body.motion.positionM.y(), body.motion.positionM.z()));
+            pose.setRotation(btQuaternion(body.motion.orientation.x(), body.motion.orientation.y(), body.motion.orientation.z(), body.motion.orientation.w()));
             mMotion.push_back(std::make_unique<btDefaultMotionState>(pose));
             btRigidBody::btRigidBodyConstructionInfo info(body.mass.massKg, mMotion.back().get(), compound.get(), inertia);
             info.m_friction = 0.6;
             info.m_restitution = 0.2;
             auto rigid = std::make_unique<btRigidBody>(info);
-            rigid->setLinearVelocity(btVector3(body.linearVelocityMS.x(), body.linearVelocityMS.y(), body.linearVelocityMS.z()));
-            rigid->setAngularVelocity(btVector3(body.angularVelocityRadS.x(), body.angularVelocityRadS.y(), body.angularVelocityRadS.z()));
+            rigid->setLinearVelocity(btVector3(body.motion.linearVelocityMS.x(), body.motion.linearVelocityMS.y(), body.motion.linearVelocityMS.z()));
+            rigid->setAngularVelocity(btVector3(body.motion.angularVelocityRadS.x(), body.motion.angularVelocityRadS.y(), body.motion.angularVelocityRadS.z()));
             rigid->setActivationState(DISABLE_DEACTIVATION);
             mWorld.addRigidBody(rigid.get());
             mShapes.push_back(std::move(compound));
@@ -140,79 +140,71 @@ struct Row {
     double stepsPerS;  ///< 0: skipped (over the time limit)
 };
 
-}  // namespace
-
-int benchCollisions(bool json, long maxBoundaryVoxels)
+/// Steps per second of one collision method on a scene's bodies.
+double measureMethod(const DebrisScene& base, const std::string& method, const SleepSettings& noSleep)
 {
-    initialiseOpenVdb();
-    std::vector<std::string> methods = {"none", "pairwise", "buckets", "tree-lookup"};
+    if (method == "bullet") {
 #ifdef SPALL_WITH_BULLET
-    methods.push_back("bullet");
+        BulletWorld world(base);
+        return measureStepsPerSecond([&] { world.step(); });
 #endif
+    }
+    CollisionSettings collisions;
+    collisions.method = parseEnum<CollisionMethod>(method);
+    Simulation sim = rigidBodySimulation(base.bodies, base.world, collisions, noSleep, kStepS, true);
+    return measureStepsPerSecond([&] { sim.step(); });
+}
+
+/// One scene ("pile" or "explosion") at growing sizes, every method; a method whose next step
+/// would exceed kLongestStepS (pairwise grows with the square of the voxels) is skipped from then on.
+void benchScene(const std::string& scene, const std::vector<std::string>& methods, long maxBoundaryVoxels, bool verbose, std::vector<Row>& rows)
+{
+    SleepSettings noSleep;
+    noSleep.enabled = false;
     // Fragment counts: one small fragment, then about 10^2 ... 10^6 boundary voxels.
     std::vector<std::pair<int, int>> sizes = {{1, 2}};  // (fragments, edge)
     for (long target = 100; target <= 1'000'000; target *= 10) sizes.push_back({static_cast<int>((target + 28) / 56), kFragmentEdge});
-    std::vector<Row> rows;
-    SleepSettings noSleep;
-    noSleep.enabled = false;
-    for (const std::string scene : {"pile", "explosion"}) {
-        std::map<std::string, double> lastStepS;
-        std::map<std::string, long> lastVoxels;
-        for (const auto& [fragments, edge] : sizes) {
-            DebrisScene base = scene == "pile" ? makeDebrisPile(fragments, edge, kVoxelSizeM, 1)
-                                               : makeExplosionCloud(fragments, edge, kVoxelSizeM, kExplosionSpeedMS, 1);
-            if (base.boundaryVoxels > maxBoundaryVoxels) break;
-            if (scene == "pile") {
-                Simulation settle = rigidBodySimulation(base.bodies, base.world, CollisionSettings(), noSleep, kStepS, true);
-                settle.advanceTo(kSettleS);
-                base.bodies = settle.bodies();
-            }
-            for (const std::string& method : methods) {
-                if (method == "bullet" && scene != "pile") continue;
-                // Skip what would take too long: pairwise grows with the square of the voxels.
-                if (lastStepS.count(method)) {
-                    const double growth = static_cast<double>(base.boundaryVoxels) / lastVoxels[method];
-                    const double predicted = lastStepS[method] * (method == "pairwise" ? growth * growth : growth);
-                    if (lastStepS[method] == 0 || predicted > kLongestStepS) {
-                        rows.push_back({scene, method, base.boundaryVoxels, 0.0});
-                        lastStepS[method] = 0;
-                        continue;
-                    }
+    std::map<std::string, double> lastStepS;
+    std::map<std::string, long> lastVoxels;
+    for (const auto& [fragments, edge] : sizes) {
+        DebrisScene base = scene == "pile" ? makeDebrisPile(fragments, edge, kVoxelSizeM, 1)
+                                           : makeExplosionCloud(fragments, edge, kVoxelSizeM, kExplosionSpeedMS, 1);
+        if (base.boundaryVoxels > maxBoundaryVoxels) break;
+        if (scene == "pile") {
+            Simulation settle = rigidBodySimulation(base.bodies, base.world, CollisionSettings(), noSleep, kStepS, true);
+            settle.advanceTo(kSettleS);
+            base.bodies = settle.bodies();
+        }
+        for (const std::string& method : methods) {
+            if (method == "bullet" && scene != "pile") continue;
+            if (lastStepS.count(method)) {
+                const double growth = static_cast<double>(base.boundaryVoxels) / lastVoxels[method];
+                const double predicted = lastStepS[method] * (method == "pairwise" ? growth * growth : growth);
+                if (lastStepS[method] == 0 || predicted > kLongestStepS) {
+                    rows.push_back({scene, method, base.boundaryVoxels, 0.0});
+                    lastStepS[method] = 0;
+                    continue;
                 }
-                double stepsPerS = 0;
-                if (method == "bullet") {
-#ifdef SPALL_WITH_BULLET
-                    BulletWorld world(base);
-                    stepsPerS = measureStepsPerSecond([&] { world.step(); });
-#endif
-                } else {
-                    CollisionSettings collisions;
-                    collisions.method = parseEnum<CollisionMethod>(method);
-                    Simulation sim = rigidBodySimulation(base.bodies, base.world, collisions, noSleep, kStepS, true);
-                    stepsPerS = measureStepsPerSecond([&] { sim.step(); });
-                }
-                rows.push_back({scene, method, base.boundaryVoxels, stepsPerS});
-                lastStepS[method] = 1.0 / stepsPerS;
-                lastVoxels[method] = base.boundaryVoxels;
-                if (!json)
-                    std::fprintf(stderr, "  %-9s %-11s %8ld boundary voxels: %10.1f steps/s\n", scene.c_str(), method.c_str(),
-                                 base.boundaryVoxels, stepsPerS);
             }
+            const double stepsPerS = measureMethod(base, method, noSleep);
+            rows.push_back({scene, method, base.boundaryVoxels, stepsPerS});
+            lastStepS[method] = 1.0 / stepsPerS;
+            lastVoxels[method] = base.boundaryVoxels;
+            if (verbose)
+                std::fprintf(stderr, "  %-9s %-11s %8ld boundary voxels: %10.1f steps/s\n", scene.c_str(), method.c_str(), base.boundaryVoxels,
+                             stepsPerS);
         }
     }
+}
+
+/// One line per scene and size, a column per method, and the ratios.
+void printCollisionTable(const std::vector<Row>& rows)
+{
     auto find = [&](const Row& r, const std::string& method) -> double {
         for (const Row& o : rows)
             if (o.scene == r.scene && o.boundaryVoxels == r.boundaryVoxels && o.method == method) return o.stepsPerS;
         return 0.0;
     };
-    if (json) {
-        nlohmann::json out = nlohmann::json::array();
-        for (const Row& r : rows)
-            out.push_back({{"scene", r.scene}, {"method", r.method}, {"boundary_voxels", r.boundaryVoxels},
-                           {"steps_per_s", r.stepsPerS > 0 ? nlohmann::json(r.stepsPerS) : nlohmann::json(nullptr)}});
-        std::cout << out.dump(1) << "\n";
-        return 0;
-    }
     std::printf("Steps per second (time step %.4g s, voxel %.3g m, fragments of %d^3 voxels, sleep off, the pile settled for\n"
                 "%.2g s first; '-' = skipped, would exceed %.0f s per step). Ratios: against pairwise in the same run; x bullet:\n"
                 "tree lookup / Bullet.\n",
@@ -235,6 +227,28 @@ int benchCollisions(bool json, long maxBoundaryVoxels)
         std::printf("%-10s %10ld %12s %12s %12s %12s %12s %10s %10s\n", r.scene.c_str(), r.boundaryVoxels, cell("none").c_str(),
                     cell("pairwise").c_str(), cell("buckets").c_str(), cell("tree-lookup").c_str(), cell("bullet").c_str(), vsPair, vsBullet);
     }
+}
+
+}  // namespace
+
+int benchCollisions(bool json, long maxBoundaryVoxels)
+{
+    initialiseOpenVdb();
+    std::vector<std::string> methods = {"none", "pairwise", "buckets", "tree-lookup"};
+#ifdef SPALL_WITH_BULLET
+    methods.push_back("bullet");
+#endif
+    std::vector<Row> rows;
+    for (const std::string scene : {"pile", "explosion"}) benchScene(scene, methods, maxBoundaryVoxels, !json, rows);
+    if (!json) {
+        printCollisionTable(rows);
+        return 0;
+    }
+    nlohmann::json out = nlohmann::json::array();
+    for (const Row& r : rows)
+        out.push_back({{"scene", r.scene}, {"method", r.method}, {"boundary_voxels", r.boundaryVoxels},
+                       {"steps_per_s", r.stepsPerS > 0 ? nlohmann::json(r.stepsPerS) : nlohmann::json(nullptr)}});
+    std::cout << out.dump(1) << "\n";
     return 0;
 }
 

@@ -27,6 +27,33 @@ E parseOption(const std::string& option, const std::string& value)
 }
 
 
+/// The pressure history at the point, from detonation to past the negative phase: a plot for
+/// .png, else CSV.
+void writePressureCurve(const spall::BlastParameters& p, const std::string& path, const std::string& title)
+{
+    const double end = p.arrivalTimeS + 1.2 * (p.positiveDurationS + p.negativeDurationS);
+    const int samples = 2000;
+    std::vector<double> times, pressures;
+    for (int i = 0; i <= samples; ++i) {
+        times.push_back(end * i / samples);
+        pressures.push_back(spall::overpressureAt(p, times.back()));
+    }
+    if (path.size() > 4 && path.substr(path.size() - 4) == ".png") {
+        std::vector<double> ms(times.size()), kPa(pressures.size());
+        for (size_t i = 0; i < times.size(); ++i) {
+            ms[i] = times[i] * 1e3;
+            kPa[i] = pressures[i] * 1e-3;
+        }
+        spall::writePng(path, spall::plotCurve(ms, kPa, "time after detonation (ms)", "overpressure (kPa)", title));
+        return;
+    }
+    std::ofstream out(path);
+    if (!out) throw spall::IoError(path + ": cannot write");
+    out << "time_s,overpressure_Pa\n";
+    for (size_t i = 0; i < times.size(); ++i) out << times[i] << "," << pressures[i] << "\n";
+    if (!out) throw spall::IoError(path + ": write failed");
+}
+
 int runBlast(double tntKg, double distanceM, const std::string& burstName, const std::string& datasetName, bool json,
              const std::string& curvePath)
 {
@@ -41,30 +68,9 @@ int runBlast(double tntKg, double distanceM, const std::string& burstName, const
     if (!warning.empty()) std::cerr << "spall blast: warning: " << warning << "\n";
 
     if (!curvePath.empty()) {
-        const bool png = curvePath.size() > 4 && curvePath.substr(curvePath.size() - 4) == ".png";
-        const double end = p.arrivalTimeS + 1.2 * (p.positiveDurationS + p.negativeDurationS);
-        const int samples = 2000;
-        std::vector<double> times, pressures;
-        for (int i = 0; i <= samples; ++i) {
-            times.push_back(end * i / samples);
-            pressures.push_back(spall::overpressureAt(p, times.back()));
-        }
-        if (png) {
-            std::vector<double> ms(times.size()), kPa(pressures.size());
-            for (size_t i = 0; i < times.size(); ++i) {
-                ms[i] = times[i] * 1e3;
-                kPa[i] = pressures[i] * 1e-3;
-            }
-            char title[160];
-            std::snprintf(title, sizeof title, "%g kg TNT at %g m (Z %.3g)", tntKg, distanceM, p.scaledDistanceMKg13);
-            spall::writePng(curvePath, spall::plotCurve(ms, kPa, "time after detonation (ms)", "overpressure (kPa)", title));
-        } else {
-            std::ofstream out(curvePath);
-            if (!out) throw spall::IoError(curvePath + ": cannot write");
-            out << "time_s,overpressure_Pa\n";
-            for (size_t i = 0; i < times.size(); ++i) out << times[i] << "," << pressures[i] << "\n";
-            if (!out) throw spall::IoError(curvePath + ": write failed");
-        }
+        char title[160];
+        std::snprintf(title, sizeof title, "%g kg TNT at %g m (Z %.3g)", tntKg, distanceM, p.scaledDistanceMKg13);
+        writePressureCurve(p, curvePath, title);
     }
     if (json) {
         nlohmann::json j = {{"tnt_kg", tntKg},

@@ -12,6 +12,7 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
 
 namespace {
@@ -20,6 +21,46 @@ std::atomic<bool> gStopRequested{false};
 
 extern "C" void requestStop(int) { gStopRequested = true; }
 
+
+/// The per-frame callback: draws a progress bar with the time left (unless quiet) and says
+/// whether to go on (not after Ctrl-C or SIGTERM).
+std::function<bool(const spall::RunProgress&)> progressBar(bool quiet)
+{
+    return [quiet, firstFrame = -1](const spall::RunProgress& p) mutable {
+        if (firstFrame < 0) firstFrame = p.frame;
+        if (!quiet) {
+            const int width = 30;
+            const int filled = p.frameCount > 0 ? width * (p.frame + 1) / p.frameCount : width;
+            const double perFrame = p.elapsedS / (p.frame + 1 - firstFrame);
+            const double left = perFrame * (p.frameCount - p.frame - 1);
+            std::fprintf(stderr, "\r[%-*s] frame %d/%d  t=%.3f s  bodies %zu  steps %lld  %.0f s left ", width,
+                         std::string(filled, '#').c_str(), p.frame + 1, p.frameCount, p.timeS, p.bodies,
+                         static_cast<long long>(p.totalSteps), left);
+            std::fflush(stderr);
+        }
+        return !gStopRequested.load();
+    };
+}
+
+/// What was written and how to open it; after an interruption, how to go on.
+void printRunSummary(const spall::RunReport& report, const std::string& outDir)
+{
+    std::printf("%s: %d frames, %zu bodies at the end, %lld fracture events, %lld steps, %.1f s\n",
+                report.complete ? "finished" : "interrupted", report.framesWritten, report.finalBodies,
+                static_cast<long long>(report.fractureEvents), static_cast<long long>(report.totalSteps), report.wallTimeS);
+    std::printf("output: %s/fragments.NNNN.vdb (one grid per fragment + density), %s/history.h5, %s/scene.json\n",
+                outDir.c_str(), outDir.c_str(), outDir.c_str());
+    std::printf("open: Blender: File > Import > OpenVDB (the sequence); Houdini: File SOP on fragments.$F4.vdb;\n"
+                "      Python: h5py.File('%s/history.h5') (see docs/file-formats.md)\n", outDir.c_str());
+    if (report.complete) return;
+    if (std::filesystem::exists(std::filesystem::path(outDir) / spall::kCheckpointFileName))
+        std::fprintf(stderr, "spall run: interrupted after %d frames; they are complete and readable; continue with: spall run --resume %s\n",
+                     report.framesWritten, outDir.c_str());
+    else
+        std::fprintf(stderr, "spall run: interrupted after %d frames; they are complete and readable; no checkpoint "
+                             "(output.checkpoint_every_s is 0), so finishing means running the scene again\n",
+                     report.framesWritten);
+}
 
 int runRun(const std::string& scenePath, const std::string& outDir, bool resume, int threads, int64_t seed, int frames, bool quiet,
            bool preview)
@@ -34,20 +75,7 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
     options.outputDirectory = outDir;
     options.maxFrames = frames;
     if (preview) options.previewPath = (std::filesystem::path(outDir) / "preview.png").string();
-    const auto onFrame = [&, firstFrame = -1](const spall::RunProgress& p) mutable {
-        if (firstFrame < 0) firstFrame = p.frame;
-        if (!quiet) {
-            const int width = 30;
-            const int filled = p.frameCount > 0 ? width * (p.frame + 1) / p.frameCount : width;
-            const double perFrame = p.elapsedS / (p.frame + 1 - firstFrame);
-            const double left = perFrame * (p.frameCount - p.frame - 1);
-            std::fprintf(stderr, "\r[%-*s] frame %d/%d  t=%.3f s  bodies %zu  steps %lld  %.0f s left ", width,
-                         std::string(filled, '#').c_str(), p.frame + 1, p.frameCount, p.timeS, p.bodies,
-                         static_cast<long long>(p.totalSteps), left);
-            std::fflush(stderr);
-        }
-        return !gStopRequested.load();
-    };
+    const auto onFrame = progressBar(quiet);
     spall::RunReport report;
     if (resume) {
         if (!quiet) std::fprintf(stderr, "spall run: resuming %s\n", outDir.c_str());
@@ -63,23 +91,8 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
         report = spall::runScene(scene, options, onFrame);
     }
     if (!quiet) std::fprintf(stderr, "\n");
-    std::printf("%s: %d frames, %zu bodies at the end, %lld fracture events, %lld steps, %.1f s\n",
-                report.complete ? "finished" : "interrupted", report.framesWritten, report.finalBodies,
-                static_cast<long long>(report.fractureEvents), static_cast<long long>(report.totalSteps), report.wallTimeS);
-    std::printf("output: %s/fragments.NNNN.vdb (one grid per fragment + density), %s/history.h5, %s/scene.json\n",
-                outDir.c_str(), outDir.c_str(), outDir.c_str());
-    std::printf("open: Blender: File > Import > OpenVDB (the sequence); Houdini: File SOP on fragments.$F4.vdb;\n"
-                "      Python: h5py.File('%s/history.h5') (see docs/file-formats.md)\n", outDir.c_str());
-    if (!report.complete) {
-        if (std::filesystem::exists(std::filesystem::path(outDir) / spall::kCheckpointFileName))
-            std::fprintf(stderr, "spall run: interrupted after %d frames; they are complete and readable; continue with: spall run --resume %s\n",
-                         report.framesWritten, outDir.c_str());
-        else
-            std::fprintf(stderr, "spall run: interrupted after %d frames; they are complete and readable; no checkpoint "
-                                 "(output.checkpoint_every_s is 0), so finishing means running the scene again\n",
-                         report.framesWritten);
-        return 130;
-    }
+    printRunSummary(report, outDir);
+    if (!report.complete) return 130;
     if (preview) std::printf("preview: %s\n", options.previewPath.c_str());
     return 0;
 }

@@ -2,7 +2,8 @@
 
 namespace spall {
 
-const std::vector<Field<Atmosphere>>& FieldTable<Atmosphere>::fields()
+template <>
+const std::vector<Field<Atmosphere>>& fieldTable<Atmosphere>()
 {
     static const std::vector<Field<Atmosphere>> table = {
         {"atmosphere.pressure_Pa", &Atmosphere::pressurePa, aboveZeroUpTo(1e8)},
@@ -11,7 +12,8 @@ const std::vector<Field<Atmosphere>>& FieldTable<Atmosphere>::fields()
     return table;
 }
 
-const std::vector<Field<Charge>>& FieldTable<Charge>::fields()
+template <>
+const std::vector<Field<Charge>>& fieldTable<Charge>()
 {
     static const std::vector<Field<Charge>> table = {
         {"position_m", &Charge::positionM},
@@ -22,7 +24,8 @@ const std::vector<Field<Charge>>& FieldTable<Charge>::fields()
     return table;
 }
 
-const std::vector<Field<BlastSettings>>& FieldTable<BlastSettings>::fields()
+template <>
+const std::vector<Field<BlastSettings>>& fieldTable<BlastSettings>()
 {
     static const std::vector<Field<BlastSettings>> table = {
         {"blast.dataset", choice(&BlastSettings::dataset)},

@@ -43,7 +43,7 @@ public:
         mBase = 2.0 * std::max(smallest, 1e-9);
         std::vector<std::pair<Cell, int>> entries(bodies.size());
         forEachIndex(bodies.size(), [&](size_t i) {
-            entries[i] = {cellAt(bodies[i].positionM, levelOf(bodies[i].boundingRadiusM)), static_cast<int>(i)};
+            entries[i] = {cellAt(bodies[i].motion.positionM, levelOf(bodies[i].boundingRadiusM)), static_cast<int>(i)};
         }, kCheapGrain);
         std::sort(entries.begin(), entries.end(),
                   [](const auto& x, const auto& y) { return x.first < y.first || (!(y.first < x.first) && x.second < y.second); });
@@ -119,7 +119,7 @@ std::vector<BodyPair> findCandidatePairs(const std::vector<Body>& bodies)
             const Body& a = bodies[i];
             const Body& b = bodies[j];
             const double reach = a.boundingRadiusM + b.boundingRadiusM;
-            if ((a.positionM - b.positionM).squaredNorm() > reach * reach || !pairCanInteract(a, b)) return;
+            if ((a.motion.positionM - b.motion.positionM).squaredNorm() > reach * reach || !pairCanInteract(a, b)) return;
             found[block].push_back({std::min(i, j), std::max(i, j)});
         };
         for (size_t r = block * kBlock; r < std::min(runs.size(), (block + 1) * kBlock); ++r) {

@@ -79,7 +79,7 @@ std::vector<int> solverSides(const std::vector<Body>& bodies, size_t contactCoun
     std::vector<int> side(bodies.size(), -1);
     std::vector<std::pair<double, int>> xs;
     for (size_t i = 0; i < bodies.size(); ++i)
-        if (movable(bodies[i])) xs.push_back({bodies[i].positionM.x(), static_cast<int>(i)});
+        if (movable(bodies[i])) xs.push_back({bodies[i].motion.positionM.x(), static_cast<int>(i)});
     if (contactCount < kSplitSolverContacts) {
         for (const auto& [x, i] : xs) side[i] = 0;
         return side;
@@ -277,9 +277,9 @@ std::vector<SolverBody> solverBodies(const std::vector<Body>& bodies, std::vecto
     rotation.resize(bodies.size());
     for (size_t i = 0; i < bodies.size(); ++i) {
         const Body& body = bodies[i];
-        rotation[i] = body.orientation.toRotationMatrix();
+        rotation[i] = body.motion.orientation.toRotationMatrix();
         if (!movable(body)) continue;
-        state[i] = {body.linearVelocityMS, body.angularVelocityRadS, 1.0 / body.mass.massKg,
+        state[i] = {body.motion.linearVelocityMS, body.motion.angularVelocityRadS, 1.0 / body.mass.massKg,
                     rotation[i] * body.mass.inertiaKgM2.inverse() * rotation[i].transpose()};
     }
     return state;
@@ -305,7 +305,7 @@ std::vector<SolverContact> solverContacts(const std::vector<Body>& bodies, const
         else
             c.bounceTarget = -gap / dt;  // speculative: the approach may only close the gap
         c.friction = friction;
-        c.height = up.dot(bodies[a].positionM + armA);
+        c.height = up.dot(bodies[a].motion.positionM + armA);
         return c;
     };
     // Each source fills its own slots.
@@ -327,7 +327,7 @@ std::vector<SolverContact> solverContacts(const std::vector<Body>& bodies, const
         const Body& b = bodies[manifold.b];
         for (size_t n = 0; n < manifold.points.size(); ++n) {
             const VoxelContact& p = manifold.points[n];
-            contacts[manifoldStart[m] + n] = makeContact(manifold.a, manifold.b, {a.id, b.id}, p.pointM - a.positionM, p.pointM - b.positionM,
+            contacts[manifoldStart[m] + n] = makeContact(manifold.a, manifold.b, {a.id, b.id}, p.pointM - a.motion.positionM, p.pointM - b.motion.positionM,
                                                          manifold.normal, p.depthM, collisions.restitution, collisions.friction);
         }
     }, kCheapGrain);
@@ -351,8 +351,8 @@ void solveContacts(std::vector<Body>& bodies, const ContactSet& set, const World
     solver.solve(collisions.solverIterations);
     for (size_t i = 0; i < bodies.size(); ++i) {
         if (!movable(bodies[i])) continue;
-        bodies[i].linearVelocityMS = state[i].v;
-        bodies[i].angularVelocityRadS = state[i].w;
+        bodies[i].motion.linearVelocityMS = state[i].v;
+        bodies[i].motion.angularVelocityRadS = state[i].w;
     }
     solver.store(cache, rotation);
 }
@@ -388,12 +388,12 @@ void correctPositions(std::vector<Body>& bodies, const ContactSet& contacts, con
             for (const StaticContact& c : contacts.statics[i])
                 if (c.collider == collider && (!deepest || c.depth > deepest->depth)) deepest = &c;
             if (deepest)
-                constraints.push_back({static_cast<int>(i), worldIndex, deepest->normal, deepest->depth, up.dot(bodies[i].positionM)});
+                constraints.push_back({static_cast<int>(i), worldIndex, deepest->normal, deepest->depth, up.dot(bodies[i].motion.positionM)});
         }
     }
     for (const ContactManifold& m : contacts.manifolds)
         if (inverseMass[m.a] + inverseMass[m.b] > 0)
-            constraints.push_back({m.a, m.b, m.normal, m.maxDepthM, up.dot(bodies[m.a].positionM + bodies[m.b].positionM) / 2});
+            constraints.push_back({m.a, m.b, m.normal, m.maxDepthM, up.dot(bodies[m.a].motion.positionM + bodies[m.b].motion.positionM) / 2});
     std::stable_sort(constraints.begin(), constraints.end(), [](const Constraint& x, const Constraint& y) { return x.height < y.height; });
     const double slop = 0.01 * bodies.front().voxelSizeM;
     std::vector<Eigen::Vector3d> shift(inverseMass.size(), Eigen::Vector3d::Zero());
@@ -406,7 +406,7 @@ void correctPositions(std::vector<Body>& bodies, const ContactSet& contacts, con
             shift[c.b] -= (depth - slop) * ib / (ia + ib) * c.normal;
         }
     }
-    for (size_t i = 0; i < bodies.size(); ++i) bodies[i].positionM += shift[i];
+    for (size_t i = 0; i < bodies.size(); ++i) bodies[i].motion.positionM += shift[i];
 }
 
 }  // namespace spall

@@ -37,8 +37,8 @@ DebrisScene makeDebrisPile(int fragments, int edge, double h, uint64_t seed)
         const double stagger = (layer % 2) * 0.25 * size;
         Body body = prototype;
         body.id = n;
-        body.positionM = Eigen::Vector3d((column + 0.5) * pitch + stagger, (row + 0.5) * pitch + stagger, (layer + 0.51) * 1.01 * size);
-        body.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(turn(rng), Eigen::Vector3d::UnitZ()));
+        body.motion.positionM = Eigen::Vector3d((column + 0.5) * pitch + stagger, (row + 0.5) * pitch + stagger, (layer + 0.51) * 1.01 * size);
+        body.motion.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(turn(rng), Eigen::Vector3d::UnitZ()));
         scene.boundaryVoxels += static_cast<int64_t>(body.boundaryVoxels.size());
         scene.bodies.push_back(std::move(body));
     }
@@ -70,12 +70,12 @@ DebrisScene makeExplosionCloud(int fragments, int edge, double h, double speedMS
         const int layer = n / (side * side), column = (n / side) % side, row = n % side;
         Body body = prototype;
         body.id = n;
-        body.positionM = Eigen::Vector3d((column + 0.5) * pitch, (row + 0.5) * pitch, (layer + 0.5) * pitch + 2.0 * side * pitch);
-        const Eigen::Vector3d out = body.positionM - centre;
+        body.motion.positionM = Eigen::Vector3d((column + 0.5) * pitch, (row + 0.5) * pitch, (layer + 0.5) * pitch + 2.0 * side * pitch);
+        const Eigen::Vector3d out = body.motion.positionM - centre;
         const double radius = 0.5 * std::sqrt(3.0) * side * pitch;
-        body.linearVelocityMS = speedMS * out / radius + 0.1 * speedMS * Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
+        body.motion.linearVelocityMS = speedMS * out / radius + 0.1 * speedMS * Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
         // Spin that moves corners at up to a quarter of the flight speed.
-        body.angularVelocityRadS = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * (0.25 * speedMS / (edge * h));
+        body.motion.angularVelocityRadS = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) * (0.25 * speedMS / (edge * h));
         scene.boundaryVoxels += static_cast<int64_t>(body.boundaryVoxels.size());
         scene.bodies.push_back(std::move(body));
     }

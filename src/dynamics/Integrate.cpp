@@ -80,14 +80,14 @@ RigidState rungeKutta4Step(const Body& body, const RigidState& s0, double t, dou
 void integrateBody(Body& body, double t, double dt, Integrator integrator, const WrenchFunction& wrench)
 {
     const double m = body.mass.massKg;
-    RigidState s{body.positionM, body.orientation, m * body.linearVelocityMS,
-                 body.worldInertiaKgM2() * body.angularVelocityRadS};
+    RigidState s{body.motion.positionM, body.motion.orientation, m * body.motion.linearVelocityMS,
+                 body.worldInertiaKgM2() * body.motion.angularVelocityRadS};
     switch (integrator) {
     case Integrator::ExplicitEuler: {
         // The paper's method: every derivative from the state at the start of the step.
-        const Wrench w = wrench(t, s.x, s.q, body.linearVelocityMS, body.angularVelocityRadS);
-        const Eigen::Quaterniond dq = quaternionRate(s.q, body.angularVelocityRadS);
-        s.x += dt * body.linearVelocityMS;
+        const Wrench w = wrench(t, s.x, s.q, body.motion.linearVelocityMS, body.motion.angularVelocityRadS);
+        const Eigen::Quaterniond dq = quaternionRate(s.q, body.motion.angularVelocityRadS);
+        s.x += dt * body.motion.linearVelocityMS;
         s.q.coeffs() += dt * dq.coeffs();
         s.q.normalize();
         s.p += dt * w.forceN;
@@ -97,7 +97,7 @@ void integrateBody(Body& body, double t, double dt, Integrator integrator, const
     case Integrator::SemiImplicitEuler: {
         // Symplectic: momenta first, then pose with the new velocities; rotation is exact for
         // the step's angular velocity.
-        const Wrench w = wrench(t, s.x, s.q, body.linearVelocityMS, body.angularVelocityRadS);
+        const Wrench w = wrench(t, s.x, s.q, body.motion.linearVelocityMS, body.motion.angularVelocityRadS);
         s.p += dt * w.forceN;
         s.l += dt * w.torqueNm;
         s.x += dt * s.p / m;
@@ -106,10 +106,10 @@ void integrateBody(Body& body, double t, double dt, Integrator integrator, const
     }
     case Integrator::RungeKutta4: s = rungeKutta4Step(body, s, t, dt, wrench); break;
     }
-    body.positionM = s.x;
-    body.orientation = s.q;
-    body.linearVelocityMS = s.p / m;
-    body.angularVelocityRadS = angularVelocity(body, s.q, s.l);
+    body.motion.positionM = s.x;
+    body.motion.orientation = s.q;
+    body.motion.linearVelocityMS = s.p / m;
+    body.motion.angularVelocityRadS = angularVelocity(body, s.q, s.l);
 }
 
 void integrateBodies(std::vector<Body>& bodies, const std::vector<char>& loaded, const BlastLoads& blast, const WorldSettings& world,
@@ -133,15 +133,15 @@ void integrateBodies(std::vector<Body>& bodies, const std::vector<char>& loaded,
 
 double kineticEnergyJ(const Body& body)
 {
-    return 0.5 * body.mass.massKg * body.linearVelocityMS.squaredNorm() +
-           0.5 * body.angularVelocityRadS.dot(body.worldInertiaKgM2() * body.angularVelocityRadS);
+    return 0.5 * body.mass.massKg * body.motion.linearVelocityMS.squaredNorm() +
+           0.5 * body.motion.angularVelocityRadS.dot(body.worldInertiaKgM2() * body.motion.angularVelocityRadS);
 }
 
-Eigen::Vector3d linearMomentum(const Body& body) { return body.mass.massKg * body.linearVelocityMS; }
+Eigen::Vector3d linearMomentum(const Body& body) { return body.mass.massKg * body.motion.linearVelocityMS; }
 
 Eigen::Vector3d angularMomentumAboutOrigin(const Body& body)
 {
-    return body.worldInertiaKgM2() * body.angularVelocityRadS + body.positionM.cross(linearMomentum(body));
+    return body.worldInertiaKgM2() * body.motion.angularVelocityRadS + body.motion.positionM.cross(linearMomentum(body));
 }
 
 }  // namespace spall

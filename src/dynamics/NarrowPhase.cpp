@@ -54,19 +54,19 @@ std::vector<VoxelContact> treeLookupContacts(const Body& a, const Body& b)
     const Body& probe = probeIsA ? a : b;
     const Body& target = probeIsA ? b : a;
     const double h = target.voxelSizeM;
-    const Eigen::Matrix3d rp = probe.orientation.toRotationMatrix();
-    const Eigen::Matrix3d rt = target.orientation.toRotationMatrix();
+    const Eigen::Matrix3d rp = probe.motion.orientation.toRotationMatrix();
+    const Eigen::Matrix3d rt = target.motion.orientation.toRotationMatrix();
     // target index u = M i + t for probe index i (both bodies share the scene's voxel size).
     const Eigen::Matrix3d m = rt.transpose() * rp * (probe.voxelSizeM / h);
     const Eigen::Vector3d t =
-        (rt.transpose() * (probe.positionM - target.positionM - rp * probe.mass.centreOfMassLocalM) + target.mass.centreOfMassLocalM) / h;
+        (rt.transpose() * (probe.motion.positionM - target.motion.positionM - rp * probe.mass.centreOfMassLocalM) + target.mass.centreOfMassLocalM) / h;
     const openvdb::CoordBBox& box = target.indexBounds;
     const Eigen::Vector3d lo = Eigen::Vector3d(box.min().x(), box.min().y(), box.min().z()).array() - kReach;
     const Eigen::Vector3d hi = Eigen::Vector3d(box.max().x(), box.max().y(), box.max().z()).array() + kReach;
     if (!boxesOverlap(probe.indexBounds, m, t, lo, hi)) return out;  // no probe voxel can be within reach
     out.reserve(32);
     const ConstLinkAccessor targetAcc(target.grid->constTree());
-    const CubePairAxes axes(a.orientation.toRotationMatrix(), b.orientation.toRotationMatrix(), h);
+    const CubePairAxes axes(a.motion.orientation.toRotationMatrix(), b.motion.orientation.toRotationMatrix(), h);
     constexpr double reach2 = kReach * kReach;
     VoxelContact contact;
     for (const openvdb::Coord& ijk : probe.boundaryVoxels) {

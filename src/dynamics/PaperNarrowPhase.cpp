@@ -54,7 +54,7 @@ std::vector<ContactManifold> manifoldsFromVoxelPairs(const std::vector<Body>& bo
     forEachIndex(groups.size(), [&](size_t g) {
         const Body& a = bodies[all[groups[g].first].pair.a];
         const Body& b = bodies[all[groups[g].first].pair.b];
-        const CubePairAxes axes(a.orientation.toRotationMatrix(), b.orientation.toRotationMatrix(), a.voxelSizeM);
+        const CubePairAxes axes(a.motion.orientation.toRotationMatrix(), b.motion.orientation.toRotationMatrix(), a.voxelSizeM);
         std::vector<VoxelContact> contacts;
         VoxelContact contact;
         for (size_t k = groups[g].first; k < groups[g].second; ++k) {

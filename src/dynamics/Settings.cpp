@@ -9,7 +9,8 @@ constexpr double kMaxFriction = 100.0;
 
 }  // namespace
 
-const std::vector<Field<GroundPlane>>& FieldTable<GroundPlane>::fields()
+template <>
+const std::vector<Field<GroundPlane>>& fieldTable<GroundPlane>()
 {
     static const std::vector<Field<GroundPlane>> table = {
         {"ground.enabled", &GroundPlane::enabled},
@@ -21,7 +22,8 @@ const std::vector<Field<GroundPlane>>& FieldTable<GroundPlane>::fields()
     return table;
 }
 
-const std::vector<Field<StaticBox>>& FieldTable<StaticBox>::fields()
+template <>
+const std::vector<Field<StaticBox>>& fieldTable<StaticBox>()
 {
     static const std::vector<Field<StaticBox>> table = {
         {"position_m", &StaticBox::centreM},
@@ -33,7 +35,8 @@ const std::vector<Field<StaticBox>>& FieldTable<StaticBox>::fields()
     return table;
 }
 
-const std::vector<Field<WorldSettings>>& FieldTable<WorldSettings>::fields()
+template <>
+const std::vector<Field<WorldSettings>>& fieldTable<WorldSettings>()
 {
     // The ground and the colliders have tables of their own.
     static const std::vector<Field<WorldSettings>> table = {
@@ -44,7 +47,8 @@ const std::vector<Field<WorldSettings>>& FieldTable<WorldSettings>::fields()
     return table;
 }
 
-const std::vector<Field<SleepSettings>>& FieldTable<SleepSettings>::fields()
+template <>
+const std::vector<Field<SleepSettings>>& fieldTable<SleepSettings>()
 {
     static const std::vector<Field<SleepSettings>> table = {
         {"solver.sleep", &SleepSettings::enabled},
@@ -54,7 +58,8 @@ const std::vector<Field<SleepSettings>>& FieldTable<SleepSettings>::fields()
     return table;
 }
 
-const std::vector<Field<TimeStepSettings>>& FieldTable<TimeStepSettings>::fields()
+template <>
+const std::vector<Field<TimeStepSettings>>& fieldTable<TimeStepSettings>()
 {
     // min_time_step_s must also not exceed max_time_step_s (checked where both are known).
     static const std::vector<Field<TimeStepSettings>> table = {
@@ -68,7 +73,8 @@ const std::vector<Field<TimeStepSettings>>& FieldTable<TimeStepSettings>::fields
     return table;
 }
 
-const std::vector<Field<CollisionSettings>>& FieldTable<CollisionSettings>::fields()
+template <>
+const std::vector<Field<CollisionSettings>>& fieldTable<CollisionSettings>()
 {
     static const std::vector<Field<CollisionSettings>> table = {
         {"collisions.method", choice(&CollisionSettings::method)},

@@ -10,8 +10,8 @@ namespace {
 
 void wake(Body& body)
 {
-    body.asleep = false;
-    body.restTimeS = 0;
+    body.motion.asleep = false;
+    body.motion.restTimeS = 0;
 }
 
 }  // namespace
@@ -29,7 +29,7 @@ void wakeBodiesHitByMovers(std::vector<Body>& bodies, const std::vector<ContactM
         Body& a = bodies[m.a];
         Body& b = bodies[m.b];
         for (auto [sleeper, other] : {std::pair<Body*, Body*>{&a, &b}, std::pair<Body*, Body*>{&b, &a}})
-            if (sleeper->asleep && !sleeper->anchored && wakes(*other)) wake(*sleeper);
+            if (sleeper->motion.asleep && !sleeper->anchored && wakes(*other)) wake(*sleeper);
     }
 }
 
@@ -39,8 +39,8 @@ void updateSleep(std::vector<Body>& bodies, const std::vector<BodyPair>& touchin
     if (!sleep.enabled) return;
     for (size_t i = 0; i < bodies.size(); ++i) {
         Body& b = bodies[i];
-        if (b.anchored || b.asleep) continue;
-        b.restTimeS = (!loaded[i] && maxVoxelSpeedMS(b) < sleep.speedMS) ? b.restTimeS + dt : 0.0;
+        if (b.anchored || b.motion.asleep) continue;
+        b.motion.restTimeS = (!loaded[i] && maxVoxelSpeedMS(b) < sleep.speedMS) ? b.motion.restTimeS + dt : 0.0;
     }
     std::vector<int> parent(bodies.size());
     for (size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
@@ -55,13 +55,13 @@ void updateSleep(std::vector<Body>& bodies, const std::vector<BodyPair>& touchin
         }
     std::vector<char> restless(bodies.size(), 0);
     for (size_t i = 0; i < bodies.size(); ++i)
-        if (!bodies[i].anchored && !bodies[i].asleep && bodies[i].restTimeS < sleep.timeS) restless[root(static_cast<int>(i))] = 1;
+        if (!bodies[i].anchored && !bodies[i].motion.asleep && bodies[i].motion.restTimeS < sleep.timeS) restless[root(static_cast<int>(i))] = 1;
     for (size_t i = 0; i < bodies.size(); ++i) {
         Body& b = bodies[i];
-        if (b.anchored || b.asleep || restless[root(static_cast<int>(i))]) continue;
-        b.asleep = true;
-        b.linearVelocityMS.setZero();
-        b.angularVelocityRadS.setZero();
+        if (b.anchored || b.motion.asleep || restless[root(static_cast<int>(i))]) continue;
+        b.motion.asleep = true;
+        b.motion.linearVelocityMS.setZero();
+        b.motion.angularVelocityRadS.setZero();
     }
 }
 

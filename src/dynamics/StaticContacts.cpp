@@ -17,16 +17,16 @@ using narrow::kContactMarginVoxels;
 std::vector<StaticContact> findCorners(const Body& body, const WorldSettings& world)
 {
     std::vector<StaticContact> contacts;
-    const Eigen::Matrix3d rot = body.orientation.toRotationMatrix();
+    const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
     const double h = body.voxelSizeM;
     const double margin = kContactMarginVoxels * h;
     const double voxelRadius = 0.5 * std::sqrt(3.0) * h + margin;
     const GroundPlane& ground = world.ground;
-    const bool nearGround = ground.enabled && ground.normal.dot(body.positionM) - ground.offsetM <= body.boundingRadiusM + margin;
+    const bool nearGround = ground.enabled && ground.normal.dot(body.motion.positionM) - ground.offsetM <= body.boundingRadiusM + margin;
     std::vector<int> nearBoxes;
     for (size_t b = 0; b < world.colliders.size(); ++b) {
         const StaticBox& box = world.colliders[b];
-        const Eigen::Vector3d local = box.orientation.inverse() * (body.positionM - box.centreM);
+        const Eigen::Vector3d local = box.orientation.inverse() * (body.motion.positionM - box.centreM);
         const Eigen::Vector3d outside = (local.cwiseAbs() - box.halfExtentM).cwiseMax(0.0);
         if (outside.norm() <= body.boundingRadiusM + margin) nearBoxes.push_back(static_cast<int>(b));
     }
@@ -34,7 +34,7 @@ std::vector<StaticContact> findCorners(const Body& body, const WorldSettings& wo
 
     for (const openvdb::Coord& voxel : body.boundaryVoxels) {
         const Eigen::Vector3d centreArm = rot * body.voxelOffsetM(voxel);
-        const Eigen::Vector3d centre = body.positionM + centreArm;
+        const Eigen::Vector3d centre = body.motion.positionM + centreArm;
         // Eight corners per voxel: a face resting on a collider gets four points, so resting
         // bodies do not pivot about a single point.
         auto corners = [&](auto&& visit) {

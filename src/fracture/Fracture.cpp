@@ -55,7 +55,7 @@ class LinkRules {
 public:
     LinkRules(const Body& body, const Material& material, const PressureSnapshot& pressure, const FractureSettings& settings, double dtS)
         : mBody(body), mMaterial(material), mPressure(pressure), mSettings(settings), mDtS(dtS),
-          mRotation(body.orientation.toRotationMatrix()), mIndexStepM(mRotation * body.voxelSizeM),
+          mRotation(body.motion.orientation.toRotationMatrix()), mIndexStepM(mRotation * body.voxelSizeM),
           mLeafRadiusM(0.5 * std::sqrt(3.0) * LinkLeaf::DIM * body.voxelSizeM),
           mOrientationFactor(settings.orientation ? material.orientationFactor : 0.0),
           mWeakening(settings.weakening ? material.weakeningFraction : 0.0),
@@ -261,7 +261,7 @@ std::vector<Body> splitBody(const Body& body)
     std::vector<LinkGrid::Ptr> grids = splitByLabels(*body.grid, labels);
     std::vector<DamageGrid::Ptr> damage(grids.size());
     if (body.damage) damage = splitDamage(*body.damage, labels, grids.size());
-    const Eigen::Matrix3d rot = body.orientation.toRotationMatrix();
+    const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
     parts.reserve(grids.size());
     for (size_t i = 0; i < grids.size(); ++i) {
         Body child;
@@ -272,12 +272,12 @@ std::vector<Body> splitBody(const Body& body)
         child.voxelSizeM = body.voxelSizeM;
         child.densityKgM3 = body.densityKgM3;
         refreshDerivedData(child);
-        child.orientation = body.orientation;
+        child.motion.orientation = body.motion.orientation;
         // The parent's rigid velocity field at the child's centre of mass (paper 4.1).
         const Eigen::Vector3d offset = rot * (child.mass.centreOfMassLocalM - body.mass.centreOfMassLocalM);
-        child.positionM = body.positionM + offset;
-        child.angularVelocityRadS = body.angularVelocityRadS;
-        child.linearVelocityMS = body.linearVelocityMS + body.angularVelocityRadS.cross(offset);
+        child.motion.positionM = body.motion.positionM + offset;
+        child.motion.angularVelocityRadS = body.motion.angularVelocityRadS;
+        child.motion.linearVelocityMS = body.motion.linearVelocityMS + body.motion.angularVelocityRadS.cross(offset);
         parts.push_back(std::move(child));
     }
     return parts;

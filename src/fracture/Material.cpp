@@ -61,7 +61,8 @@ const Material& findMaterialPreset(const std::string& name)
     throw InputError("material '" + name + "' is unknown (presets: " + known + ")");
 }
 
-const std::vector<Field<Material>>& FieldTable<Material>::fields()
+template <>
+const std::vector<Field<Material>>& fieldTable<Material>()
 {
     static const std::vector<Field<Material>> table = {
         {"density_kg_m3", &Material::densityKgM3, aboveZeroUpTo(1e12)},

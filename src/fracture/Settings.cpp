@@ -2,7 +2,8 @@
 
 namespace spall {
 
-const std::vector<Field<FractureSettings>>& FieldTable<FractureSettings>::fields()
+template <>
+const std::vector<Field<FractureSettings>>& fieldTable<FractureSettings>()
 {
     // The seed is the scene's (a key of its own at the top).
     static const std::vector<Field<FractureSettings>> table = {

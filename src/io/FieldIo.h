@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -75,25 +76,27 @@ template <typename S>
 void readField(ObjectReader& reader, const std::string& key, const nlohmann::json& v, const Field<S>& field, S& value)
 {
     auto fail = [&](const std::string& reason) { reader.fail(reader.keyPath(key), reason); };
-    auto number = [&](double x) {
-        if (!field.range.contains(x)) {
-            std::ostringstream got;
-            got << x;
-            fail("must be " + field.range.describe() + ", got " + got.str());
-        }
-        return x;
+    auto check = [&](const std::string& problem) {
+        if (!problem.empty()) fail(problem);
     };
     std::visit(
         [&](const auto& member) {
             using M = std::decay_t<decltype(member)>;
             if constexpr (std::is_same_v<M, double S::*>) {
                 if (!v.is_number()) fail("must be a number, got " + std::string(v.type_name()));
-                value.*member = number(v.get<double>()) / field.scale;
+                check(numberProblem(field, v.get<double>()));
+                value.*member = v.get<double>() / field.scale;
             } else if constexpr (std::is_same_v<M, int S::*> || std::is_same_v<M, int64_t S::*> || std::is_same_v<M, uint64_t S::*>) {
+                using Int = std::decay_t<decltype(value.*member)>;
                 if (!v.is_number_integer()) fail("must be an integer");
+                // A uint64 above INT64_MAX reads back negative here and fails the type's range.
                 const int64_t x = v.get<int64_t>();
-                number(static_cast<double>(x));
-                value.*member = static_cast<std::decay_t<decltype(value.*member)>>(x);
+                if (x < static_cast<int64_t>(std::numeric_limits<Int>::min()) ||
+                    static_cast<uint64_t>(x) > static_cast<uint64_t>(std::numeric_limits<Int>::max()))
+                    fail("must be an integer that fits in " + std::to_string(sizeof(Int) * 8) + " bits" +
+                         (std::is_signed_v<Int> ? "" : ", not negative"));
+                check(numberProblem(field, static_cast<double>(x)));
+                value.*member = static_cast<Int>(x);
             } else if constexpr (std::is_same_v<M, bool S::*>) {
                 if (!v.is_boolean()) fail("must be true or false");
                 value.*member = v.get<bool>();
@@ -106,10 +109,8 @@ void readField(ObjectReader& reader, const std::string& key, const nlohmann::jso
                 for (int i = 0; i < 3; ++i) {
                     if (!v[i].is_number() || !std::isfinite(v[i].get<double>())) fail("must be an array of 3 finite numbers");
                     x[i] = v[i].get<double>();
-                    if (!field.range.contains(x[i])) fail("every component must be " + field.range.describe());
                 }
-                if (field.vectorCheck == VectorCheck::NonZero && !(x.norm() > 0)) fail("must not be zero");
-                if (field.vectorCheck == VectorCheck::Positive && !(x.minCoeff() > 0)) fail("must be positive");
+                check(vectorProblem(field, x));
                 value.*member = x / field.scale;
             } else {
                 if (!v.is_string()) fail("must be a string");
@@ -123,7 +124,7 @@ void readField(ObjectReader& reader, const std::string& key, const nlohmann::jso
 template <typename S>
 void readFields(ObjectReader& reader, S& value)
 {
-    for (const Field<S>& field : FieldTable<S>::fields()) {
+    for (const Field<S>& field : fieldTable<S>()) {
         auto [holder, key] = reader.locate(field.key);
         if (!holder) continue;
         if (const nlohmann::json* v = holder->raw(key)) readField(*holder, key, *v, field, value);
@@ -134,7 +135,7 @@ void readFields(ObjectReader& reader, S& value)
 template <typename S>
 void writeFields(const S& value, nlohmann::json& out)
 {
-    for (const Field<S>& field : FieldTable<S>::fields()) {
+    for (const Field<S>& field : fieldTable<S>()) {
         std::string pointer = "/" + field.key;
         for (char& c : pointer)
             if (c == '.') c = '/';

@@ -149,6 +149,11 @@ struct HistoryWriter::Impl {
     Series dustTime, dustParent, dustVoxels, dustMassRows, dustMomentum;
     int64_t bodyRows = 0, childRows = 0;
 
+    /// Throws IoError when the disk cannot take a frame of this size.
+    void requireSpaceFor(size_t newBodyRows, const std::vector<FractureEvent>& events, size_t newDustRows) const;
+    void appendBodies(const std::vector<BodyRow>& bodies);
+    void appendEvents(const std::vector<FractureEvent>& events, const std::vector<DustRecord>& dust);
+    void appendFrameRow(const FrameRow& f);
     void flush() { check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flushing (disk full?)"); }
     void close()
     {
@@ -307,33 +312,36 @@ HistoryWriter::~HistoryWriter()
     if (mImpl) mImpl->close();
 }
 
-void HistoryWriter::appendFrame(const FrameRow& f, const std::vector<BodyRow>& bodies, const std::vector<FractureEvent>& events,
-                                const std::vector<DustRecord>& dust)
+void HistoryWriter::Impl::requireSpaceFor(size_t newBodyRows, const std::vector<FractureEvent>& events, size_t newDustRows) const
 {
-    Impl& m = *mImpl;
-    const size_t n = bodies.size();
     // HDF5 cannot recover from running out of space part-way through a flush (the file is left
     // claiming more than it holds, and does not open), so refuse before touching it. The
     // margin covers a new chunk for every dataset and the metadata.
     size_t childCount = 0;
     for (const FractureEvent& e : events) childCount += e.childIds.size();
-    const uintmax_t needed = n * sizeof(BodyRow) + (events.size() + childCount + dust.size()) * 64 + (uintmax_t(512) << 10);
+    const uintmax_t needed = newBodyRows * sizeof(BodyRow) + (events.size() + childCount + newDustRows) * 64 + (uintmax_t(512) << 10);
+    const std::filesystem::path directory = std::filesystem::path(path).parent_path();
     std::error_code ec;
-    const auto space = std::filesystem::space(std::filesystem::path(m.path).parent_path().empty() ? "." : std::filesystem::path(m.path).parent_path(), ec);
+    const auto space = std::filesystem::space(directory.empty() ? "." : directory, ec);
     if (!ec && space.available < needed)
-        throw IoError(m.path + ": disk full (" + std::to_string(space.available) + " bytes free, a frame needs about " +
+        throw IoError(path + ": disk full (" + std::to_string(space.available) + " bytes free, a frame needs about " +
                       std::to_string(needed) + "); the frames before it are intact");
-    std::vector<int64_t> ids(n), parents(n), voxels(n);
-    std::vector<double> pos(3 * n), ori(4 * n), lin(3 * n), ang(3 * n), mass(n);
-    std::vector<int8_t> asleep(n), anchored(n);
+}
+
+void HistoryWriter::Impl::appendBodies(const std::vector<BodyRow>& bodies)
+{
+    const size_t n = bodies.size();
+    std::vector<int64_t> ids(n), parents(n), voxelCounts(n);
+    std::vector<double> pos(3 * n), ori(4 * n), lin(3 * n), ang(3 * n), masses(n);
+    std::vector<int8_t> sleeping(n), anchoredFlags(n);
     for (size_t i = 0; i < n; ++i) {
         const BodyRow& b = bodies[i];
         ids[i] = b.id;
         parents[i] = b.parentId;
-        voxels[i] = b.voxelCount;
-        mass[i] = b.massKg;
-        asleep[i] = b.asleep;
-        anchored[i] = b.anchored;
+        voxelCounts[i] = b.voxelCount;
+        masses[i] = b.massKg;
+        sleeping[i] = b.asleep;
+        anchoredFlags[i] = b.anchored;
         for (int k = 0; k < 3; ++k) {
             pos[3 * i + k] = b.positionM[k];
             lin[3 * i + k] = b.linearVelocityMS[k];
@@ -341,46 +349,61 @@ void HistoryWriter::appendFrame(const FrameRow& f, const std::vector<BodyRow>& b
         }
         for (int k = 0; k < 4; ++k) ori[4 * i + k] = b.orientationWxyz[k];
     }
-    m.id.append(ids.data(), n);
-    m.parent.append(parents.data(), n);
-    m.position.append(pos.data(), n);
-    m.orientation.append(ori.data(), n);
-    m.linVel.append(lin.data(), n);
-    m.angVel.append(ang.data(), n);
-    m.mass.append(mass.data(), n);
-    m.voxels.append(voxels.data(), n);
-    m.asleep.append(asleep.data(), n);
-    m.anchored.append(anchored.data(), n);
+    id.append(ids.data(), n);
+    parent.append(parents.data(), n);
+    position.append(pos.data(), n);
+    orientation.append(ori.data(), n);
+    linVel.append(lin.data(), n);
+    angVel.append(ang.data(), n);
+    mass.append(masses.data(), n);
+    voxels.append(voxelCounts.data(), n);
+    asleep.append(sleeping.data(), n);
+    anchored.append(anchoredFlags.data(), n);
+    bodyRows += static_cast<int64_t>(n);
+}
 
+void HistoryWriter::Impl::appendEvents(const std::vector<FractureEvent>& events, const std::vector<DustRecord>& dust)
+{
     for (const FractureEvent& e : events) {
-        m.eventTime.append(&e.timeS, 1);
-        m.eventParent.append(&e.parentId, 1);
-        m.eventChild.append(e.childIds.data(), e.childIds.size());
-        m.childRows += static_cast<int64_t>(e.childIds.size());
-        m.eventChildOffset.append(&m.childRows, 1);
+        eventTime.append(&e.timeS, 1);
+        eventParent.append(&e.parentId, 1);
+        eventChild.append(e.childIds.data(), e.childIds.size());
+        childRows += static_cast<int64_t>(e.childIds.size());
+        eventChildOffset.append(&childRows, 1);
     }
     for (const DustRecord& d : dust) {
-        m.dustTime.append(&d.timeS, 1);
-        m.dustParent.append(&d.parentId, 1);
-        m.dustVoxels.append(&d.voxelCount, 1);
-        m.dustMassRows.append(&d.massKg, 1);
-        m.dustMomentum.append(d.linearMomentum.data(), 1);
+        dustTime.append(&d.timeS, 1);
+        dustParent.append(&d.parentId, 1);
+        dustVoxels.append(&d.voxelCount, 1);
+        dustMassRows.append(&d.massKg, 1);
+        dustMomentum.append(d.linearMomentum.data(), 1);
     }
+}
 
+void HistoryWriter::Impl::appendFrameRow(const FrameRow& f)
+{
+    kinetic.append(&f.kineticEnergyJ, 1);
+    linear.append(f.linearMomentum.data(), 1);
+    angular.append(f.angularMomentum.data(), 1);
+    broken.append(&f.brokenLinks, 1);
+    steps.append(&f.steps, 1);
+    minDt.append(&f.minDtS, 1);
+    bodyCount.append(&f.bodyCount, 1);
+    voxelCount.append(&f.voxelCount, 1);
+    dustMass.append(&f.dustMassKg, 1);
+    bodyOffset.append(&bodyRows, 1);
+    time.append(&f.timeS, 1);
+}
+
+void HistoryWriter::appendFrame(const FrameRow& f, const std::vector<BodyRow>& bodies, const std::vector<FractureEvent>& events,
+                                const std::vector<DustRecord>& dust)
+{
+    mImpl->requireSpaceFor(bodies.size(), events, dust.size());
+    mImpl->appendBodies(bodies);
+    mImpl->appendEvents(events, dust);
     // The frame row goes last: a reader that sees frame f also sees all of its bodies.
-    m.bodyRows += static_cast<int64_t>(n);
-    m.kinetic.append(&f.kineticEnergyJ, 1);
-    m.linear.append(f.linearMomentum.data(), 1);
-    m.angular.append(f.angularMomentum.data(), 1);
-    m.broken.append(&f.brokenLinks, 1);
-    m.steps.append(&f.steps, 1);
-    m.minDt.append(&f.minDtS, 1);
-    m.bodyCount.append(&f.bodyCount, 1);
-    m.voxelCount.append(&f.voxelCount, 1);
-    m.dustMass.append(&f.dustMassKg, 1);
-    m.bodyOffset.append(&m.bodyRows, 1);
-    m.time.append(&f.timeS, 1);
-    m.flush();
+    mImpl->appendFrameRow(f);
+    mImpl->flush();
 }
 
 void HistoryWriter::finish()

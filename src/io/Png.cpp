@@ -145,49 +145,70 @@ Image plotCurve(const std::vector<double>& x, const std::vector<double>& y, cons
     return plotSeries({{"", x, y}}, xLabel, yLabel, title, false, width, height);
 }
 
-Image plotSeries(const std::vector<PlotSeries>& series, const std::string& xLabel, const std::string& yLabel, const std::string& title,
-                 bool logLog, int width, int height)
-{
-    Image img(width, height);
-    const int left = 110, right = width - 30, top = 50, bottom = height - 70;
-    // On log-log axes the plot works in log10 of the values; points that are not positive are left out.
-    const auto axisValue = [&](double v) { return logLog ? std::log10(v) : v; };
-    const auto usable = [&](double v) { return std::isfinite(v) && (!logLog || v > 0); };
+namespace {
+
+/// Where values land on a plot: the data range (log10 of it on log-log axes) onto the pixel box.
+struct PlotAxes {
+    int left = 0, right = 0, top = 0, bottom = 0;
+    bool logLog = false;
     double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+
+    double value(double v) const { return logLog ? std::log10(v) : v; }
+    /// Points that are not finite (or, on log-log axes, not positive) are left out.
+    bool usable(double v) const { return std::isfinite(v) && (!logLog || v > 0); }
+    double px(double v) const { return left + (v - x0) / (x1 - x0) * (right - left); }
+    double py(double v) const { return bottom - (v - y0) / (y1 - y0) * (bottom - top); }
+};
+
+PlotAxes fitAxes(const std::vector<PlotSeries>& series, bool logLog, int width, int height)
+{
+    PlotAxes axes;
+    axes.left = 110, axes.right = width - 30, axes.top = 50, axes.bottom = height - 70;
+    axes.logLog = logLog;
     for (const PlotSeries& s : series)
         for (size_t i = 0; i < s.x.size(); ++i) {
-            if (!usable(s.x[i]) || !usable(s.y[i])) continue;
-            x0 = std::min(x0, axisValue(s.x[i]));
-            x1 = std::max(x1, axisValue(s.x[i]));
-            y0 = std::min(y0, axisValue(s.y[i]));
-            y1 = std::max(y1, axisValue(s.y[i]));
+            if (!axes.usable(s.x[i]) || !axes.usable(s.y[i])) continue;
+            axes.x0 = std::min(axes.x0, axes.value(s.x[i]));
+            axes.x1 = std::max(axes.x1, axes.value(s.x[i]));
+            axes.y0 = std::min(axes.y0, axes.value(s.y[i]));
+            axes.y1 = std::max(axes.y1, axes.value(s.y[i]));
         }
-    if (x0 > x1) x0 = 0, x1 = 1, y0 = 0, y1 = 1;
-    if (x1 <= x0) x1 = x0 + 1;
-    const double pad = 0.05 * (y1 - y0 > 0 ? y1 - y0 : 1);
-    y0 -= pad;
-    y1 += pad;
-    auto px = [&](double v) { return left + (v - x0) / (x1 - x0) * (right - left); };
-    auto py = [&](double v) { return bottom - (v - y0) / (y1 - y0) * (bottom - top); };
-    const Rgb grid{225, 225, 225}, axis{60, 60, 60};
+    if (axes.x0 > axes.x1) axes.x0 = 0, axes.x1 = 1, axes.y0 = 0, axes.y1 = 1;
+    if (axes.x1 <= axes.x0) axes.x1 = axes.x0 + 1;
+    const double pad = 0.05 * (axes.y1 - axes.y0 > 0 ? axes.y1 - axes.y0 : 1);
+    axes.y0 -= pad;
+    axes.y1 += pad;
+    return axes;
+}
+
+const Rgb kAxisColour{60, 60, 60};
+
+void drawGridAndTicks(Image& img, const PlotAxes& a)
+{
+    const Rgb grid{225, 225, 225};
+    const auto tickLabel = [&](double v) { return a.logLog ? "1e" + formatTick(v) : formatTick(v); };
+    const double xs = a.logLog ? std::max(1.0, std::ceil((a.x1 - a.x0) / 8)) : tickStep(a.x1 - a.x0, 8);
+    const double ys = a.logLog ? std::max(1.0, std::ceil((a.y1 - a.y0) / 6)) : tickStep(a.y1 - a.y0, 6);
+    for (double v = std::ceil(a.x0 / xs) * xs; v <= a.x1 + 1e-12 * xs; v += xs) {
+        img.line(a.px(v), a.top, a.px(v), a.bottom, grid);
+        const std::string s = tickLabel(v);
+        img.text(int(a.px(v)) - Image::textWidth(s) / 2, a.bottom + 10, s, kAxisColour);
+    }
+    for (double v = std::ceil(a.y0 / ys) * ys; v <= a.y1 + 1e-12 * ys; v += ys) {
+        img.line(a.left, a.py(v), a.right, a.py(v), grid);
+        const std::string s = tickLabel(v);
+        img.text(a.left - 10 - Image::textWidth(s), int(a.py(v)) - 7, s, kAxisColour);
+    }
+    if (!a.logLog && a.y0 < 0 && a.y1 > 0) img.line(a.left, a.py(0), a.right, a.py(0), kAxisColour);
+    img.line(a.left, a.top, a.left, a.bottom, kAxisColour);
+    img.line(a.left, a.bottom, a.right, a.bottom, kAxisColour);
+}
+
+/// Each series as a line (with markers when there are several), named in a legend at the upper right.
+void drawSeries(Image& img, const PlotAxes& a, const std::vector<PlotSeries>& series)
+{
     const Rgb colours[] = {{30, 90, 200}, {200, 60, 40}, {40, 150, 60}, {150, 60, 170}, {220, 140, 20}, {20, 150, 160}};
-    const auto tickLabel = [&](double v) { return logLog ? "1e" + formatTick(v) : formatTick(v); };
-    const double xs = logLog ? std::max(1.0, std::ceil((x1 - x0) / 8)) : tickStep(x1 - x0, 8);
-    const double ys = logLog ? std::max(1.0, std::ceil((y1 - y0) / 6)) : tickStep(y1 - y0, 6);
-    for (double v = std::ceil(x0 / xs) * xs; v <= x1 + 1e-12 * xs; v += xs) {
-        img.line(px(v), top, px(v), bottom, grid);
-        const std::string s = tickLabel(v);
-        img.text(int(px(v)) - Image::textWidth(s) / 2, bottom + 10, s, axis);
-    }
-    for (double v = std::ceil(y0 / ys) * ys; v <= y1 + 1e-12 * ys; v += ys) {
-        img.line(left, py(v), right, py(v), grid);
-        const std::string s = tickLabel(v);
-        img.text(left - 10 - Image::textWidth(s), int(py(v)) - 7, s, axis);
-    }
-    if (!logLog && y0 < 0 && y1 > 0) img.line(left, py(0), right, py(0), axis);
-    img.line(left, top, left, bottom, axis);
-    img.line(left, bottom, right, bottom, axis);
-    size_t longestName = 0;  // the legend sits in the upper right, wide enough for it
+    size_t longestName = 0;
     for (const PlotSeries& s : series) longestName = std::max(longestName, s.name.size());
     for (size_t k = 0; k < series.size(); ++k) {
         const PlotSeries& s = series[k];
@@ -195,24 +216,34 @@ Image plotSeries(const std::vector<PlotSeries>& series, const std::string& xLabe
         bool havePrevious = false;
         double previousX = 0, previousY = 0;
         for (size_t i = 0; i < s.x.size(); ++i) {
-            if (!usable(s.x[i]) || !usable(s.y[i])) continue;
-            const double cx = px(axisValue(s.x[i])), cy = py(axisValue(s.y[i]));
+            if (!a.usable(s.x[i]) || !a.usable(s.y[i])) continue;
+            const double cx = a.px(a.value(s.x[i])), cy = a.py(a.value(s.y[i]));
             if (havePrevious) img.line(previousX, previousY, cx, cy, colour, 2);
             if (series.size() > 1) img.fillRect(int(cx) - 3, int(cy) - 3, int(cx) + 3, int(cy) + 3, colour);
             havePrevious = true;
             previousX = cx;
             previousY = cy;
         }
-        if (!s.name.empty()) {
-            const int lx = right - 30 - Image::textWidth(std::string(longestName, ' '));
-            const int ly = top + 10 + 20 * int(k);
-            img.fillRect(lx - 20, ly + 2, lx - 6, ly + 12, colour);
-            img.text(lx, ly, s.name, axis);
-        }
+        if (s.name.empty()) continue;
+        const int lx = a.right - 30 - Image::textWidth(std::string(longestName, ' '));
+        const int ly = a.top + 10 + 20 * int(k);
+        img.fillRect(lx - 20, ly + 2, lx - 6, ly + 12, colour);
+        img.text(lx, ly, s.name, kAxisColour);
     }
-    img.text((left + right - Image::textWidth(xLabel)) / 2, height - 35, xLabel, axis);
-    img.text(10, 15, yLabel, axis);
-    img.text((left + right - Image::textWidth(title)) / 2, 15, title, axis);
+}
+
+}  // namespace
+
+Image plotSeries(const std::vector<PlotSeries>& series, const std::string& xLabel, const std::string& yLabel, const std::string& title,
+                 bool logLog, int width, int height)
+{
+    Image img(width, height);
+    const PlotAxes axes = fitAxes(series, logLog, width, height);
+    drawGridAndTicks(img, axes);
+    drawSeries(img, axes, series);
+    img.text((axes.left + axes.right - Image::textWidth(xLabel)) / 2, height - 35, xLabel, kAxisColour);
+    img.text(10, 15, yLabel, kAxisColour);
+    img.text((axes.left + axes.right - Image::textWidth(title)) / 2, 15, title, kAxisColour);
     return img;
 }
 

@@ -13,7 +13,8 @@ namespace spall {
 
 using nlohmann::json;
 
-const std::vector<Field<ObjectSpec>>& FieldTable<ObjectSpec>::fields()
+template <>
+const std::vector<Field<ObjectSpec>>& fieldTable<ObjectSpec>()
 {
     // mesh and primitive are read by hand: exactly one of them, and a primitive's keys depend on
     // its shape.
@@ -27,7 +28,8 @@ const std::vector<Field<ObjectSpec>>& FieldTable<ObjectSpec>::fields()
     return table;
 }
 
-const std::vector<Field<OutputSettings>>& FieldTable<OutputSettings>::fields()
+template <>
+const std::vector<Field<OutputSettings>>& fieldTable<OutputSettings>()
 {
     static const std::vector<Field<OutputSettings>> table = {
         {"output.vdb", &OutputSettings::vdb},
@@ -38,7 +40,8 @@ const std::vector<Field<OutputSettings>>& FieldTable<OutputSettings>::fields()
     return table;
 }
 
-const std::vector<Field<Scene>>& FieldTable<Scene>::fields()
+template <>
+const std::vector<Field<Scene>>& fieldTable<Scene>()
 {
     static const std::vector<Field<Scene>> table = {
         {"voxel_size_m", &Scene::voxelSizeM, aboveZeroUpTo(100)},

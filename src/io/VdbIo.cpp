@@ -161,11 +161,11 @@ std::string FrameWriter::write(const FrameInfo& info, const std::vector<Body>& b
         grid->insertMeta("parent_id", openvdb::Int64Metadata(body.parentId));
         grid->insertMeta("mass_kg", openvdb::DoubleMetadata(body.mass.massKg));
         grid->insertMeta("voxel_count", openvdb::Int64Metadata(body.mass.voxelCount));
-        const auto& v = body.linearVelocityMS;
-        const auto& w = body.angularVelocityRadS;
+        const auto& v = body.motion.linearVelocityMS;
+        const auto& w = body.motion.angularVelocityRadS;
         grid->insertMeta("linear_velocity_m_s", openvdb::Vec3DMetadata(openvdb::Vec3d(v.x(), v.y(), v.z())));
         grid->insertMeta("angular_velocity_rad_s", openvdb::Vec3DMetadata(openvdb::Vec3d(w.x(), w.y(), w.z())));
-        const auto& p = body.positionM;
+        const auto& p = body.motion.positionM;
         grid->insertMeta("centre_of_mass_m", openvdb::Vec3DMetadata(openvdb::Vec3d(p.x(), p.y(), p.z())));
         grid->insertMeta("anchored", openvdb::BoolMetadata(body.anchored));
         grids.push_back(grid);
@@ -197,7 +197,7 @@ openvdb::FloatGrid::Ptr rasteriseDensity(const std::vector<Body>& bodies, double
     for (const Body& body : bodies) {
         // Visit world voxels in the body's bounding box and look each one up in the body's own
         // index space: no holes, whatever the rotation.
-        const Eigen::Matrix3d toLocal = body.orientation.toRotationMatrix().transpose();
+        const Eigen::Matrix3d toLocal = body.motion.orientation.toRotationMatrix().transpose();
         // World box around the body's index box (its eight corners, voxel cubes included).
         const openvdb::CoordBBox& box = body.indexBounds;
         Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
@@ -205,7 +205,7 @@ openvdb::FloatGrid::Ptr rasteriseDensity(const std::vector<Body>& bodies, double
             const Eigen::Vector3d corner((c & 1 ? box.max().x() + 0.5 : box.min().x() - 0.5),
                                          (c & 2 ? box.max().y() + 0.5 : box.min().y() - 0.5),
                                          (c & 4 ? box.max().z() + 0.5 : box.min().z() - 0.5));
-            const Eigen::Vector3d world = body.positionM + body.orientation * (corner * h - body.mass.centreOfMassLocalM);
+            const Eigen::Vector3d world = body.motion.positionM + body.motion.orientation * (corner * h - body.mass.centreOfMassLocalM);
             lo = lo.cwiseMin(world / h);
             hi = hi.cwiseMax(world / h);
         }
@@ -214,7 +214,7 @@ openvdb::FloatGrid::Ptr rasteriseDensity(const std::vector<Body>& bodies, double
             for (int j = int(std::floor(lo.y())); j <= int(std::ceil(hi.y())); ++j)
                 for (int k = int(std::floor(lo.z())); k <= int(std::ceil(hi.z())); ++k) {
                     const Eigen::Vector3d world(i * h, j * h, k * h);
-                    const Eigen::Vector3d index = (toLocal * (world - body.positionM) + body.mass.centreOfMassLocalM) / h;
+                    const Eigen::Vector3d index = (toLocal * (world - body.motion.positionM) + body.mass.centreOfMassLocalM) / h;
                     const openvdb::Coord ijk(int(std::lround(index.x())), int(std::lround(index.y())), int(std::lround(index.z())));
                     if (in.isValueOn(ijk)) out.setValueOn(openvdb::Coord(i, j, k), 1.0f);
                 }

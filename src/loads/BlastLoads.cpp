@@ -13,7 +13,7 @@ namespace spall {
 bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows)
 {
     for (const OpenWindow& w : windows) {
-        const double d = (body.positionM - field.charges()[w.charge].positionM).norm();
+        const double d = (body.motion.positionM - field.charges()[w.charge].positionM).norm();
         if (d + body.boundingRadiusM >= w.minDistanceM && d - body.boundingRadiusM <= w.maxDistanceM) return true;
     }
     return false;

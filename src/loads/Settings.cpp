@@ -2,7 +2,8 @@
 
 namespace spall {
 
-const std::vector<Field<LoadSettings>>& FieldTable<LoadSettings>::fields()
+template <>
+const std::vector<Field<LoadSettings>>& fieldTable<LoadSettings>()
 {
     static const std::vector<Field<LoadSettings>> table = {
         {"solver.reflected_pressure", &LoadSettings::reflectedPressure},

@@ -178,14 +178,11 @@ Camera frameCamera(const std::vector<std::vector<FragmentRef>>& sets, const Rend
     return cam;
 }
 
-Image renderFragments(const std::vector<FragmentRef>& fragments, const Camera& camera, const RenderSettings& settings)
-{
-    Image img(settings.width, settings.height, {0, 0, 0});
-    std::vector<float> depth(size_t(settings.width) * settings.height, std::numeric_limits<float>::infinity());
-    const View view = makeView(camera, settings);
-    const Eigen::Vector3d light = Eigen::Vector3d(-0.4, -0.7, 0.9).normalized();
+namespace {
 
-    // Sky and a chequered ground: one ray per pixel.
+/// Sky and a chequered ground: one ray per pixel.
+void drawBackground(Image& img, std::vector<float>& depth, const View& view, const RenderSettings& settings)
+{
     const Eigen::Matrix3d toWorld = view.toCamera.transpose();
     for (int y = 0; y < settings.height; ++y)
         for (int x = 0; x < settings.width; ++x) {
@@ -204,45 +201,57 @@ Image renderFragments(const std::vector<FragmentRef>& fragments, const Camera& c
                 img.set(x, y, {uint8_t(200 - 90 * s), uint8_t(215 - 70 * s), uint8_t(235 - 20 * s)});
             }
         }
+}
 
+const int kFaceAxes[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
+
+/// Face f of voxel ijk as two shaded triangles, unless it faces away from the eye.
+void drawVoxelFace(Image& img, std::vector<float>& depth, const View& view, const openvdb::math::Transform& xf, const openvdb::Coord& ijk,
+                   int f, const Rgb& base)
+{
+    const Eigen::Vector3d light = Eigen::Vector3d(-0.4, -0.7, 0.9).normalized();
+    // The face's four corners in index space, then in the world.
+    const int axis = f / 2;
+    const double side = (f & 1) ? 0.5 : -0.5;
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    Eigen::Vector3d corners[4];
+    for (int k = 0; k < 4; ++k) {
+        openvdb::Vec3d p(ijk.x(), ijk.y(), ijk.z());
+        p[axis] += side;
+        p[u] += (k == 1 || k == 2) ? 0.5 : -0.5;
+        p[v] += (k >= 2) ? 0.5 : -0.5;
+        corners[k] = toEigen(xf.indexToWorld(p));
+    }
+    const openvdb::Vec3d outside(ijk.x() + kFaceAxes[f][0], ijk.y() + kFaceAxes[f][1], ijk.z() + kFaceAxes[f][2]);
+    const Eigen::Vector3d normal = (toEigen(xf.indexToWorld(outside)) - toEigen(xf.indexToWorld(ijk))).normalized();
+    const Eigen::Vector3d faceCentre = 0.25 * (corners[0] + corners[1] + corners[2] + corners[3]);
+    if (normal.dot(view.eye - faceCentre) <= 0) return;  // back face
+    const double shade = 0.35 + 0.65 * std::max(0.0, normal.dot(light));
+    const Rgb c{uint8_t(base.r * shade), uint8_t(base.g * shade), uint8_t(base.b * shade)};
+    Eigen::Vector3d p[4];
+    for (int k = 0; k < 4; ++k) p[k] = view.project(corners[k]);
+    rasteriseTriangle(img, depth, p[0], p[1], p[2], c);
+    rasteriseTriangle(img, depth, p[0], p[2], p[3], c);
+}
+
+}  // namespace
+
+Image renderFragments(const std::vector<FragmentRef>& fragments, const Camera& camera, const RenderSettings& settings)
+{
+    Image img(settings.width, settings.height, {0, 0, 0});
+    std::vector<float> depth(size_t(settings.width) * settings.height, std::numeric_limits<float>::infinity());
+    const View view = makeView(camera, settings);
+    drawBackground(img, depth, view, settings);
     // Exposed faces: the neighbour across the face is not in the same fragment.
-    static const int kAxes[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
     for (const FragmentRef& fragment : fragments) withGrid(fragment.grid, [&](const auto& grid) {
-        const openvdb::math::Transform& xf = *fragment.transform;
         const Rgb base = fragmentColour(fragment.id);
         auto acc = grid.getConstAccessor();
         for (auto it = grid.cbeginValueOn(); it; ++it) {
             if (!it.isVoxelValue()) continue;
             const openvdb::Coord ijk = it.getCoord();
-            for (int f = 0; f < 6; ++f) {
-                const openvdb::Coord n = ijk + openvdb::Coord(kAxes[f][0], kAxes[f][1], kAxes[f][2]);
-                if (acc.isValueOn(n)) continue;
-                // The face's four corners in index space, then in the world.
-                const int axis = f / 2;
-                const double side = (f & 1) ? 0.5 : -0.5;
-                const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-                Eigen::Vector3d corners[4];
-                for (int k = 0; k < 4; ++k) {
-                    openvdb::Vec3d p(ijk.x(), ijk.y(), ijk.z());
-                    p[axis] += side;
-                    p[u] += (k == 1 || k == 2) ? 0.5 : -0.5;
-                    p[v] += (k >= 2) ? 0.5 : -0.5;
-                    corners[k] = toEigen(xf.indexToWorld(p));
-                }
-                const Eigen::Vector3d centreIndexOut(ijk.x() + kAxes[f][0], ijk.y() + kAxes[f][1], ijk.z() + kAxes[f][2]);
-                const Eigen::Vector3d normal =
-                    (toEigen(xf.indexToWorld(openvdb::Vec3d(centreIndexOut.x(), centreIndexOut.y(), centreIndexOut.z()))) -
-                     toEigen(xf.indexToWorld(ijk)))
-                        .normalized();
-                const Eigen::Vector3d faceCentre = 0.25 * (corners[0] + corners[1] + corners[2] + corners[3]);
-                if (normal.dot(view.eye - faceCentre) <= 0) continue;  // back face
-                const double shade = 0.35 + 0.65 * std::max(0.0, normal.dot(light));
-                const Rgb c{uint8_t(base.r * shade), uint8_t(base.g * shade), uint8_t(base.b * shade)};
-                Eigen::Vector3d p[4];
-                for (int k = 0; k < 4; ++k) p[k] = view.project(corners[k]);
-                rasteriseTriangle(img, depth, p[0], p[1], p[2], c);
-                rasteriseTriangle(img, depth, p[0], p[2], p[3], c);
-            }
+            for (int f = 0; f < 6; ++f)
+                if (!acc.isValueOn(ijk + openvdb::Coord(kFaceAxes[f][0], kFaceAxes[f][1], kFaceAxes[f][2])))
+                    drawVoxelFace(img, depth, view, *fragment.transform, ijk, f, base);
         }
     });
     return img;

@@ -133,12 +133,12 @@ void transferFields(Archive& a, C& c, std::vector<uint8_t>& hasDamage)
         a.pod(b.materialIndex, "material");
         a.pod(b.voxelSizeM, "voxel size");
         a.pod(b.densityKgM3, "density");
-        a.vec(b.positionM, "position");
-        a.doubles(b.orientation.coeffs().data(), 4, "orientation");
-        a.vec(b.linearVelocityMS, "velocity");
-        a.vec(b.angularVelocityRadS, "angular velocity");
-        a.flag(b.asleep, "asleep");
-        a.pod(b.restTimeS, "rest time");
+        a.vec(b.motion.positionM, "position");
+        a.doubles(b.motion.orientation.coeffs().data(), 4, "orientation");
+        a.vec(b.motion.linearVelocityMS, "velocity");
+        a.vec(b.motion.angularVelocityRadS, "angular velocity");
+        a.flag(b.motion.asleep, "asleep");
+        a.pod(b.motion.restTimeS, "rest time");
         // Mass, faces, bounds, link count and anchoring are derived from the grid on reading.
         if constexpr (Archive::kReading) hasDamage.resize(index + 1);
         a.pod(hasDamage[index++], "damage flag");

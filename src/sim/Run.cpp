@@ -44,8 +44,8 @@ public:
             row.linearMomentum += linearMomentum(b);
             row.angularMomentum += angularMomentumAboutOrigin(b);
             row.voxelCount += b.mass.voxelCount;
-            rows.push_back({b.id, b.parentId, b.positionM, Eigen::Vector4d(b.orientation.w(), b.orientation.x(), b.orientation.y(), b.orientation.z()),
-                            b.linearVelocityMS, b.angularVelocityRadS, b.mass.massKg, b.mass.voxelCount, b.asleep, b.anchored});
+            rows.push_back({b.id, b.parentId, b.motion.positionM, Eigen::Vector4d(b.motion.orientation.w(), b.motion.orientation.x(), b.motion.orientation.y(), b.motion.orientation.z()),
+                            b.motion.linearVelocityMS, b.motion.angularVelocityRadS, b.mass.massKg, b.mass.voxelCount, b.motion.asleep, b.anchored});
         }
         const auto& events = sim.fractureEvents();
         const auto& dust = sim.dust();

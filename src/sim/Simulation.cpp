@@ -16,7 +16,7 @@ namespace {
 /// Sets the anchor bit of voxels whose lowest point lies within a quarter voxel of the ground.
 void anchorToGround(Body& body, const GroundPlane& ground)
 {
-    const Eigen::Matrix3d rot = body.orientation.toRotationMatrix();
+    const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
     const Eigen::Vector3d& n = ground.normal;
     const double support = 0.5 * body.voxelSizeM * (std::abs(n.dot(rot.col(0))) + std::abs(n.dot(rot.col(1))) + std::abs(n.dot(rot.col(2))));
     for (auto it = body.grid->beginValueOn(); it; ++it) {
@@ -50,17 +50,17 @@ Simulation::Simulation(const Scene& scene) : mScene(scene)
             body.materialIndex = static_cast<int>(mScene.materials.size() - 1);
         }
         // world = t + Q (index h + offset): the centre of mass goes to t + Q (c + offset).
-        body.orientation = rotationFromDegrees(spec.rotationDeg);
-        body.positionM = spec.positionM + body.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
+        body.motion.orientation = rotationFromDegrees(spec.rotationDeg);
+        body.motion.positionM = spec.positionM + body.motion.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
         if (spec.anchor == AnchorMode::Ground) {
             anchorToGround(body, scene.world.ground);
             refreshDerivedData(body);
-            body.positionM = spec.positionM + body.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
+            body.motion.positionM = spec.positionM + body.motion.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
             if (!body.anchored) throw InputError(scene.sourceName + ": objects[" + std::to_string(i) + "].anchor: no voxel of '" + spec.name + "' touches the ground");
         }
         // A charge inside an object would need contact detonation physics the model does not have.
         for (size_t c = 0; c < scene.charges.size(); ++c) {
-            const Eigen::Vector3d local = (body.orientation.inverse() * (scene.charges[c].positionM - body.positionM) +
+            const Eigen::Vector3d local = (body.motion.orientation.inverse() * (scene.charges[c].positionM - body.motion.positionM) +
                                            body.mass.centreOfMassLocalM) / body.voxelSizeM;
             const openvdb::Coord ijk(static_cast<int>(std::lround(local.x())), static_cast<int>(std::lround(local.y())),
                                      static_cast<int>(std::lround(local.z())));
@@ -76,6 +76,7 @@ Simulation::Simulation(const Scene& scene) : mScene(scene)
 
 Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene), mState(std::move(state))
 {
+    requireVoxelSize(mState.bodies, scene.voxelSizeM);
     initialiseOpenVdb();
     mField = std::make_unique<BlastField>(scene.charges, scene.blast);
     mStats.minDtS = scene.timeStep.maxTimeStepS;
@@ -104,7 +105,7 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
     std::vector<Reach> reach(mField->charges().size());
     for (const Body& body : mState.bodies) {
         for (size_t c = 0; c < reach.size(); ++c) {
-            const double d = (body.positionM - mField->charges()[c].positionM).norm();
+            const double d = (body.motion.positionM - mField->charges()[c].positionM).norm();
             Reach& r = reach[c];
             r.nearM = std::max(d - body.boundingRadiusM, h);
             r.farM = d + body.boundingRadiusM;
@@ -130,7 +131,7 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
             if (arrival > t && arrival - t < dt)
                 dt = std::min(dt, std::max(arrival - t, ts.frontFraction * h / mField->shockSpeedMS(static_cast<int>(c), reach[c].nearM)));
         }
-        if (!body.anchored && !body.asleep) {
+        if (!body.anchored && !body.motion.asleep) {
             const double speed = maxVoxelSpeedMS(body);
             if (speed > 0) dt = std::min(dt, ts.speedFraction * h / speed);
         }

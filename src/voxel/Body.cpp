@@ -1,10 +1,13 @@
 #include <spall/voxel/Body.h>
 
+#include <spall/core/Error.h>
+
 #include <openvdb/tree/LeafManager.h>
 #include <tbb/parallel_for.h>
 
 #include <array>
 #include <cmath>
+#include <sstream>
 
 namespace spall {
 
@@ -18,8 +21,8 @@ using ConstLeafManager = openvdb::tree::LeafManager<const LinkTree>;
 openvdb::math::Transform::Ptr Body::indexToWorld() const
 {
     // world = p + R (h * index - c); OpenVDB maps row vectors: world = index * M.
-    const Eigen::Matrix3d r = orientation.toRotationMatrix();
-    const Eigen::Vector3d t = positionM - r * mass.centreOfMassLocalM;
+    const Eigen::Matrix3d r = motion.orientation.toRotationMatrix();
+    const Eigen::Vector3d t = motion.positionM - r * mass.centreOfMassLocalM;
     openvdb::math::Mat4d m = openvdb::math::Mat4d::identity();
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) m(i, j) = voxelSizeM * r(j, i);
@@ -214,8 +217,19 @@ Body makeBody(LinkGrid::Ptr grid, double voxelSizeM, double densityKgM3)
     body.voxelSizeM = voxelSizeM;
     body.densityKgM3 = densityKgM3;
     refreshDerivedData(body);
-    body.positionM = body.mass.centreOfMassLocalM;
+    body.motion.positionM = body.mass.centreOfMassLocalM;
     return body;
+}
+
+void requireVoxelSize(const std::vector<Body>& bodies, double voxelSizeM)
+{
+    for (const Body& body : bodies) {
+        if (body.voxelSizeM == voxelSizeM) continue;
+        std::ostringstream message;
+        message << "body " << body.id << " has voxel size " << body.voxelSizeM << " m, the scene " << voxelSizeM
+                << " m: every body of a simulation has the scene's voxel size";
+        throw InputError(message.str());
+    }
 }
 
 }  // namespace spall

@@ -44,16 +44,10 @@ struct BlastSettings {
 
 // Keys and ranges (src/blast/Settings.cpp).
 template <>
-struct FieldTable<Atmosphere> {
-    static const std::vector<Field<Atmosphere>>& fields();
-};
+const std::vector<Field<Atmosphere>>& fieldTable<Atmosphere>();
 template <>
-struct FieldTable<Charge> {
-    static const std::vector<Field<Charge>>& fields();
-};
+const std::vector<Field<Charge>>& fieldTable<Charge>();
 template <>
-struct FieldTable<BlastSettings> {
-    static const std::vector<Field<BlastSettings>>& fields();
-};
+const std::vector<Field<BlastSettings>>& fieldTable<BlastSettings>();
 
 }  // namespace spall

@@ -1,5 +1,5 @@
 // Field tables: each settings struct lists its fields once — key (with the unit in its name),
-// member and valid range — next to its declaration, by specialising FieldTable. That one list
+// member and valid range — next to its declaration, by specialising fieldTable. That one list
 // drives reading a scene, writing the resolved scene (which is also what a checkpoint stores),
 // and validating values built in code, so the keys and ranges cannot drift apart.
 #pragma once
@@ -82,37 +82,50 @@ struct Field {
     VectorCheck vectorCheck = VectorCheck::Finite;
 };
 
-/// Specialise for each settings struct: `static const std::vector<Field<S>>& fields();`, defined
-/// in the stage's Settings.cpp.
+/// The struct's fields. Each settings header declares its specialisation in one line,
+/// `template <> const std::vector<Field<S>>& fieldTable<S>();`, defined in the stage's Settings.cpp.
 template <typename S>
-struct FieldTable;
+const std::vector<Field<S>>& fieldTable();
+
+/// Why a number, in file units, cannot be the field's value ("must be in (0, 100], got 0"), or ""
+/// when it can. Reading a scene and validating a struct built in code share it.
+template <typename S>
+std::string numberProblem(const Field<S>& field, double fileValue)
+{
+    if (field.range.contains(fileValue)) return {};
+    std::ostringstream got;
+    got << fileValue;
+    return "must be " + field.range.describe() + ", got " + got.str();
+}
+
+/// The same for a vector, in file units.
+template <typename S>
+std::string vectorProblem(const Field<S>& field, const Eigen::Vector3d& fileValue)
+{
+    for (int i = 0; i < 3; ++i)
+        if (!field.range.contains(fileValue[i])) return "every component must be " + field.range.describe();
+    if (field.vectorCheck == VectorCheck::NonZero && !(fileValue.norm() > 0)) return "must not be zero";
+    if (field.vectorCheck == VectorCheck::Positive && !(fileValue.minCoeff() > 0)) return "must be positive";
+    return {};
+}
 
 /// Throws InputError "<context>: <key>: must be ..., got ..." for the first value out of range.
 template <typename S>
 void validateFields(const S& value, const std::string& context)
 {
-    for (const Field<S>& field : FieldTable<S>::fields()) {
-        auto fail = [&](const std::string& reason) { throw InputError(context + ": " + field.key + ": " + reason); };
+    for (const Field<S>& field : fieldTable<S>()) {
+        std::string problem;
         std::visit(
             [&](const auto& member) {
                 using M = std::decay_t<decltype(member)>;
-                if constexpr (std::is_same_v<M, Eigen::Vector3d S::*>) {
-                    const Eigen::Vector3d& v = value.*member;
-                    for (int i = 0; i < 3; ++i)
-                        if (!field.range.contains(v[i] * field.scale)) fail("every component must be " + field.range.describe());
-                    if (field.vectorCheck == VectorCheck::NonZero && !(v.norm() > 0)) fail("must not be zero");
-                    if (field.vectorCheck == VectorCheck::Positive && !(v.minCoeff() > 0)) fail("must be positive");
-                } else if constexpr (std::is_same_v<M, double S::*> || std::is_same_v<M, int S::*> || std::is_same_v<M, int64_t S::*> ||
-                                     std::is_same_v<M, uint64_t S::*>) {
-                    const double x = static_cast<double>(value.*member) * field.scale;
-                    if (!field.range.contains(x)) {
-                        std::ostringstream got;
-                        got << value.*member;
-                        fail("must be " + field.range.describe() + ", got " + got.str());
-                    }
-                }
+                if constexpr (std::is_same_v<M, Eigen::Vector3d S::*>)
+                    problem = vectorProblem(field, value.*member * field.scale);
+                else if constexpr (std::is_same_v<M, double S::*> || std::is_same_v<M, int S::*> || std::is_same_v<M, int64_t S::*> ||
+                                   std::is_same_v<M, uint64_t S::*>)
+                    problem = numberProblem(field, static_cast<double>(value.*member) * field.scale);
             },
             field.member);
+        if (!problem.empty()) throw InputError(context + ": " + field.key + ": " + problem);
     }
 }
 

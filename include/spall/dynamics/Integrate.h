@@ -15,12 +15,12 @@
 namespace spall {
 
 /// A body the solver may move: neither anchored nor asleep.
-inline bool movable(const Body& body) { return !body.anchored && !body.asleep; }
+inline bool movable(const Body& body) { return !body.anchored && !body.motion.asleep; }
 
 /// Upper bound of the speed of any voxel of the body (unit: m/s).
 inline double maxVoxelSpeedMS(const Body& body)
 {
-    return body.linearVelocityMS.norm() + body.angularVelocityRadS.norm() * body.boundingRadiusM;
+    return body.motion.linearVelocityMS.norm() + body.motion.angularVelocityRadS.norm() * body.boundingRadiusM;
 }
 
 /// Every force on a body at a trial state (time, pose, velocities): blast, gravity, drag.

@@ -84,28 +84,16 @@ struct CollisionSettings {
 
 // Keys and ranges (src/dynamics/Settings.cpp).
 template <>
-struct FieldTable<GroundPlane> {
-    static const std::vector<Field<GroundPlane>>& fields();
-};
+const std::vector<Field<GroundPlane>>& fieldTable<GroundPlane>();
 template <>
-struct FieldTable<StaticBox> {
-    static const std::vector<Field<StaticBox>>& fields();
-};
+const std::vector<Field<StaticBox>>& fieldTable<StaticBox>();
 template <>
-struct FieldTable<WorldSettings> {
-    static const std::vector<Field<WorldSettings>>& fields();
-};
+const std::vector<Field<WorldSettings>>& fieldTable<WorldSettings>();
 template <>
-struct FieldTable<SleepSettings> {
-    static const std::vector<Field<SleepSettings>>& fields();
-};
+const std::vector<Field<SleepSettings>>& fieldTable<SleepSettings>();
 template <>
-struct FieldTable<TimeStepSettings> {
-    static const std::vector<Field<TimeStepSettings>>& fields();
-};
+const std::vector<Field<TimeStepSettings>>& fieldTable<TimeStepSettings>();
 template <>
-struct FieldTable<CollisionSettings> {
-    static const std::vector<Field<CollisionSettings>>& fields();
-};
+const std::vector<Field<CollisionSettings>>& fieldTable<CollisionSettings>();
 
 }  // namespace spall

@@ -30,9 +30,7 @@ const Material& findMaterialPreset(const std::string& name);
 /// Keys and ranges of a material's numbers (src/fracture/Material.cpp); the name and the source
 /// are not among them.
 template <>
-struct FieldTable<Material> {
-    static const std::vector<Field<Material>>& fields();
-};
+const std::vector<Field<Material>>& fieldTable<Material>();
 
 /// Throws InputError naming the material and the field when a value is out of range.
 void validateMaterial(const Material& material);

@@ -40,8 +40,6 @@ struct FractureSettings {
 
 // Keys and ranges (src/fracture/Settings.cpp).
 template <>
-struct FieldTable<FractureSettings> {
-    static const std::vector<Field<FractureSettings>>& fields();
-};
+const std::vector<Field<FractureSettings>>& fieldTable<FractureSettings>();
 
 }  // namespace spall

@@ -71,17 +71,11 @@ struct Scene {
 // Keys and ranges (src/io/Scene.cpp). A scene's own table holds its top-level numbers; its
 // settings structs, lists and materials have tables of their own.
 template <>
-struct FieldTable<ObjectSpec> {
-    static const std::vector<Field<ObjectSpec>>& fields();
-};
+const std::vector<Field<ObjectSpec>>& fieldTable<ObjectSpec>();
 template <>
-struct FieldTable<OutputSettings> {
-    static const std::vector<Field<OutputSettings>>& fields();
-};
+const std::vector<Field<OutputSettings>>& fieldTable<OutputSettings>();
 template <>
-struct FieldTable<Scene> {
-    static const std::vector<Field<Scene>>& fields();
-};
+const std::vector<Field<Scene>>& fieldTable<Scene>();
 
 /// Rotation about the world x, then y, then z axes (degrees), as scenes give it.
 Eigen::Quaterniond rotationFromDegrees(const Eigen::Vector3d& degrees);

@@ -14,8 +14,6 @@ struct LoadSettings {
 
 // Keys and ranges (src/loads/Settings.cpp).
 template <>
-struct FieldTable<LoadSettings> {
-    static const std::vector<Field<LoadSettings>>& fields();
-};
+const std::vector<Field<LoadSettings>>& fieldTable<LoadSettings>();
 
 }  // namespace spall

@@ -58,31 +58,40 @@ struct ExposedFace {
     int face;
 };
 
-/// One rigid body of connected voxels.
+/// A body's hot state: what every step reads and writes (Box2D keeps it apart from shape data).
+struct BodyMotion {
+    Eigen::Vector3d positionM = Eigen::Vector3d::Zero();  ///< centre of mass, world frame (unit: m)
+    Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< local to world
+    Eigen::Vector3d linearVelocityMS = Eigen::Vector3d::Zero();       ///< (unit: m/s)
+    Eigen::Vector3d angularVelocityRadS = Eigen::Vector3d::Zero();    ///< world frame (unit: rad/s)
+    bool asleep = false;
+    double restTimeS = 0.0;  ///< how long the body has been below the sleep thresholds (unit: s)
+};
+
+/// One rigid body of connected voxels: its motion, its shape (grid, per-voxel state), and what is
+/// derived from the shape, which only refreshDerivedData writes. Every body of a simulation has
+/// the same voxel size (the scene's; fragments inherit it): the contact code relies on that and
+/// requireVoxelSize checks it where a simulation starts.
 struct Body {
     int64_t id = 0;
     int64_t parentId = -1;
     int materialIndex = 0;
+    BodyMotion motion;
+
+    // Shape.
     LinkGrid::Ptr grid;
     /// Per-voxel Davison–Stevens damage, same topology as the grid; only for that fracture rule
     /// (else null). It follows the voxels through every split.
     DamageGrid::Ptr damage;
     double voxelSizeM = 0.1;
     double densityKgM3 = 1000.0;
+
+    // Derived from the shape (refreshDerivedData).
     MassProperties mass;
     /// Radius of the sphere about the centre of mass that holds every voxel (unit: m).
     double boundingRadiusM = 0.0;
     bool anchored = false;
     int64_t linkCount = 0;  ///< intact links; a body without links or anchors cannot fracture
-
-    // Pose and motion, world frame.
-    Eigen::Vector3d positionM = Eigen::Vector3d::Zero();  ///< centre of mass
-    Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
-    Eigen::Vector3d linearVelocityMS = Eigen::Vector3d::Zero();
-    Eigen::Vector3d angularVelocityRadS = Eigen::Vector3d::Zero();
-    bool asleep = false;
-    double restTimeS = 0.0;  ///< how long the body has been below the sleep thresholds
-
     std::vector<ExposedFace> exposedFaces;
     /// Voxels with an exposed face, in leaf order: the only ones that can touch another body.
     std::vector<openvdb::Coord> boundaryVoxels;
@@ -96,11 +105,11 @@ struct Body {
     }
     Eigen::Vector3d voxelWorldM(const openvdb::Coord& ijk) const
     {
-        return positionM + orientation * voxelOffsetM(ijk);
+        return motion.positionM + motion.orientation * voxelOffsetM(ijk);
     }
     Eigen::Matrix3d worldInertiaKgM2() const
     {
-        const Eigen::Matrix3d r = orientation.toRotationMatrix();
+        const Eigen::Matrix3d r = motion.orientation.toRotationMatrix();
         return r * mass.inertiaKgM2 * r.transpose();
     }
     /// The exact index-to-world map, as OpenVDB's transform (row-vector convention).
@@ -134,6 +143,9 @@ bool hasAnchoredVoxel(const LinkGrid& grid);
 /// bounds, bounding radius, link count, anchored flag — the one function that does (on creation,
 /// on a split, on reading a checkpoint).
 void refreshDerivedData(Body& body);
+
+/// Throws InputError naming the first body whose voxel size is not `voxelSizeM`.
+void requireVoxelSize(const std::vector<Body>& bodies, double voxelSizeM);
 
 /// A body from a grid placed so that its local frame maps to the world by translation only.
 Body makeBody(LinkGrid::Ptr grid, double voxelSizeM, double densityKgM3);
