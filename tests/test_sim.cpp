@@ -111,7 +111,8 @@ const char* kEveryKeyScene = R"({
                "small_fragments": "dust"},
   "solver": {"integrator": "rk4", "max_time_step_s": 0.002, "min_time_step_s": 1e-6, "front_fraction_voxels": 0.4,
              "pulse_fraction": 0.05, "speed_fraction_voxels": 0.4, "linear_drag_per_s": 0.1, "angular_drag_per_s": 0.2,
-             "reflected_pressure": false, "sleep": false, "sleep_speed_m_s": 0.1, "sleep_time_s": 1.0},
+             "sleep": false, "sleep_speed_m_s": 0.1, "sleep_time_s": 1.0},
+  "loads": {"model": "paper"},
   "collisions": {"method": "buckets", "restitution": 0.3, "friction": 0.5, "solver_iterations": 20,
                  "penetration_tolerance_voxels": 0.5},
   "output": {"vdb": false, "density_grid": false, "history": false, "checkpoint_every_s": 10}

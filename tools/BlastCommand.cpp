@@ -86,6 +86,7 @@ int runBlast(double tntKg, double distanceM, const std::string& burstName, const
                             {"negative_peak_Pa", p.negativePeakPa},
                             {"negative_duration_s", p.negativeDurationS},
                             {"reflected_pressure_Pa", p.reflectedPressurePa},
+                            {"reflected_impulse_Pa_s", p.reflectedImpulsePaS},
                             {"shock_speed_m_s", p.shockSpeedMS}};
         if (!warning.empty()) j["warning"] = warning;
         std::cout << j.dump(2) << "\n";
@@ -101,6 +102,7 @@ int runBlast(double tntKg, double distanceM, const std::string& burstName, const
     std::printf("  negative peak         %12.5g kPa\n", p.negativePeakPa * 1e-3);
     std::printf("  negative duration     %12.5g ms\n", p.negativeDurationS * 1e3);
     std::printf("  reflected pressure    %12.5g kPa\n", p.reflectedPressurePa * 1e-3);
+    std::printf("  reflected impulse     %12.5g kPa ms\n", p.reflectedImpulsePaS);
     std::printf("  shock speed           %12.5g m/s\n", p.shockSpeedMS);
     return 0;
 }

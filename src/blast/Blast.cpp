@@ -63,6 +63,7 @@ const KbFit kFreeIs1{2.34723921354, 3.24299066475,
 const KbFit kFreeIs2{-1.75305660315, 2.30629231803,
                      {1.55197227115, -0.40463292088, -0.0142721946082, 0.00912366316617, -0.0006750681404,
                       -0.00800863718901, 0.00314819515931, 0.00152044783382, -0.0007470265899}};
+const KbFit kFreeIr{-0.204004553231, 1.37882996018, {2.55875660396, -0.903118886091, 0.101771877942, -0.0242139751146}};
 const KbFit kFreeU{-0.214362789151, 1.35034249993,
                    {-0.144615443471, -0.650507560471, 0.291320654009, 0.307916322787, -0.183361123489,
                     -0.197740454538, 0.0909119559768, 0.0898926178054, -0.0287370990248, -0.0248730221702,
@@ -95,10 +96,24 @@ const KbFit kSurfIs2{-2.91358616806, 2.40697745406,
 /// Granström's negative peak (blast-data.md §4): 0.35/Z bar beyond Z = 3.5, 0.1 bar nearer.
 double granstromNegativePeakPa(double z) { return z > 3.5 ? 0.35e5 / z : 0.1e5; }
 
-/// Sea-level Ps, ta, T+, Is, Pr, U inside the fitted range (SI, per kg^(1/3)).
+/// Sea-level Ps, ta, T+, Is, Pr, Ir, U inside the fitted range (SI, per kg^(1/3)).
 struct CoreValues {
-    double ps, ta, td, is, pr, u;
+    double ps, ta, td, is, pr, ir, u;
 };
+
+/// A charge on rigid ground acts like one of twice the mass in free air (the hemisphere carries
+/// all the energy): scaled distance shrinks by 2^(1/3), scaled times and impulses grow by it.
+const double kSurfaceMassFactorCbrt = std::cbrt(2.0);
+
+/// Kingery–Bulmash normally reflected pressure and impulse of a surface burst, from the free-air
+/// fits of the equivalent charge of twice the mass (the hemispherical set in blast-data.md has
+/// no Pr or Ir fits).
+void surfaceReflection(double z, CoreValues& v)
+{
+    const double zFree = z / kSurfaceMassFactorCbrt;
+    v.pr = kFreePr(zFree) * 1e3;
+    v.ir = kFreeIr(zFree) * kSurfaceMassFactorCbrt;
+}
 
 CoreValues kingeryBulmashFreeAir(double z)
 {
@@ -116,6 +131,7 @@ CoreValues kingeryBulmashFreeAir(double z)
     else
         v.td = kFreeTd3(z) * 1e-3;
     v.is = (z < 0.792 ? kFreeIs1(z) : kFreeIs2(z));  // kPa·ms = Pa·s
+    v.ir = kFreeIr(z);
     v.u = kFreeU(z) * 1e3;
     return v;
 }
@@ -138,7 +154,7 @@ CoreValues kingeryBulmashSurface(double z)
         tdImperial = kSurfTd3(zft);
     v.td = tdImperial * kPerLb13ToPerKg13 * 1e-3;
     v.is = (zlog <= 0.382017 ? kSurfIs1(zft) : kSurfIs2(zft)) * kImpulseImperialToMetric;
-    v.pr = rankineHugoniotReflected(v.ps, kSeaLevelPressurePa);
+    surfaceReflection(z, v);
     v.u = rankineHugoniotShockSpeed(v.ps, kSeaLevelPressurePa);
     return v;
 }
@@ -177,6 +193,9 @@ CoreValues kinneyGraham(double z)
     v.is = 0.067 * std::sqrt(1.0 + std::pow(z / 0.23, 4)) / (z * z * std::cbrt(1.0 + std::pow(z / 1.55, 3))) * 100.0;
     v.ta = kinneyGrahamArrival(z);
     v.pr = rankineHugoniotReflected(v.ps, kSeaLevelPressurePa);
+    // Kinney and Graham give no reflected impulse: their Is times Kingery–Bulmash's Ir/Is.
+    const double zKb = std::clamp(z, 0.0531, 40.0);
+    v.ir = v.is * kFreeIr(zKb) / (zKb < 0.792 ? kFreeIs1(zKb) : kFreeIs2(zKb));
     v.u = rankineHugoniotShockSpeed(v.ps, kSeaLevelPressurePa);
     return v;
 }
@@ -184,15 +203,14 @@ CoreValues kinneyGraham(double z)
 CoreValues coreValuesRaw(BlastDataset dataset, BurstType burst, double z)
 {
     if (dataset == BlastDataset::KinneyGraham) {
-        // Kinney–Graham fits free air; a charge on rigid ground acts like one of twice the mass
-        // (the hemisphere carries all the energy), so Z shrinks by 2^(1/3) and times and
-        // impulses grow by 2^(1/3).
+        // Kinney–Graham fits free air: a surface burst is the free-air charge of twice the mass.
         if (burst == BurstType::Surface) {
-            const double f = std::cbrt(2.0);
+            const double f = kSurfaceMassFactorCbrt;
             CoreValues v = kinneyGraham(z / f);
             v.ta *= f;
             v.td *= f;
             v.is *= f;
+            v.ir *= f;
             return v;
         }
         return kinneyGraham(z);
@@ -295,6 +313,7 @@ BlastParameters scaledBlastDirect(BlastDataset dataset, BurstType burst, double 
         v = end;
         v.ps = end.ps * std::exp(psSlope * lnRatio);
         v.is = end.is * std::exp(isSlope * lnRatio);
+        v.ir = end.ir * v.is / end.is;  // Ir/Is held at the fit's end value (near its acoustic limit, 2)
         v.ta = end.ta + (z - zh) / kSoundSpeedMS;
         v.pr = rankineHugoniotReflected(v.ps, kSeaLevelPressurePa);
         v.u = rankineHugoniotShockSpeed(v.ps, kSeaLevelPressurePa);
@@ -311,6 +330,8 @@ BlastParameters scaledBlastDirect(BlastDataset dataset, BurstType burst, double 
     out.negativePeakPa = granstromNegativePeakPa(z);
     out.negativeDurationS = kNegativeDurationScaledS;
     out.reflectedPressurePa = v.pr;
+    out.reflectedImpulsePaS = v.ir;
+    out.reflectedDecayCoefficient = solveDecayCoefficient(v.ir / (v.pr * v.td));
     out.shockSpeedMS = v.u;
     return out;
 }
@@ -355,6 +376,8 @@ BlastParameters blastParameters(BlastDataset dataset, BurstType burst, double tn
     p.negativePeakPa = s.negativePeakPa * sachs.pressureScale;
     p.negativeDurationS = s.negativeDurationS * sachs.timeScale;
     p.reflectedPressurePa = s.reflectedPressurePa * sachs.pressureScale;
+    p.reflectedImpulsePaS = s.reflectedImpulsePaS * sachs.impulseScale;
+    p.reflectedDecayCoefficient = s.reflectedDecayCoefficient;
     p.shockSpeedMS = s.shockSpeedMS * sachs.speedScale;
     p.status = s.status;
     return p;

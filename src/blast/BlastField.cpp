@@ -53,7 +53,8 @@ BlastTable::BlastTable(BlastDataset dataset, BurstType burst, int nodesPerDecade
     for (size_t i = 0; i < count; ++i) {
         const BlastParameters s = scaledBlastDirect(dataset, burst, scaledDistanceOfNode(double(i)));
         runningEnd = std::max(runningEnd, s.arrivalTimeS + s.positiveDurationS + s.negativeDurationS);
-        mNodes[i] = {s.arrivalTimeS, s.positiveDurationS, s.peakOverpressurePa, s.decayCoefficient, s.negativePeakPa, runningEnd};
+        mNodes[i] = {s.arrivalTimeS,    s.positiveDurationS, s.peakOverpressurePa,        s.decayCoefficient, s.negativePeakPa,
+                     runningEnd,        s.reflectedPressurePa, s.reflectedDecayCoefficient, s.shockSpeedMS};
     }
 }
 
@@ -140,15 +141,33 @@ BlastParameters BlastField::tableParameters(int charge, double distanceM) const
     p.decayCoefficient = n.decayCoefficient;
     p.negativePeakPa = n.negativePeakPa * c.pressureScale;
     p.negativeDurationS = mNegativeDurationScaledS * c.timeScale;
+    p.reflectedPressurePa = n.reflectedPeakPa * c.pressureScale;
+    p.reflectedDecayCoefficient = n.reflectedDecayCoefficient;
+    p.shockSpeedMS = n.shockSpeedMS * mSpeedScale;
+    return p;
+}
+
+PointPulse BlastField::pulseAt(int charge, double distanceSquaredM2) const
+{
+    const PerCharge& c = mPerCharge[charge];
+    const BlastTable::Node n = c.table->lookupLog2(0.5 * fastLog2(distanceSquaredM2) + c.log2LengthScale);
+    PointPulse p;
+    p.arrivalTimeS = c.detonationTimeS + n.arrivalTimeS * c.timeScale;
+    p.positiveDurationS = n.positiveDurationS * c.timeScale;
+    p.peakOverpressurePa = n.peakOverpressurePa * c.pressureScale;
+    p.decayCoefficient = n.decayCoefficient;
+    p.reflectedPeakPa = n.reflectedPeakPa * c.pressureScale;
+    p.reflectedDecayCoefficient = n.reflectedDecayCoefficient;
+    p.negativePeakPa = n.negativePeakPa * c.pressureScale;
+    p.negativeDurationS = mNegativeDurationScaledS * c.timeScale;
+    p.shockSpeedMS = n.shockSpeedMS * mSpeedScale;
     return p;
 }
 
 double BlastField::shockSpeedMS(int charge, double distanceM) const
 {
-    const PerCharge& c = mPerCharge[charge];
-    const BlastTable::Node n = c.table->lookupLog2(std::log2(distanceM) + c.log2LengthScale);
     // Sound speed, and with it the shock speed, scales with sqrt(T); T > 0 is checked on construction.
-    return rankineHugoniotShockSpeed(n.peakOverpressurePa, kSeaLevelPressurePa) * mSpeedScale;
+    return tableParameters(charge, distanceM).shockSpeedMS;
 }
 
 }  // namespace spall

@@ -50,7 +50,8 @@ std::string ObjectReader::string(const std::string& key, const std::string& fall
 void ObjectReader::finish() const
 {
     static const std::map<std::string, std::string> renamed = {
-        {"checkpoint_every_frames", "output.checkpoint_every_s (wall-clock seconds between checkpoints)"}};
+        {"checkpoint_every_frames", "output.checkpoint_every_s (wall-clock seconds between checkpoints)"},
+        {"reflected_pressure", "loads.model (\"paper-reflected\" for true, \"paper\" for false)"}};
     for (auto it = mValue.begin(); it != mValue.end(); ++it) {
         if (mUsed.count(it.key())) continue;
         const auto r = renamed.find(it.key());

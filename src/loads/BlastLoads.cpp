@@ -10,6 +10,29 @@
 
 namespace spall {
 
+namespace {
+
+/// Faces per block of the parallel sums: blocks are summed in order, so results do not depend
+/// on the thread count.
+constexpr size_t kFaceBlock = 4096;
+
+/// Runs perBlock(first, end) over fixed blocks of the body's faces, in parallel when there are several.
+template <typename F>
+void forEachFaceBlock(size_t faceCount, F&& perBlock)
+{
+    const size_t blocks = (faceCount + kFaceBlock - 1) / kFaceBlock;
+    auto run = [&](size_t b) { perBlock(b, b * kFaceBlock, std::min(faceCount, (b + 1) * kFaceBlock)); };
+    if (blocks == 1) {
+        run(0);
+        return;
+    }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t b = r.begin(); b != r.end(); ++b) run(b);
+    });
+}
+
+}  // namespace
+
 bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows)
 {
     for (const OpenWindow& w : windows) {
@@ -17,6 +40,43 @@ bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<
         if (d + body.boundingRadiusM >= w.minDistanceM && d - body.boundingRadiusM <= w.maxDistanceM) return true;
     }
     return false;
+}
+
+double Silhouette::smallerHalfSizeM() const { return std::min(onGround ? 2.0 * halfHeightM : halfHeightM, halfWidthM); }
+
+double Silhouette::clearingTimeS() const
+{
+    const double height = onGround ? 2.0 * halfHeightM : halfHeightM;
+    return spall::clearingTimeS(std::min(height, halfWidthM), std::max(height, halfWidthM), shockSpeedMS);
+}
+
+double Silhouette::rearRiseTimeS() const { return 4.0 * smallerHalfSizeM() / shockSpeedMS; }
+
+Silhouette silhouetteOf(const Body& body, const Eigen::Vector3d& chargeM, double shockSpeedMS, const GroundReference& ground)
+{
+    const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
+    const openvdb::CoordBBox& box = body.indexBounds;
+    const Eigen::Vector3d extentM = Eigen::Vector3d(box.dim().x(), box.dim().y(), box.dim().z()) * body.voxelSizeM;
+    const Eigen::Vector3d boxCentreLocal =
+        0.5 * Eigen::Vector3d(box.min().x() + box.max().x(), box.min().y() + box.max().y(), box.min().z() + box.max().z()) * body.voxelSizeM -
+        body.mass.centreOfMassLocalM;
+    Silhouette out;
+    out.centreM = body.motion.positionM + rot * boxCentreLocal;
+    out.shockSpeedMS = shockSpeedMS;
+    const Eigen::Vector3d sight = (out.centreM - chargeM).normalized();
+    const Eigen::Vector3d up = ground.enabled ? ground.normal : Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d vertical = up - up.dot(sight) * sight;
+    out.vertical = vertical.norm() > 1e-6 ? Eigen::Vector3d(vertical.normalized()) : sight.unitOrthogonal();
+    out.horizontal = sight.cross(out.vertical);
+    auto halfSpan = [&](const Eigen::Vector3d& axis) {
+        return 0.5 * (std::abs(axis.dot(rot.col(0))) * extentM.x() + std::abs(axis.dot(rot.col(1))) * extentM.y() +
+                      std::abs(axis.dot(rot.col(2))) * extentM.z());
+    };
+    out.halfHeightM = halfSpan(out.vertical);
+    out.halfWidthM = halfSpan(out.horizontal);
+    const double lowestM = up.dot(out.centreM) - halfSpan(up);
+    out.onGround = ground.enabled && lowestM <= ground.heightM + 0.5 * body.voxelSizeM;
+    return out;
 }
 
 std::vector<char> BlastLoads::loadedBodies(const std::vector<Body>& bodies) const
@@ -27,58 +87,102 @@ std::vector<char> BlastLoads::loadedBodies(const std::vector<Body>& bodies) cons
     return loaded;
 }
 
-Wrench BlastLoads::wrench(const Body& body, double timeS, const Eigen::Vector3d& positionM, const Eigen::Quaterniond& orientation) const
+std::vector<Silhouette> BlastLoads::silhouettes(const Body& body) const
 {
-    const BlastField& field = mField;
-    const std::vector<OpenWindow>& windows = mWindows;
-    Wrench total;
-    if (windows.empty() || body.exposedFaces.empty()) return total;
-    const double h = body.voxelSizeM;
-    const double faceArea = h * h;
-    const Eigen::Matrix3d rot = orientation.toRotationMatrix();
-    const double p0 = field.settings().atmosphere.pressurePa;
-    constexpr size_t kBlock = 4096;
-    const size_t blocks = (body.exposedFaces.size() + kBlock - 1) / kBlock;
-    std::vector<Wrench> partial(blocks);
-    auto sumBlock = [&](size_t b) {
-        Wrench w;
-        const size_t end = std::min(body.exposedFaces.size(), (b + 1) * kBlock);
-        for (size_t i = b * kBlock; i < end; ++i) {
-            const ExposedFace& f = body.exposedFaces[i];
-            const Eigen::Vector3d normal = rot.col(faceAxis(f.face)) * faceSign(f.face);
-            const Eigen::Vector3d arm = rot * body.voxelOffsetM(f.voxel) + 0.5 * h * normal;
-            const Eigen::Vector3d x = positionM + arm;
-            field.forEachCharge(x, timeS, windows, [&](int, double p, const Eigen::Vector3d& charge) {
-                const Eigen::Vector3d r = x - charge;
-                const double distance = r.norm();
-                if (distance <= 0) return;
-                const Eigen::Vector3d rHat = r / distance;
-                const double cosine = -normal.dot(rHat);
-                if (cosine <= 0.0) return;  // the face looks away from this charge
-                double pressure = p;
-                if (mSettings.reflectedPressure && p > 0) {
-                    const double reflected = rankineHugoniotReflected(p, p0);
-                    pressure = p + (reflected - p) * cosine * cosine;
-                }
-                const Eigen::Vector3d force = pressure * faceArea * cosine * rHat;
-                w.forceN += force;
-                w.torqueNm += arm.cross(force);
-            });
-        }
-        partial[b] = w;
-    };
-    if (blocks == 1) {
-        sumBlock(0);
-    } else {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks), [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t b = r.begin(); b != r.end(); ++b) sumBlock(b);
-        });
+    std::vector<Silhouette> outlines(mWindows.size());
+    if (mSettings.model != LoadModel::BlastEngineering) return outlines;
+    for (size_t w = 0; w < mWindows.size(); ++w) {
+        const Eigen::Vector3d& charge = mField.charges()[mWindows[w].charge].positionM;
+        const double speed = mField.pulseAt(mWindows[w].charge, (body.motion.positionM - charge).squaredNorm()).shockSpeedMS;
+        outlines[w] = silhouetteOf(body, charge, speed, mGround);
     }
+    return outlines;
+}
+
+template <typename F>
+void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouette>& outlines, double timeS, double dtS, size_t firstFace,
+                                    size_t endFace, F&& f) const
+{
+    const double h = body.voxelSizeM, area = h * h;
+    const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
+    const double p0 = mField.settings().atmosphere.pressurePa;
+    for (size_t i = firstFace; i < endFace; ++i) {
+        const ExposedFace& face = body.exposedFaces[i];
+        const Eigen::Vector3d normal = rot.col(faceAxis(face.face)) * faceSign(face.face);
+        const Eigen::Vector3d arm = rot * body.voxelOffsetM(face.voxel) + 0.5 * h * normal;
+        const Eigen::Vector3d x = body.motion.positionM + arm;
+        for (size_t w = 0; w < mWindows.size(); ++w) {
+            const OpenWindow& window = mWindows[w];
+            const Eigen::Vector3d r = x - mField.charges()[window.charge].positionM;
+            const double r2 = r.squaredNorm();
+            if (r2 < window.minDistanceM * window.minDistanceM || r2 > window.maxDistanceM * window.maxDistanceM || r2 <= 0) continue;
+            const Eigen::Vector3d rHat = r / std::sqrt(r2);
+            const double cosine = -normal.dot(rHat);
+            if (mSettings.model == LoadModel::BlastEngineering) {
+                const PointPulse pulse = mField.pulseAt(window.charge, r2);
+                const double from = timeS - pulse.arrivalTimeS;
+                if (from + dtS <= 0.0 || from >= pulse.positiveDurationS + pulse.negativeDurationS) continue;
+                const FaceExposure exposure{cosine, outlines[w].clearingTimeS(), outlines[w].rearRiseTimeS()};
+                const double impulse = faceImpulsePaS(pulse, exposure, from, from + dtS, p0);
+                if (impulse != 0.0) f(i, Eigen::Vector3d(-impulse * area * normal), arm, normal);
+                continue;
+            }
+            // The paper's rule, sampled at the step's start, on faces that look at the charge.
+            const double p = mField.chargeOverpressurePa(window.charge, std::sqrt(r2), timeS);
+            if (cosine <= 0.0 || p == 0.0) continue;
+            const double pressure = mSettings.model == LoadModel::PaperReflected && p > 0
+                                        ? p + (rankineHugoniotReflected(p, p0) - p) * cosine * cosine
+                                        : p;
+            f(i, Eigen::Vector3d(pressure * area * cosine * dtS * rHat), arm, normal);
+        }
+    }
+}
+
+Wrench BlastLoads::stepWrench(const Body& body, double timeS, double dtS) const
+{
+    Wrench total;
+    if (mWindows.empty() || body.exposedFaces.empty() || !(dtS > 0)) return total;
+    const std::vector<Silhouette> outlines = silhouettes(body);
+    std::vector<Wrench> partial((body.exposedFaces.size() + kFaceBlock - 1) / kFaceBlock);
+    forEachFaceBlock(body.exposedFaces.size(), [&](size_t block, size_t first, size_t end) {
+        Wrench w;
+        forEachFaceImpulse(body, outlines, timeS, dtS, first, end,
+                           [&](size_t, const Eigen::Vector3d& impulse, const Eigen::Vector3d& arm, const Eigen::Vector3d&) {
+                               w.forceN += impulse;
+                               w.torqueNm += arm.cross(impulse);
+                           });
+        partial[block] = w;
+    });
     for (const Wrench& w : partial) {
-        total.forceN += w.forceN;
-        total.torqueNm += w.torqueNm;
+        total.forceN += w.forceN / dtS;
+        total.torqueNm += w.torqueNm / dtS;
     }
     return total;
+}
+
+std::vector<Wrench> BlastLoads::stepWrenches(const std::vector<Body>& bodies, const std::vector<char>& loaded, double timeS,
+                                             double dtS) const
+{
+    std::vector<Wrench> wrenches(bodies.size());
+    forEachIndex(bodies.size(), [&](size_t i) {
+        if (loaded[i]) wrenches[i] = stepWrench(bodies[i], timeS, dtS);
+    });
+    return wrenches;
+}
+
+std::vector<double> BlastLoads::faceImpulsesPaS(const Body& body, double timeS, double dtS) const
+{
+    std::vector<double> perFace(body.exposedFaces.size(), 0.0);
+    if (mWindows.empty() || body.exposedFaces.empty()) return perFace;
+    const std::vector<Silhouette> outlines = silhouettes(body);
+    const double area = body.voxelSizeM * body.voxelSizeM;
+    forEachFaceBlock(body.exposedFaces.size(), [&](size_t, size_t first, size_t end) {
+        forEachFaceImpulse(body, outlines, timeS, dtS, first, end,
+                           [&](size_t i, const Eigen::Vector3d& impulse, const Eigen::Vector3d&, const Eigen::Vector3d& normal) {
+                               perFace[i] -= impulse.dot(normal) / area;
+                           });
+    });
+    return perFace;
 }
 
 }  // namespace spall

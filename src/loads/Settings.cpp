@@ -6,7 +6,7 @@ template <>
 const std::vector<Field<LoadSettings>>& fieldTable<LoadSettings>()
 {
     static const std::vector<Field<LoadSettings>> table = {
-        {"solver.reflected_pressure", &LoadSettings::reflectedPressure},
+        {"loads.model", choice(&LoadSettings::model)},
     };
     return table;
 }

@@ -161,10 +161,12 @@ void Simulation::step(double targetS)
     const std::vector<char> cracked = fractureBodies(windows, dt);
     splitBodies(cracked);
 
-    const BlastLoads blast(*mField, windows, mScene.loads);
+    const GroundReference ground{mScene.world.ground.enabled, mScene.world.ground.normal.normalized(), mScene.world.ground.offsetM};
+    const BlastLoads blast(*mField, windows, mScene.loads, ground);
     const std::vector<char> loaded = blast.loadedBodies(mState.bodies);
     wakeLoadedBodies(mState.bodies, loaded);
-    integrateBodies(mState.bodies, loaded, blast, mScene.world, mScene.timeStep.integrator, mState.timeS, dt);
+    const std::vector<Wrench> blastWrenches = blast.stepWrenches(mState.bodies, loaded, mState.timeS, dt);
+    integrateBodies(mState.bodies, blastWrenches, mScene.world, mScene.timeStep.integrator, mState.timeS, dt);
 
     const ContactSet contacts = detectContacts(mState.bodies, mScene.world, mScene.collisions, mScene.sleep);
     solveContacts(mState.bodies, contacts, mScene.world, mScene.collisions, dt, mState.contactCache);

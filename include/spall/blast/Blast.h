@@ -32,9 +32,25 @@ struct BlastParameters {
     double decayCoefficient = 0;
     double negativePeakPa = 0;
     double negativeDurationS = 0;
-    double reflectedPressurePa = 0;
+    double reflectedPressurePa = 0;   ///< normally reflected peak Pr
+    double reflectedImpulsePaS = 0;   ///< normally reflected positive impulse Ir
+    /// Friedlander decay of the reflected pulse: Pr over T+ carrying Ir (unit: 1).
+    double reflectedDecayCoefficient = 0;
     double shockSpeedMS = 0;
     RangeStatus status = RangeStatus::Inside;
+};
+
+/// One charge's pulse at one point, in real units: what the loads stage turns into face pressures.
+struct PointPulse {
+    double arrivalTimeS = 0;  ///< absolute (detonation time included)
+    double positiveDurationS = 0;
+    double peakOverpressurePa = 0;  ///< side-on
+    double decayCoefficient = 0;
+    double reflectedPeakPa = 0;  ///< normally reflected, Kingery–Bulmash Pr
+    double reflectedDecayCoefficient = 0;
+    double negativePeakPa = 0;
+    double negativeDurationS = 0;
+    double shockSpeedMS = 0;
 };
 
 /// Direct evaluation of the dataset's fits (polynomials or closed forms) at scaled distance Z
@@ -112,6 +128,7 @@ public:
     struct Node {
         double arrivalTimeS, positiveDurationS, peakOverpressurePa, decayCoefficient, negativePeakPa;
         double windowEndS;  ///< arrival + T+ + T-, running maximum from the near end
+        double reflectedPeakPa, reflectedDecayCoefficient, shockSpeedMS;
     };
     BlastTable(BlastDataset dataset, BurstType burst, int nodesPerDecade);
 
@@ -131,7 +148,10 @@ public:
                 a.peakOverpressurePa + w * (b.peakOverpressurePa - a.peakOverpressurePa),
                 a.decayCoefficient + w * (b.decayCoefficient - a.decayCoefficient),
                 a.negativePeakPa + w * (b.negativePeakPa - a.negativePeakPa),
-                a.windowEndS + w * (b.windowEndS - a.windowEndS)};
+                a.windowEndS + w * (b.windowEndS - a.windowEndS),
+                a.reflectedPeakPa + w * (b.reflectedPeakPa - a.reflectedPeakPa),
+                a.reflectedDecayCoefficient + w * (b.reflectedDecayCoefficient - a.reflectedDecayCoefficient),
+                a.shockSpeedMS + w * (b.shockSpeedMS - a.shockSpeedMS)};
     }
     double scaledDistanceMax() const { return std::exp2(mLog2ZMin + double(mNodes.size() - 1) / mNodesPerLog2); }
     /// Scaled distance of the shock front at scaled time tau (s/kg^(1/3)).
@@ -234,6 +254,8 @@ public:
 
     /// Parameters of one charge at a distance from the table (what the hot path uses).
     BlastParameters tableParameters(int charge, double distanceM) const;
+    /// One charge's pulse at squared distance r2 (unit: m^2), from the table.
+    PointPulse pulseAt(int charge, double distanceSquaredM2) const;
 
 private:
     struct PerCharge {

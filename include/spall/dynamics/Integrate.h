@@ -30,11 +30,12 @@ using WrenchFunction = std::function<Wrench(double timeS, const Eigen::Vector3d&
 /// Advances position, orientation and momenta of one body over dt. Quaternions stay unit.
 void integrateBody(Body& body, double timeS, double dtS, Integrator integrator, const WrenchFunction& wrench);
 
-/// The integrate phase: every awake, unanchored body under gravity, drag and, where `loaded`
-/// says so, the blast (evaluated at each integrator stage's own time and pose). In parallel:
-/// each task writes only its own body.
-void integrateBodies(std::vector<Body>& bodies, const std::vector<char>& loaded, const BlastLoads& blast,
-                     const WorldSettings& world, Integrator integrator, double timeS, double dtS);
+/// The integrate phase: every awake, unanchored body under gravity, drag and its blast load
+/// (`blast[i]`, the step's mean force and torque from the loads phase; held through the step, so
+/// the blast's impulse is exactly what the loads stage integrated). In parallel: each task
+/// writes only its own body.
+void integrateBodies(std::vector<Body>& bodies, const std::vector<Wrench>& blast, const WorldSettings& world, Integrator integrator,
+                     double timeS, double dtS);
 
 /// Kinetic energy (J), linear momentum (kg m/s) and angular momentum about the origin (kg m^2/s).
 double kineticEnergyJ(const Body& body);

@@ -1,8 +1,10 @@
-// Loads (paper section 4.1): the blast's force and torque on the exposed faces of a body.
-// Between the free field (blast) and everything that moves or breaks (fracture, dynamics).
+// Loads: the blast's force and torque on the exposed faces of a body, between the free field
+// (blast) and everything that moves or breaks (fracture, dynamics). The rule is a setting
+// (LoadModel): blast engineering's procedure, or the paper's (section 4.1) as a baseline.
 #pragma once
 
 #include <spall/blast/Blast.h>
+#include <spall/loads/FacePulse.h>
 #include <spall/loads/Settings.h>
 #include <spall/voxel/Body.h>
 
@@ -19,30 +21,75 @@ struct Wrench {
     Eigen::Vector3d torqueNm = Eigen::Vector3d::Zero();  ///< (unit: N m)
 };
 
+/// The ground as the loads stage needs it: a face region resting on it clears only over its
+/// other edges (UFC 3-340-02: S is the smaller of the wall's height and half-width).
+struct GroundReference {
+    bool enabled = false;
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< unit, pointing up
+    double heightM = 0.0;                               ///< offset along the normal (unit: m)
+};
+
 /// True when the body's bounding sphere meets some open window's distance range: only then can
 /// the blast load it.
 bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows);
 
+/// A body's outline as seen from a charge: the rectangle its bounding box covers across the
+/// line of sight, "up" from the ground. Its edges are free, except one resting on the ground.
+struct Silhouette {
+    Eigen::Vector3d centreM = Eigen::Vector3d::Zero();
+    Eigen::Vector3d horizontal = Eigen::Vector3d::UnitY(), vertical = Eigen::Vector3d::UnitZ();  ///< unit
+    double halfWidthM = 0, halfHeightM = 0;
+    bool onGround = false;
+    double shockSpeedMS = 340.0;
+
+    /// UFC 3-340-02's S: the smaller of the half-width and the height above the ground (the
+    /// half-height when nothing is below) (unit: m).
+    double smallerHalfSizeM() const;
+    /// UFC 3-340-02 eq. 2-4, tc = 4S/((1 + S/G) U), G the larger of the two (unit: s).
+    double clearingTimeS() const;
+    /// UFC 3-340-02's rear-wall rise time 4S/U (unit: s).
+    double rearRiseTimeS() const;
+};
+Silhouette silhouetteOf(const Body& body, const Eigen::Vector3d& chargeM, double shockSpeedMS, const GroundReference& ground);
+
 /// The blast's loads during one step: the field and the windows open at the step's start.
 class BlastLoads {
 public:
-    BlastLoads(const BlastField& field, const std::vector<OpenWindow>& windows, const LoadSettings& settings)
-        : mField(field), mWindows(windows), mSettings(settings)
+    BlastLoads(const BlastField& field, const std::vector<OpenWindow>& windows, const LoadSettings& settings, const GroundReference& ground)
+        : mField(field), mWindows(windows), mSettings(settings), mGround(ground)
     {
     }
 
     /// Per body: whether the blast can load it this step (anchored bodies: 0, they do not move).
     std::vector<char> loadedBodies(const std::vector<Body>& bodies) const;
 
-    /// Load on the exposed faces at a trial pose and time: F = p h^2 |n . R| R on every face
-    /// facing a charge (paper eq. 4.1), summed per body, with torques. Faces are summed in fixed
-    /// blocks and the blocks in order, so the result does not depend on the thread count.
-    Wrench wrench(const Body& body, double timeS, const Eigen::Vector3d& positionM, const Eigen::Quaterniond& orientation) const;
+    /// The mean force and torque over [t, t + dt] on the body at its pose at t: per face and
+    /// charge, the face's pressure history integrated over the step (blast engineering), or
+    /// the paper's force sampled at t. Faces are summed in fixed blocks and the blocks in
+    /// order, so the result does not depend on the thread count.
+    Wrench stepWrench(const Body& body, double timeS, double dtS) const;
+
+    /// stepWrench for every body `loaded` marks (zero for the others), in parallel.
+    std::vector<Wrench> stepWrenches(const std::vector<Body>& bodies, const std::vector<char>& loaded, double timeS, double dtS) const;
+
+    /// Per exposed face (in body.exposedFaces order): the impulse per area pushing into it over
+    /// [t, t + dt] (unit: Pa s).
+    std::vector<double> faceImpulsesPaS(const Body& body, double timeS, double dtS) const;
 
 private:
+    /// Calls f(faceIndex, impulse (unit: N s), arm from the centre of mass (unit: m), outward
+    /// normal) for every exposed face in [firstFace, endFace) and every charge that loads it
+    /// during the step. `outlines` holds the body's silhouette per window.
+    template <typename F>
+    void forEachFaceImpulse(const Body& body, const std::vector<Silhouette>& outlines, double timeS, double dtS, size_t firstFace,
+                            size_t endFace, F&& f) const;
+    /// The body's silhouette from each open window's charge (blast engineering only).
+    std::vector<Silhouette> silhouettes(const Body& body) const;
+
     const BlastField& mField;
     const std::vector<OpenWindow>& mWindows;
     LoadSettings mSettings;
+    GroundReference mGround;
 };
 
 }  // namespace spall
