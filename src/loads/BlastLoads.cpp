@@ -1,6 +1,7 @@
 #include <spall/loads/BlastLoads.h>
 
 #include <spall/core/Parallel.h>
+#include <spall/loads/Exposure.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -52,30 +53,39 @@ double Silhouette::clearingTimeS() const
 
 double Silhouette::rearRiseTimeS() const { return 4.0 * smallerHalfSizeM() / shockSpeedMS; }
 
-Silhouette silhouetteOf(const Body& body, const Eigen::Vector3d& chargeM, double shockSpeedMS, const GroundReference& ground)
+Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vector3d& chargeM, double shockSpeedMS,
+                        const GroundReference& ground)
 {
-    const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
-    const openvdb::CoordBBox& box = body.indexBounds;
-    const Eigen::Vector3d extentM = Eigen::Vector3d(box.dim().x(), box.dim().y(), box.dim().z()) * body.voxelSizeM;
-    const Eigen::Vector3d boxCentreLocal =
-        0.5 * Eigen::Vector3d(box.min().x() + box.max().x(), box.min().y() + box.max().y(), box.min().z() + box.max().z()) * body.voxelSizeM -
-        body.mass.centreOfMassLocalM;
+    // The corners of every member's oriented index box, in the world.
+    std::vector<Eigen::Vector3d> corners;
+    for (const Body* body : group) {
+        const Eigen::Matrix3d rot = body->motion.orientation.toRotationMatrix();
+        const openvdb::CoordBBox& box = body->indexBounds;
+        for (int c = 0; c < 8; ++c) {
+            const Eigen::Vector3d index((c & 1 ? box.max().x() + 0.5 : box.min().x() - 0.5), (c & 2 ? box.max().y() + 0.5 : box.min().y() - 0.5),
+                                        (c & 4 ? box.max().z() + 0.5 : box.min().z() - 0.5));
+            corners.push_back(body->motion.positionM + rot * (index * body->voxelSizeM - body->mass.centreOfMassLocalM));
+        }
+    }
+    Eigen::Vector3d lo = corners.front(), hi = corners.front();
+    for (const Eigen::Vector3d& c : corners) lo = lo.cwiseMin(c), hi = hi.cwiseMax(c);
     Silhouette out;
-    out.centreM = body.motion.positionM + rot * boxCentreLocal;
     out.shockSpeedMS = shockSpeedMS;
-    const Eigen::Vector3d sight = (out.centreM - chargeM).normalized();
+    const Eigen::Vector3d sight = (0.5 * (lo + hi) - chargeM).normalized();
     const Eigen::Vector3d up = ground.enabled ? ground.normal : Eigen::Vector3d::UnitZ();
     const Eigen::Vector3d vertical = up - up.dot(sight) * sight;
     out.vertical = vertical.norm() > 1e-6 ? Eigen::Vector3d(vertical.normalized()) : sight.unitOrthogonal();
     out.horizontal = sight.cross(out.vertical);
-    auto halfSpan = [&](const Eigen::Vector3d& axis) {
-        return 0.5 * (std::abs(axis.dot(rot.col(0))) * extentM.x() + std::abs(axis.dot(rot.col(1))) * extentM.y() +
-                      std::abs(axis.dot(rot.col(2))) * extentM.z());
-    };
-    out.halfHeightM = halfSpan(out.vertical);
-    out.halfWidthM = halfSpan(out.horizontal);
-    const double lowestM = up.dot(out.centreM) - halfSpan(up);
-    out.onGround = ground.enabled && lowestM <= ground.heightM + 0.5 * body.voxelSizeM;
+    double uLo = 1e300, uHi = -1e300, vLo = 1e300, vHi = -1e300, lowestM = 1e300;
+    for (const Eigen::Vector3d& c : corners) {
+        uLo = std::min(uLo, c.dot(out.horizontal)), uHi = std::max(uHi, c.dot(out.horizontal));
+        vLo = std::min(vLo, c.dot(out.vertical)), vHi = std::max(vHi, c.dot(out.vertical));
+        lowestM = std::min(lowestM, c.dot(up));
+    }
+    out.halfWidthM = 0.5 * (uHi - uLo);
+    out.halfHeightM = 0.5 * (vHi - vLo);
+    out.centreM = 0.5 * (lo + hi);
+    out.onGround = ground.enabled && lowestM <= ground.heightM + 0.5 * group.front()->voxelSizeM;
     return out;
 }
 
@@ -87,26 +97,27 @@ std::vector<char> BlastLoads::loadedBodies(const std::vector<Body>& bodies) cons
     return loaded;
 }
 
-std::vector<Silhouette> BlastLoads::silhouettes(const Body& body) const
+std::vector<Silhouette> BlastLoads::silhouettes(const std::vector<const Body*>& group) const
 {
     std::vector<Silhouette> outlines(mWindows.size());
     if (mSettings.model != LoadModel::BlastEngineering) return outlines;
     for (size_t w = 0; w < mWindows.size(); ++w) {
         const Eigen::Vector3d& charge = mField.charges()[mWindows[w].charge].positionM;
-        const double speed = mField.pulseAt(mWindows[w].charge, (body.motion.positionM - charge).squaredNorm()).shockSpeedMS;
-        outlines[w] = silhouetteOf(body, charge, speed, mGround);
+        const double speed = mField.pulseAt(mWindows[w].charge, (group.front()->motion.positionM - charge).squaredNorm()).shockSpeedMS;
+        outlines[w] = silhouetteOf(group, charge, speed, mGround);
     }
     return outlines;
 }
 
 template <typename F>
-void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouette>& outlines, double timeS, double dtS, size_t firstFace,
-                                    size_t endFace, F&& f) const
+void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouette>& outlines, const std::vector<char>& covered,
+                                    double timeS, double dtS, size_t firstFace, size_t endFace, F&& f) const
 {
     const double h = body.voxelSizeM, area = h * h;
     const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
     const double p0 = mField.settings().atmosphere.pressurePa;
     for (size_t i = firstFace; i < endFace; ++i) {
+        if (!covered.empty() && covered[i]) continue;  // pressed against another body: no air there
         const ExposedFace& face = body.exposedFaces[i];
         const Eigen::Vector3d normal = rot.col(faceAxis(face.face)) * faceSign(face.face);
         const Eigen::Vector3d arm = rot * body.voxelOffsetM(face.voxel) + 0.5 * h * normal;
@@ -138,15 +149,15 @@ void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouet
     }
 }
 
-Wrench BlastLoads::stepWrench(const Body& body, double timeS, double dtS) const
+Wrench BlastLoads::wrenchOf(const Body& body, const std::vector<Silhouette>& outlines, const std::vector<char>& covered, double timeS,
+                          double dtS) const
 {
     Wrench total;
     if (mWindows.empty() || body.exposedFaces.empty() || !(dtS > 0)) return total;
-    const std::vector<Silhouette> outlines = silhouettes(body);
     std::vector<Wrench> partial((body.exposedFaces.size() + kFaceBlock - 1) / kFaceBlock);
     forEachFaceBlock(body.exposedFaces.size(), [&](size_t block, size_t first, size_t end) {
         Wrench w;
-        forEachFaceImpulse(body, outlines, timeS, dtS, first, end,
+        forEachFaceImpulse(body, outlines, covered, timeS, dtS, first, end,
                            [&](size_t, const Eigen::Vector3d& impulse, const Eigen::Vector3d& arm, const Eigen::Vector3d&) {
                                w.forceN += impulse;
                                w.torqueNm += arm.cross(impulse);
@@ -160,12 +171,34 @@ Wrench BlastLoads::stepWrench(const Body& body, double timeS, double dtS) const
     return total;
 }
 
+Wrench BlastLoads::stepWrench(const Body& body, double timeS, double dtS) const
+{
+    return wrenchOf(body, silhouettes({&body}), {}, timeS, dtS);
+}
+
 std::vector<Wrench> BlastLoads::stepWrenches(const std::vector<Body>& bodies, const std::vector<char>& loaded, double timeS,
                                              double dtS) const
 {
     std::vector<Wrench> wrenches(bodies.size());
+    if (mSettings.model != LoadModel::BlastEngineering) {
+        forEachIndex(bodies.size(), [&](size_t i) {
+            if (loaded[i]) wrenches[i] = wrenchOf(bodies[i], silhouettes({&bodies[i]}), {}, timeS, dtS);
+        });
+        return wrenches;
+    }
+    // Every body the wave can reach covers faces, anchored and resting ones too.
+    std::vector<char> reached(bodies.size());
+    forEachIndex(bodies.size(), [&](size_t i) { reached[i] = bodyInWindows(bodies[i], mField, mWindows); }, kCheapGrain);
+    const Exposure exposure(bodies, reached);
+    std::vector<std::vector<const Body*>> members(bodies.size());
+    for (size_t i = 0; i < bodies.size(); ++i)
+        if (reached[i]) members[exposure.groupOf()[i]].push_back(&bodies[i]);
+    std::vector<std::vector<Silhouette>> outlines(bodies.size());
+    forEachIndex(bodies.size(), [&](size_t g) {
+        if (!members[g].empty()) outlines[g] = silhouettes(members[g]);
+    });
     forEachIndex(bodies.size(), [&](size_t i) {
-        if (loaded[i]) wrenches[i] = stepWrench(bodies[i], timeS, dtS);
+        if (loaded[i]) wrenches[i] = wrenchOf(bodies[i], outlines[exposure.groupOf()[i]], exposure.coveredFaces(i), timeS, dtS);
     });
     return wrenches;
 }
@@ -174,10 +207,10 @@ std::vector<double> BlastLoads::faceImpulsesPaS(const Body& body, double timeS, 
 {
     std::vector<double> perFace(body.exposedFaces.size(), 0.0);
     if (mWindows.empty() || body.exposedFaces.empty()) return perFace;
-    const std::vector<Silhouette> outlines = silhouettes(body);
+    const std::vector<Silhouette> outlines = silhouettes({&body});
     const double area = body.voxelSizeM * body.voxelSizeM;
     forEachFaceBlock(body.exposedFaces.size(), [&](size_t, size_t first, size_t end) {
-        forEachFaceImpulse(body, outlines, timeS, dtS, first, end,
+        forEachFaceImpulse(body, outlines, {}, timeS, dtS, first, end,
                            [&](size_t i, const Eigen::Vector3d& impulse, const Eigen::Vector3d&, const Eigen::Vector3d& normal) {
                                perFace[i] -= impulse.dot(normal) / area;
                            });

@@ -50,7 +50,9 @@ struct Silhouette {
     /// UFC 3-340-02's rear-wall rise time 4S/U (unit: s).
     double rearRiseTimeS() const;
 };
-Silhouette silhouetteOf(const Body& body, const Eigen::Vector3d& chargeM, double shockSpeedMS, const GroundReference& ground);
+/// The outline of a group of bodies (one body, or bodies pressed together) seen from a charge.
+Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vector3d& chargeM, double shockSpeedMS,
+                        const GroundReference& ground);
 
 /// The blast's loads during one step: the field and the windows open at the step's start.
 class BlastLoads {
@@ -69,7 +71,9 @@ public:
     /// order, so the result does not depend on the thread count.
     Wrench stepWrench(const Body& body, double timeS, double dtS) const;
 
-    /// stepWrench for every body `loaded` marks (zero for the others), in parallel.
+    /// stepWrench for every body `loaded` marks (zero for the others), in parallel, with the
+    /// bodies' exposure (blast engineering): faces pressed against another body take no load,
+    /// and bodies pressed together clear as one outline.
     std::vector<Wrench> stepWrenches(const std::vector<Body>& bodies, const std::vector<char>& loaded, double timeS, double dtS) const;
 
     /// Per exposed face (in body.exposedFaces order): the impulse per area pushing into it over
@@ -81,10 +85,13 @@ private:
     /// normal) for every exposed face in [firstFace, endFace) and every charge that loads it
     /// during the step. `outlines` holds the body's silhouette per window.
     template <typename F>
-    void forEachFaceImpulse(const Body& body, const std::vector<Silhouette>& outlines, double timeS, double dtS, size_t firstFace,
-                            size_t endFace, F&& f) const;
-    /// The body's silhouette from each open window's charge (blast engineering only).
-    std::vector<Silhouette> silhouettes(const Body& body) const;
+    void forEachFaceImpulse(const Body& body, const std::vector<Silhouette>& outlines, const std::vector<char>& covered, double timeS,
+                            double dtS, size_t firstFace, size_t endFace, F&& f) const;
+    /// The group's silhouette from each open window's charge (blast engineering only).
+    std::vector<Silhouette> silhouettes(const std::vector<const Body*>& group) const;
+    /// stepWrench with the outlines and the faces to skip given.
+    Wrench wrenchOf(const Body& body, const std::vector<Silhouette>& outlines, const std::vector<char>& covered, double timeS,
+                    double dtS) const;
 
     const BlastField& mField;
     const std::vector<OpenWindow>& mWindows;

@@ -1,0 +1,50 @@
+// Which faces touch air: a face whose neighbouring cell holds a voxel of another body (packed
+// fragments, stacked pieces) takes no blast load, and bodies pressed together are loaded as one
+// object (one outline, so one clearing time), so a body's impulse does not depend on whether it
+// has broken into pieces that still touch.
+#pragma once
+
+#include <spall/voxel/Body.h>
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <vector>
+
+namespace spall {
+
+class Exposure {
+public:
+    /// Occupancy of world cells of the bodies' voxel size by the boundary voxels of every body
+    /// `considered` marks, built in parallel and sorted (deterministic whatever the thread count).
+    Exposure(const std::vector<Body>& bodies, const std::vector<char>& considered);
+
+    /// True when the cell across exposed face `faceIndex` of the body holds a voxel of another
+    /// body (its centre within half a voxel of where a face neighbour's would be).
+    bool covered(size_t bodyIndex, size_t faceIndex) const
+    {
+        return !mCovered[bodyIndex].empty() && mCovered[bodyIndex][faceIndex];
+    }
+    /// Per exposed face of the body, 1 when covered (empty when the body was not considered).
+    const std::vector<char>& coveredFaces(size_t bodyIndex) const { return mCovered[bodyIndex]; }
+
+    /// Per body: the lowest index of the group of bodies pressed together that it belongs to
+    /// (itself when it touches none, or was not considered).
+    const std::vector<uint32_t>& groupOf() const { return mGroup; }
+
+private:
+    struct Cell {
+        uint64_t key;
+        uint32_t body;
+        float centre[3];  ///< world centre of the voxel (unit: m)
+    };
+    /// The other body whose voxel fills the cell centred at x (world, unit: m), or -1.
+    int64_t otherBodyAt(const Eigen::Vector3d& xM, size_t self) const;
+
+    double mVoxelSizeM = 1.0;
+    std::vector<Cell> mCells;  ///< sorted by key, then body
+    std::vector<std::vector<char>> mCovered;  ///< per considered body, per exposed face
+    std::vector<uint32_t> mGroup;
+};
+
+}  // namespace spall

@@ -1,0 +1,100 @@
+#include <spall/loads/Exposure.h>
+
+#include <spall/core/Parallel.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace spall {
+
+namespace {
+
+/// Cell of lattice point (i, j, k), 21 bits per axis (+-10^6 cells).
+uint64_t cellKey(int64_t i, int64_t j, int64_t k)
+{
+    auto axis = [](int64_t v) { return uint64_t(v + (int64_t(1) << 20)) & 0x1fffff; };
+    return (axis(i) << 42) | (axis(j) << 21) | axis(k);
+}
+
+/// Cell of a world point: the nearest lattice point of spacing h.
+uint64_t cellKey(const Eigen::Vector3d& xM, double h)
+{
+    return cellKey(std::llround(xM.x() / h), std::llround(xM.y() / h), std::llround(xM.z() / h));
+}
+
+uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t i)
+{
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+}
+
+}  // namespace
+
+Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& considered)
+    : mCovered(bodies.size()), mGroup(bodies.size())
+{
+    std::iota(mGroup.begin(), mGroup.end(), 0u);
+    if (bodies.empty()) return;
+    mVoxelSizeM = bodies.front().voxelSizeM;
+    // Every considered body's boundary voxels into one sorted list of cells.
+    std::vector<std::vector<Cell>> perBody(bodies.size());
+    forEachIndex(bodies.size(), [&](size_t b) {
+        if (!considered[b]) return;
+        for (const openvdb::Coord& ijk : bodies[b].boundaryVoxels) {
+            const Eigen::Vector3d x = bodies[b].voxelWorldM(ijk);
+            perBody[b].push_back({cellKey(x, mVoxelSizeM), uint32_t(b), {float(x.x()), float(x.y()), float(x.z())}});
+        }
+    });
+    for (auto& cells : perBody) mCells.insert(mCells.end(), cells.begin(), cells.end());
+    std::sort(mCells.begin(), mCells.end(), [](const Cell& a, const Cell& c) { return a.key != c.key ? a.key < c.key : a.body < c.body; });
+    // Per face: is the cell across it another body's?
+    std::vector<std::vector<uint32_t>> touching(bodies.size());
+    forEachIndex(bodies.size(), [&](size_t b) {
+        if (!considered[b]) return;
+        const Body& body = bodies[b];
+        const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
+        mCovered[b].assign(body.exposedFaces.size(), 0);
+        for (size_t f = 0; f < body.exposedFaces.size(); ++f) {
+            const ExposedFace& face = body.exposedFaces[f];
+            const Eigen::Vector3d across = body.voxelWorldM(face.voxel) + body.voxelSizeM * (rot * faceNormal(face.face));
+            const int64_t other = otherBodyAt(across, b);
+            if (other < 0) continue;
+            mCovered[b][f] = 1;
+            touching[b].push_back(uint32_t(other));
+        }
+    });
+    // Groups of bodies pressed together: union-find, roots the lowest index.
+    for (size_t b = 0; b < bodies.size(); ++b)
+        for (uint32_t other : touching[b]) {
+            const uint32_t ra = findRoot(mGroup, uint32_t(b)), rb = findRoot(mGroup, other);
+            mGroup[std::max(ra, rb)] = std::min(ra, rb);
+        }
+    for (size_t b = 0; b < bodies.size(); ++b) mGroup[b] = findRoot(mGroup, uint32_t(b));
+}
+
+int64_t Exposure::otherBodyAt(const Eigen::Vector3d& xM, size_t self) const
+{
+    // A voxel within half a cell of x may sit in the next cell along an axis where x lies near
+    // a cell boundary (bodies from different objects need not share a lattice): look there too.
+    int64_t range[3][2];
+    for (int a = 0; a < 3; ++a) {
+        const double v = xM[a] / mVoxelSizeM, nearest = std::round(v);
+        range[a][0] = range[a][1] = int64_t(nearest);
+        if (std::abs(v - nearest) > 0.2) (v > nearest ? range[a][1] : range[a][0]) += v > nearest ? 1 : -1;
+    }
+    for (int64_t i = range[0][0]; i <= range[0][1]; ++i)
+        for (int64_t j = range[1][0]; j <= range[1][1]; ++j)
+            for (int64_t k = range[2][0]; k <= range[2][1]; ++k) {
+                const uint64_t key = cellKey(i, j, k);
+                auto it = std::lower_bound(mCells.begin(), mCells.end(), key, [](const Cell& c, uint64_t x) { return c.key < x; });
+                for (; it != mCells.end() && it->key == key; ++it) {
+                    if (it->body == self) continue;
+                    const double d = std::max({std::abs(it->centre[0] - xM.x()), std::abs(it->centre[1] - xM.y()), std::abs(it->centre[2] - xM.z())});
+                    if (d < 0.5 * mVoxelSizeM) return it->body;
+                }
+            }
+    return -1;
+}
+
+}  // namespace spall
