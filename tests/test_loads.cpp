@@ -44,7 +44,7 @@ double fineImpulse(const PointPulse& p, const FaceExposure& face, double from, d
 
 /// The blast impulse (unit: N s) and angular impulse on a body held still through the whole
 /// wave, in steps of `dtS` from detonation.
-Wrench impulseOnHeldBody(const Body& body, const BlastField& field, const LoadSettings& settings, const GroundReference& ground,
+Wrench impulseOnHeldBody(const Body& body, const BlastField& field, const LoadSettings& settings, const LoadGeometry& ground,
                          double dtS, double untilS)
 {
     Wrench total;
@@ -61,7 +61,7 @@ Wrench impulseOnHeldBody(const Body& body, const BlastField& field, const LoadSe
 /// Sum over the body's exposed faces whose centre satisfies `select` of the impulse per area
 /// pushing into them, times their area (unit: N s), from detonation to `untilS`.
 template <typename Select>
-double faceImpulseOn(const Body& body, const BlastField& field, const GroundReference& ground, double dtS, double untilS, Select&& select)
+double faceImpulseOn(const Body& body, const BlastField& field, const LoadGeometry& ground, double dtS, double untilS, Select&& select)
 {
     double total = 0;
     const double area = body.voxelSizeM * body.voxelSizeM;
@@ -134,7 +134,7 @@ TEST(Loads, LargeWallAtNormalIncidenceTakesTheKingeryBulmashReflectedImpulse)
     const double h = 0.5;
     const Body wall = test::boxBody(1, 61, 61, h, 2000.0, Eigen::Vector3d(3.0 + 0.5 * h, 0, 0));
     const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::FreeAir, 1.0, 3.0);
-    const double impulse = faceImpulseOn(wall, field, GroundReference(), p.positiveDurationS / 200, p.arrivalTimeS + p.positiveDurationS,
+    const double impulse = faceImpulseOn(wall, field, LoadGeometry(), p.positiveDurationS / 200, p.arrivalTimeS + p.positiveDurationS,
                                          [](const ExposedFace& f) { return f.voxel == openvdb::Coord(0, 30, 30) && f.face == kNegX; });
     EXPECT_NEAR(impulse / (h * h), p.reflectedImpulsePaS, 0.05 * p.reflectedImpulsePaS);
 }
@@ -151,10 +151,10 @@ TEST(Loads, TiltedPlateIsPushedAlongItsNormal)
     const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::FreeAir, 5.0, 5.0);
     const double until = p.arrivalTimeS + 2 * p.positiveDurationS, dt = p.positiveDurationS / 100;
     auto degreesOff = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return std::acos(std::abs(a.normalized().dot(b.normalized()))) * 180 / M_PI; };
-    const Wrench engineering = impulseOnHeldBody(plate, field, LoadSettings(), GroundReference(), dt, until);
+    const Wrench engineering = impulseOnHeldBody(plate, field, LoadSettings(), LoadGeometry(), dt, until);
     EXPECT_LT(degreesOff(engineering.forceN, normal), 3.0);
     EXPECT_GT(engineering.forceN.dot(normal), 0.0);
-    const Wrench paper = impulseOnHeldBody(plate, field, LoadSettings{LoadModel::Paper}, GroundReference(), dt, until);
+    const Wrench paper = impulseOnHeldBody(plate, field, LoadSettings{LoadModel::Paper}, LoadGeometry(), dt, until);
     EXPECT_GT(degreesOff(paper.forceN, normal), 40.0);
 }
 
@@ -173,7 +173,7 @@ TEST(Loads, NothingEndsMovingTowardAFreeAirCharge)
         double momentum = 0, afterPositivePhase = 0;
         for (double t = 0; t < end; t += dt) {
             const auto windows = field.openWindows(t);
-            momentum += BlastLoads(field, windows, LoadSettings(), GroundReference()).stepWrench(cube, t, dt).forceN.x() * dt;
+            momentum += BlastLoads(field, windows, LoadSettings(), LoadGeometry()).stepWrench(cube, t, dt).forceN.x() * dt;
             if (t < rear.arrivalTimeS + rear.positiveDurationS) afterPositivePhase = momentum;
         }
         EXPECT_GT(momentum, 0.0) << distance << " m";
@@ -204,9 +204,9 @@ TEST(Loads, SmallCubeMatchesTheUfcFrontMinusRearProcedure)
     const double byHand = (frontByHand - rearByHand) * side * side;
 
     const double dt = front.positiveDurationS / 200;
-    const double frontImpulse = faceImpulseOn(cube, field, GroundReference(), dt, front.arrivalTimeS + front.positiveDurationS,
+    const double frontImpulse = faceImpulseOn(cube, field, LoadGeometry(), dt, front.arrivalTimeS + front.positiveDurationS,
                                               [](const ExposedFace& f) { return f.face == kNegX; });
-    const double rearImpulse = faceImpulseOn(cube, field, GroundReference(), dt, rear.arrivalTimeS + rear.positiveDurationS,
+    const double rearImpulse = faceImpulseOn(cube, field, LoadGeometry(), dt, rear.arrivalTimeS + rear.positiveDurationS,
                                              [](const ExposedFace& f) { return f.face == kPosX; });
     EXPECT_NEAR(frontImpulse - rearImpulse, byHand, 0.2 * byHand) << "front " << frontImpulse << " rear " << rearImpulse;
 }
@@ -220,7 +220,7 @@ TEST(Loads, FiniteWallClearsAsTheCfdReferenceSays)
     // the CFD: spall gives 0.966, 10.4 % high. Issue 16 asks for 10 %; the bound below is
     // today's, and tightens when the relief model does.
     const BlastField field({Charge{Eigen::Vector3d::Zero(), 0.365, 0.0, BurstType::Surface}}, BlastSettings());
-    const GroundReference ground{true, Eigen::Vector3d::UnitZ(), 0.0};
+    const LoadGeometry ground{true, Eigen::Vector3d::UnitZ(), 0.0, {}};
     const double h = 0.1;
     const Body low = test::boxBody(1, 200, 5, h, 2000.0, Eigen::Vector3d(2.0 + 0.5 * h, 0, 0.25));
     const Body tall = test::boxBody(1, 200, 35, h, 2000.0, Eigen::Vector3d(2.0 + 0.5 * h, 0, 1.75));
@@ -254,7 +254,7 @@ TEST(Loads, SlabTakesTheSameImpulseIntactOrInTouchingLayers)
         const std::vector<char> loaded(bodies.size(), 1);
         for (double t = 0; t < until; t += dt) {
             const auto windows = field.openWindows(t);
-            for (const Wrench& w : BlastLoads(field, windows, LoadSettings(), GroundReference()).stepWrenches(bodies, loaded, t, dt))
+            for (const Wrench& w : BlastLoads(field, windows, LoadSettings(), LoadGeometry()).stepWrenches(bodies, loaded, t, dt))
                 total += w.forceN * dt;
         }
         return total;
@@ -262,4 +262,37 @@ TEST(Loads, SlabTakesTheSameImpulseIntactOrInTouchingLayers)
     const Eigen::Vector3d whole = momentum(intact), broken = momentum(layers);
     EXPECT_GT(whole.y(), 0.0);
     EXPECT_NEAR(broken.y(), whole.y(), 0.15 * whole.y()) << "intact " << whole.y() << " N s, in layers " << broken.y() << " N s";
+}
+
+TEST(Loads, BoxBehindABlastWallIsShadowed)
+{
+    // shared/reference/blast-loads-cfd.md, target T2: a 0.2 m block on the ground 1.4 m behind
+    // a 1 m high, 0.1 m thick barrier whose front face is 2 m from a 0.36 kg surface burst (the
+    // barrier a long static box). With / without the barrier the CFD gives 0.476 of the block's
+    // front-face impulse and 0.376 of its net impulse. spall loads a shadowed face as a rear
+    // wall (UFC 3-340-02 §2-15.4: the side-on pulse wrapping around, with rear drag and rise):
+    // front face 0.376, within 30 % of the CFD; but front and rear then nearly cancel (net
+    // -0.02), where the CFD's wrapped-around flow still pushes the block (0.376): the net is
+    // only bounded here, and stays open in issue 16 (it needs a diffraction model that
+    // attenuates the wave behind the barrier and keeps its flow).
+    const BlastField field({Charge{Eigen::Vector3d::Zero(), 0.365, 0.0, BurstType::Surface}}, BlastSettings());
+    const LoadGeometry open{true, Eigen::Vector3d::UnitZ(), 0.0, {}};
+    LoadGeometry walled = open;
+    walled.obstacles.push_back({Eigen::Vector3d(2.05, 0, 0.5), Eigen::Vector3d(0.05, 10, 0.5), Eigen::Quaterniond::Identity()});
+    const std::vector<Body> block{test::boxBody(2, 2, 2, 0.1, 2000.0, Eigen::Vector3d(3.6, 0, 0.1))};
+    const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::Surface, 0.365, 3.6);
+    const double dt = p.positiveDurationS / 200, until = p.arrivalTimeS + 1.2 * p.positiveDurationS;
+    auto netImpulse = [&](const LoadGeometry& geometry) {
+        double total = 0;
+        for (double t = 0; t < until; t += dt) {
+            const auto windows = field.openWindows(t);
+            total += BlastLoads(field, windows, LoadSettings(), geometry).stepWrenches(block, {1}, t, dt)[0].forceN.x() * dt;
+        }
+        return total;
+    };
+    auto front = [](const ExposedFace& f) { return f.face == kNegX; };
+    const double frontRatio = faceImpulseOn(block[0], field, walled, dt, until, front) / faceImpulseOn(block[0], field, open, dt, until, front);
+    const double netRatio = netImpulse(walled) / netImpulse(open);
+    EXPECT_NEAR(frontRatio, 0.476, 0.3 * 0.476);
+    EXPECT_LT(std::abs(netRatio), 0.5) << "the barrier hardly shields";
 }

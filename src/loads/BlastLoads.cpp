@@ -54,7 +54,7 @@ double Silhouette::clearingTimeS() const
 double Silhouette::rearRiseTimeS() const { return 4.0 * smallerHalfSizeM() / shockSpeedMS; }
 
 Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vector3d& chargeM, double shockSpeedMS,
-                        const GroundReference& ground)
+                        const LoadGeometry& ground)
 {
     // The corners of every member's oriented index box, in the world.
     std::vector<Eigen::Vector3d> corners;
@@ -89,6 +89,38 @@ Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vect
     return out;
 }
 
+namespace {
+
+/// True when the segment from a to b meets the box (slab test in the box's frame).
+bool segmentMeetsBox(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const ObstacleBox& box)
+{
+    const Eigen::Matrix3d toBox = box.orientation.toRotationMatrix().transpose();
+    const Eigen::Vector3d p = toBox * (a - box.centreM), d = toBox * (b - a);
+    double enter = 0.0, leave = 1.0;
+    for (int axis = 0; axis < 3; ++axis) {
+        const double lo = -box.halfExtentM[axis], hi = box.halfExtentM[axis];
+        if (std::abs(d[axis]) < 1e-15) {
+            if (p[axis] < lo || p[axis] > hi) return false;
+            continue;
+        }
+        double t0 = (lo - p[axis]) / d[axis], t1 = (hi - p[axis]) / d[axis];
+        if (t0 > t1) std::swap(t0, t1);
+        enter = std::max(enter, t0);
+        leave = std::min(leave, t1);
+        if (enter > leave) return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+bool BlastLoads::inShadow(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure) const
+{
+    for (const ObstacleBox& box : mGeometry.obstacles)
+        if (segmentMeetsBox(xM, chargeM, box)) return true;
+    return exposure && exposure->blocked(xM, chargeM);
+}
+
 std::vector<char> BlastLoads::loadedBodies(const std::vector<Body>& bodies) const
 {
     std::vector<char> loaded(bodies.size(), 0);
@@ -104,20 +136,20 @@ std::vector<Silhouette> BlastLoads::silhouettes(const std::vector<const Body*>& 
     for (size_t w = 0; w < mWindows.size(); ++w) {
         const Eigen::Vector3d& charge = mField.charges()[mWindows[w].charge].positionM;
         const double speed = mField.pulseAt(mWindows[w].charge, (group.front()->motion.positionM - charge).squaredNorm()).shockSpeedMS;
-        outlines[w] = silhouetteOf(group, charge, speed, mGround);
+        outlines[w] = silhouetteOf(group, charge, speed, mGeometry);
     }
     return outlines;
 }
 
 template <typename F>
-void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouette>& outlines, const std::vector<char>& covered,
+void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouette>& outlines, const Exposure* exposure, size_t bodyIndex,
                                     double timeS, double dtS, size_t firstFace, size_t endFace, F&& f) const
 {
     const double h = body.voxelSizeM, area = h * h;
     const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
     const double p0 = mField.settings().atmosphere.pressurePa;
     for (size_t i = firstFace; i < endFace; ++i) {
-        if (!covered.empty() && covered[i]) continue;  // pressed against another body: no air there
+        if (exposure && exposure->covered(bodyIndex, i)) continue;  // pressed against another body: no air there
         const ExposedFace& face = body.exposedFaces[i];
         const Eigen::Vector3d normal = rot.col(faceAxis(face.face)) * faceSign(face.face);
         const Eigen::Vector3d arm = rot * body.voxelOffsetM(face.voxel) + 0.5 * h * normal;
@@ -133,8 +165,9 @@ void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouet
                 const PointPulse pulse = mField.pulseAt(window.charge, r2);
                 const double from = timeS - pulse.arrivalTimeS;
                 if (from + dtS <= 0.0 || from >= pulse.positiveDurationS + pulse.negativeDurationS) continue;
-                const FaceExposure exposure{cosine, outlines[w].clearingTimeS(), outlines[w].rearRiseTimeS()};
-                const double impulse = faceImpulsePaS(pulse, exposure, from, from + dtS, p0);
+                const bool shadow = cosine > 0.0 && inShadow(x + 0.5 * h * normal, mField.charges()[window.charge].positionM, exposure);
+                const FaceExposure face{shadow ? -1.0 : cosine, outlines[w].clearingTimeS(), outlines[w].rearRiseTimeS()};
+                const double impulse = faceImpulsePaS(pulse, face, from, from + dtS, p0);
                 if (impulse != 0.0) f(i, Eigen::Vector3d(-impulse * area * normal), arm, normal);
                 continue;
             }
@@ -149,15 +182,15 @@ void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouet
     }
 }
 
-Wrench BlastLoads::wrenchOf(const Body& body, const std::vector<Silhouette>& outlines, const std::vector<char>& covered, double timeS,
-                          double dtS) const
+Wrench BlastLoads::wrenchOf(const Body& body, const std::vector<Silhouette>& outlines, const Exposure* exposure, size_t bodyIndex,
+                            double timeS, double dtS) const
 {
     Wrench total;
     if (mWindows.empty() || body.exposedFaces.empty() || !(dtS > 0)) return total;
     std::vector<Wrench> partial((body.exposedFaces.size() + kFaceBlock - 1) / kFaceBlock);
     forEachFaceBlock(body.exposedFaces.size(), [&](size_t block, size_t first, size_t end) {
         Wrench w;
-        forEachFaceImpulse(body, outlines, covered, timeS, dtS, first, end,
+        forEachFaceImpulse(body, outlines, exposure, bodyIndex, timeS, dtS, first, end,
                            [&](size_t, const Eigen::Vector3d& impulse, const Eigen::Vector3d& arm, const Eigen::Vector3d&) {
                                w.forceN += impulse;
                                w.torqueNm += arm.cross(impulse);
@@ -173,7 +206,7 @@ Wrench BlastLoads::wrenchOf(const Body& body, const std::vector<Silhouette>& out
 
 Wrench BlastLoads::stepWrench(const Body& body, double timeS, double dtS) const
 {
-    return wrenchOf(body, silhouettes({&body}), {}, timeS, dtS);
+    return wrenchOf(body, silhouettes({&body}), nullptr, 0, timeS, dtS);
 }
 
 std::vector<Wrench> BlastLoads::stepWrenches(const std::vector<Body>& bodies, const std::vector<char>& loaded, double timeS,
@@ -182,13 +215,17 @@ std::vector<Wrench> BlastLoads::stepWrenches(const std::vector<Body>& bodies, co
     std::vector<Wrench> wrenches(bodies.size());
     if (mSettings.model != LoadModel::BlastEngineering) {
         forEachIndex(bodies.size(), [&](size_t i) {
-            if (loaded[i]) wrenches[i] = wrenchOf(bodies[i], silhouettes({&bodies[i]}), {}, timeS, dtS);
+            if (loaded[i]) wrenches[i] = wrenchOf(bodies[i], silhouettes({&bodies[i]}), nullptr, 0, timeS, dtS);
         });
         return wrenches;
     }
-    // Every body the wave can reach covers faces, anchored and resting ones too.
+    // Every body the wave has reached covers faces and casts shadows, anchored and resting ones too.
     std::vector<char> reached(bodies.size());
-    forEachIndex(bodies.size(), [&](size_t i) { reached[i] = bodyInWindows(bodies[i], mField, mWindows); }, kCheapGrain);
+    forEachIndex(bodies.size(), [&](size_t i) {
+        for (const OpenWindow& w : mWindows)
+            if ((bodies[i].motion.positionM - mField.charges()[w.charge].positionM).norm() - bodies[i].boundingRadiusM <= w.maxDistanceM)
+                reached[i] = 1;
+    }, kCheapGrain);
     const Exposure exposure(bodies, reached);
     std::vector<std::vector<const Body*>> members(bodies.size());
     for (size_t i = 0; i < bodies.size(); ++i)
@@ -198,7 +235,7 @@ std::vector<Wrench> BlastLoads::stepWrenches(const std::vector<Body>& bodies, co
         if (!members[g].empty()) outlines[g] = silhouettes(members[g]);
     });
     forEachIndex(bodies.size(), [&](size_t i) {
-        if (loaded[i]) wrenches[i] = wrenchOf(bodies[i], outlines[exposure.groupOf()[i]], exposure.coveredFaces(i), timeS, dtS);
+        if (loaded[i]) wrenches[i] = wrenchOf(bodies[i], outlines[exposure.groupOf()[i]], &exposure, i, timeS, dtS);
     });
     return wrenches;
 }
@@ -210,7 +247,7 @@ std::vector<double> BlastLoads::faceImpulsesPaS(const Body& body, double timeS, 
     const std::vector<Silhouette> outlines = silhouettes({&body});
     const double area = body.voxelSizeM * body.voxelSizeM;
     forEachFaceBlock(body.exposedFaces.size(), [&](size_t, size_t first, size_t end) {
-        forEachFaceImpulse(body, outlines, {}, timeS, dtS, first, end,
+        forEachFaceImpulse(body, outlines, nullptr, 0, timeS, dtS, first, end,
                            [&](size_t i, const Eigen::Vector3d& impulse, const Eigen::Vector3d&, const Eigen::Vector3d& normal) {
                                perFace[i] -= impulse.dot(normal) / area;
                            });

@@ -17,6 +17,10 @@ uint64_t cellKey(int64_t i, int64_t j, int64_t k)
     return (axis(i) << 42) | (axis(j) << 21) | axis(k);
 }
 
+constexpr int kBlockShift = 3;  ///< blocks of 8^3 cells
+
+uint64_t blockKey(int64_t i, int64_t j, int64_t k) { return cellKey(i >> kBlockShift, j >> kBlockShift, k >> kBlockShift); }
+
 /// Cell of a world point: the nearest lattice point of spacing h.
 uint64_t cellKey(const Eigen::Vector3d& xM, double h)
 {
@@ -48,6 +52,14 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     });
     for (auto& cells : perBody) mCells.insert(mCells.end(), cells.begin(), cells.end());
     std::sort(mCells.begin(), mCells.end(), [](const Cell& a, const Cell& c) { return a.key != c.key ? a.key < c.key : a.body < c.body; });
+    // Blocks hold their cells and those next to them: a voxel can contain points of the
+    // neighbouring cells (bodies need not share the world's lattice).
+    for (const Cell& c : mCells) {
+        const int64_t i = std::llround(c.centre[0] / mVoxelSizeM), j = std::llround(c.centre[1] / mVoxelSizeM),
+                      k = std::llround(c.centre[2] / mVoxelSizeM);
+        for (int corner = 0; corner < 8; ++corner)
+            mBlockKeys.insert(blockKey(i + (corner & 1 ? 1 : -1), j + (corner & 2 ? 1 : -1), k + (corner & 4 ? 1 : -1)));
+    }
     // Per face: is the cell across it another body's?
     std::vector<std::vector<uint32_t>> touching(bodies.size());
     forEachIndex(bodies.size(), [&](size_t b) {
@@ -58,7 +70,7 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
         for (size_t f = 0; f < body.exposedFaces.size(); ++f) {
             const ExposedFace& face = body.exposedFaces[f];
             const Eigen::Vector3d across = body.voxelWorldM(face.voxel) + body.voxelSizeM * (rot * faceNormal(face.face));
-            const int64_t other = otherBodyAt(across, b);
+            const int64_t other = bodyAt(across, b);
             if (other < 0) continue;
             mCovered[b][f] = 1;
             touching[b].push_back(uint32_t(other));
@@ -73,7 +85,36 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     for (size_t b = 0; b < bodies.size(); ++b) mGroup[b] = findRoot(mGroup, uint32_t(b));
 }
 
-int64_t Exposure::otherBodyAt(const Eigen::Vector3d& xM, size_t self) const
+bool Exposure::blocked(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM) const
+{
+    const double h = mVoxelSizeM, length = (toM - fromM).norm();
+    if (mCells.empty() || !(length > 0)) return false;
+    const Eigen::Vector3d dir = (toM - fromM) / length;
+    const double blockM = h * (1 << kBlockShift);
+    for (double t = 0; t < length;) {
+        const Eigen::Vector3d x = fromM + t * dir;
+        const int64_t i = std::llround(x.x() / h), j = std::llround(x.y() / h), k = std::llround(x.z() / h);
+        if (mBlockKeys.count(blockKey(i, j, k))) {
+            if (bodyAt(x, kNoBody) >= 0) return true;
+            t += 0.5 * h;
+            continue;
+        }
+        // An empty block: go on from where the ray leaves it (its cells span lattice points
+        // lo..lo+7, so its faces lie half a cell outside them).
+        double exit = 1e300;
+        const int64_t index[3] = {i, j, k};
+        for (int a = 0; a < 3; ++a) {
+            if (dir[a] == 0) continue;
+            const int64_t lo = (index[a] >> kBlockShift) << kBlockShift;
+            const double face = (dir[a] > 0 ? (lo + (1 << kBlockShift) - 0.5) : (lo - 0.5)) * h;
+            exit = std::min(exit, (face - x[a]) / dir[a]);
+        }
+        t += std::max(exit, 0.0) + 1e-6 * blockM;
+    }
+    return false;
+}
+
+int64_t Exposure::bodyAt(const Eigen::Vector3d& xM, size_t exclude) const
 {
     // A voxel within half a cell of x may sit in the next cell along an axis where x lies near
     // a cell boundary (bodies from different objects need not share a lattice): look there too.
@@ -89,7 +130,7 @@ int64_t Exposure::otherBodyAt(const Eigen::Vector3d& xM, size_t self) const
                 const uint64_t key = cellKey(i, j, k);
                 auto it = std::lower_bound(mCells.begin(), mCells.end(), key, [](const Cell& c, uint64_t x) { return c.key < x; });
                 for (; it != mCells.end() && it->key == key; ++it) {
-                    if (it->body == self) continue;
+                    if (it->body == exclude) continue;
                     const double d = std::max({std::abs(it->centre[0] - xM.x()), std::abs(it->centre[1] - xM.y()), std::abs(it->centre[2] - xM.z())});
                     if (d < 0.5 * mVoxelSizeM) return it->body;
                 }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <spall/blast/Blast.h>
+#include <spall/loads/Exposure.h>
 #include <spall/loads/FacePulse.h>
 #include <spall/loads/Settings.h>
 #include <spall/voxel/Body.h>
@@ -21,12 +22,21 @@ struct Wrench {
     Eigen::Vector3d torqueNm = Eigen::Vector3d::Zero();  ///< (unit: N m)
 };
 
-/// The ground as the loads stage needs it: a face region resting on it clears only over its
-/// other edges (UFC 3-340-02: S is the smaller of the wall's height and half-width).
-struct GroundReference {
-    bool enabled = false;
+/// A static box that casts a blast shadow (a scene collider).
+struct ObstacleBox {
+    Eigen::Vector3d centreM = Eigen::Vector3d::Zero();
+    Eigen::Vector3d halfExtentM = Eigen::Vector3d::Ones();
+    Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< box to world
+};
+
+/// The static world as the loads stage needs it: the ground (a face region resting on it clears
+/// only over its other edges; UFC 3-340-02: S is the smaller of a wall's height and half-width)
+/// and the boxes that cast shadows.
+struct LoadGeometry {
+    bool enabled = false;                               ///< the ground
     Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< unit, pointing up
     double heightM = 0.0;                               ///< offset along the normal (unit: m)
+    std::vector<ObstacleBox> obstacles;
 };
 
 /// True when the body's bounding sphere meets some open window's distance range: only then can
@@ -52,13 +62,13 @@ struct Silhouette {
 };
 /// The outline of a group of bodies (one body, or bodies pressed together) seen from a charge.
 Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vector3d& chargeM, double shockSpeedMS,
-                        const GroundReference& ground);
+                        const LoadGeometry& ground);
 
 /// The blast's loads during one step: the field and the windows open at the step's start.
 class BlastLoads {
 public:
-    BlastLoads(const BlastField& field, const std::vector<OpenWindow>& windows, const LoadSettings& settings, const GroundReference& ground)
-        : mField(field), mWindows(windows), mSettings(settings), mGround(ground)
+    BlastLoads(const BlastField& field, const std::vector<OpenWindow>& windows, const LoadSettings& settings, const LoadGeometry& ground)
+        : mField(field), mWindows(windows), mSettings(settings), mGeometry(ground)
     {
     }
 
@@ -73,7 +83,9 @@ public:
 
     /// stepWrench for every body `loaded` marks (zero for the others), in parallel, with the
     /// bodies' exposure (blast engineering): faces pressed against another body take no load,
-    /// and bodies pressed together clear as one outline.
+    /// bodies pressed together clear as one outline, and a face that looks at a charge through
+    /// a body or an obstacle box is in shadow and loaded as a rear face by the wave that wraps
+    /// around (UFC 3-340-02 §2-15.4's rear-wall load: side-on plus rear drag, with its rise).
     std::vector<Wrench> stepWrenches(const std::vector<Body>& bodies, const std::vector<char>& loaded, double timeS, double dtS) const;
 
     /// Per exposed face (in body.exposedFaces order): the impulse per area pushing into it over
@@ -84,19 +96,23 @@ private:
     /// Calls f(faceIndex, impulse (unit: N s), arm from the centre of mass (unit: m), outward
     /// normal) for every exposed face in [firstFace, endFace) and every charge that loads it
     /// during the step. `outlines` holds the body's silhouette per window.
+    /// `exposure` (may be null) says which faces are covered or in shadow; `bodyIndex` is the
+    /// body's index in it.
     template <typename F>
-    void forEachFaceImpulse(const Body& body, const std::vector<Silhouette>& outlines, const std::vector<char>& covered, double timeS,
-                            double dtS, size_t firstFace, size_t endFace, F&& f) const;
+    void forEachFaceImpulse(const Body& body, const std::vector<Silhouette>& outlines, const Exposure* exposure, size_t bodyIndex,
+                            double timeS, double dtS, size_t firstFace, size_t endFace, F&& f) const;
+    /// True when the straight path from x to the charge crosses a body or an obstacle box.
+    bool inShadow(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure) const;
     /// The group's silhouette from each open window's charge (blast engineering only).
     std::vector<Silhouette> silhouettes(const std::vector<const Body*>& group) const;
     /// stepWrench with the outlines and the faces to skip given.
-    Wrench wrenchOf(const Body& body, const std::vector<Silhouette>& outlines, const std::vector<char>& covered, double timeS,
+    Wrench wrenchOf(const Body& body, const std::vector<Silhouette>& outlines, const Exposure* exposure, size_t bodyIndex, double timeS,
                     double dtS) const;
 
     const BlastField& mField;
     const std::vector<OpenWindow>& mWindows;
     LoadSettings mSettings;
-    GroundReference mGround;
+    LoadGeometry mGeometry;
 };
 
 }  // namespace spall

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <unordered_set>
 #include <vector>
 
 namespace spall {
@@ -28,6 +29,11 @@ public:
     /// Per exposed face of the body, 1 when covered (empty when the body was not considered).
     const std::vector<char>& coveredFaces(size_t bodyIndex) const { return mCovered[bodyIndex]; }
 
+    /// True when the segment from `fromM` to `toM` (world) passes through a voxel of any
+    /// considered body (cells of the voxel size around their centres; sampled every half voxel,
+    /// skipping empty blocks of 8^3 cells).
+    bool blocked(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM) const;
+
     /// Per body: the lowest index of the group of bodies pressed together that it belongs to
     /// (itself when it touches none, or was not considered).
     const std::vector<uint32_t>& groupOf() const { return mGroup; }
@@ -38,11 +44,13 @@ private:
         uint32_t body;
         float centre[3];  ///< world centre of the voxel (unit: m)
     };
-    /// The other body whose voxel fills the cell centred at x (world, unit: m), or -1.
-    int64_t otherBodyAt(const Eigen::Vector3d& xM, size_t self) const;
+    static constexpr size_t kNoBody = ~size_t(0);
+    /// A body other than `exclude` with a voxel that contains x (world, unit: m), or -1.
+    int64_t bodyAt(const Eigen::Vector3d& xM, size_t exclude) const;
 
     double mVoxelSizeM = 1.0;
     std::vector<Cell> mCells;  ///< sorted by key, then body
+    std::unordered_set<uint64_t> mBlockKeys;  ///< every block of 8^3 cells holding one
     std::vector<std::vector<char>> mCovered;  ///< per considered body, per exposed face
     std::vector<uint32_t> mGroup;
 };
