@@ -32,6 +32,10 @@ grep -q "bad.stl" "$dir/err.txt" || fail "error does not name the file: $(cat "$
 [[ ! -e "$dir/bad.vdb" ]] || fail "output left behind"
 if "$spall" voxelise --primitive box:1,1,1 --voxel-size -1 -o "$dir/neg.vdb" 2> /dev/null; then fail "negative voxel size accepted"; fi
 if "$spall" blast --tnt-kg 0 --distance-m 3 2> /dev/null; then fail "zero charge accepted"; fi
+# The burst follows the height above the ground; a surface burst 2 m up is refused.
+"$spall" blast --tnt-kg 20 --distance-m 4 --height-m 0.1 | grep -q "surface burst" || fail "a charge on the ground is not a surface burst"
+"$spall" blast --tnt-kg 20 --distance-m 4 --height-m 2 | grep -q "free-air burst" || fail "a charge 2 m up is not in free air"
+if "$spall" blast --tnt-kg 20 --distance-m 4 --height-m 2 --burst surface 2> /dev/null; then fail "a surface burst 2 m up accepted"; fi
 
 # blast JSON keys with units
 "$spall" blast --tnt-kg 8 --distance-m 4 --dataset kinney-graham --json > "$dir/blast.json"

@@ -287,3 +287,19 @@ TEST(Checkpoint, DamagedFilesAreRefusedNamingTheFile)
     std::filesystem::remove(path);
     EXPECT_NE(messageOf().find("no checkpoint"), std::string::npos);
 }
+
+TEST(Scene, BurstFollowsTheChargesHeightAboveTheGround)
+{
+    // Within two charge radii of the ground (0.29 m for 20 kg) a charge is a surface burst
+    // unless the scene says otherwise; above it, free air; a named surface burst 2 m up is an error.
+    auto charges = [](const std::string& charge) {
+        return R"({"objects": [{"primitive": {"shape": "box", "size_m": [1, 1, 1]}, "position_m": [0, 0, 0.5]}], "charges": [)" + charge + "]}";
+    };
+    EXPECT_EQ(parseScene(charges(R"({"position_m": [0, -4, 0.1], "tnt_kg": 20})"), "s.json", ".").charges[0].burst, BurstType::Surface);
+    EXPECT_EQ(parseScene(charges(R"({"position_m": [0, -4, 2.0], "tnt_kg": 20})"), "s.json", ".").charges[0].burst, BurstType::FreeAir);
+    EXPECT_EQ(parseScene(charges(R"({"position_m": [0, -4, 0.1], "tnt_kg": 20, "burst": "free-air"})"), "s.json", ".").charges[0].burst,
+              BurstType::FreeAir);
+    EXPECT_NE(errorOf(charges(R"({"position_m": [0, -4, 2.0], "tnt_kg": 20, "burst": "surface"})")).find("charges[0].burst: 'surface', but charge 0 is 2 m above the ground"),
+              std::string::npos);
+    EXPECT_NEAR(surfaceBurstHeightM(20.0), 2 * std::cbrt(3 * 20.0 / (4 * M_PI * 1600)), 1e-12);
+}

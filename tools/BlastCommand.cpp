@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <sstream>
 
 namespace {
 
@@ -52,6 +53,22 @@ void writePressureCurve(const spall::BlastParameters& p, const std::string& path
     out << "time_s,overpressure_Pa\n";
     for (size_t i = 0; i < times.size(); ++i) out << times[i] << "," << pressures[i] << "\n";
     if (!out) throw spall::IoError(path + ": write failed");
+}
+
+/// The burst a charge at `heightM` above the ground is (the scene's rule): surface within
+/// surfaceBurstHeightM, else free air; a named surface burst well above the ground is an error.
+std::string burstForHeight(double tntKg, double heightM, const std::string& named)
+{
+    const bool nearGround = heightM <= spall::surfaceBurstHeightM(tntKg);
+    if (named.empty()) return nearGround ? "surface" : "free-air";
+    if (named == "surface" && !nearGround)
+    {
+        std::ostringstream reason;
+        reason << "--burst surface: the charge is " << heightM << " m above the ground; a surface burst of " << tntKg << " kg sits within "
+               << spall::surfaceBurstHeightM(tntKg) << " m of it (--height-m alone picks the burst)";
+        throw spall::InputError(reason.str());
+    }
+    return named;
 }
 
 int runBlast(double tntKg, double distanceM, const std::string& burstName, const std::string& datasetName, bool json,
@@ -112,7 +129,7 @@ int runBlast(double tntKg, double distanceM, const std::string& burstName, const
 void addBlastCommand(CLI::App& app, CommandAction& action)
 {
     struct Options {
-        double tntKg = 0, distanceM = 0;
+        double tntKg = 0, distanceM = 0, heightM = 0;
         std::string burst = "free-air", dataset = "kingery-bulmash", curve;
         bool json = false;
     };
@@ -120,9 +137,17 @@ void addBlastCommand(CLI::App& app, CommandAction& action)
     auto* sub = app.add_subcommand("blast", "Print blast-wave parameters of a TNT charge at a distance");
     sub->add_option("--tnt-kg", o->tntKg, "Charge mass (kg TNT)")->required();
     sub->add_option("--distance-m", o->distanceM, "Distance from the charge (m)")->required();
-    sub->add_option("--burst", o->burst, "free-air | surface");
+    auto* burst = sub->add_option("--burst", o->burst, "free-air | surface (default: free-air, or from --height-m)");
+    auto* height = sub->add_option("--height-m", o->heightM, "Height of the charge above the ground (m): surface burst within two charge radii")
+                       ->check(CLI::NonNegativeNumber);
     sub->add_option("--dataset", o->dataset, "kingery-bulmash | kinney-graham");
     sub->add_flag("--json", o->json, "JSON with SI units in every key");
     sub->add_option("--curve", o->curve, "Write the pressure history: .csv, or .png for a plot");
-    sub->callback([o, &action] { action = [o] { return runBlast(o->tntKg, o->distanceM, o->burst, o->dataset, o->json, o->curve); }; });
+    sub->callback([o, burst, height, &action] {
+        const bool fromHeight = height->count() > 0, named = burst->count() > 0;
+        action = [o, fromHeight, named] {
+            const std::string burstName = fromHeight ? burstForHeight(o->tntKg, o->heightM, named ? o->burst : "") : o->burst;
+            return runBlast(o->tntKg, o->distanceM, burstName, o->dataset, o->json, o->curve);
+        };
+    });
 }

@@ -151,6 +151,25 @@ void readMaterials(ObjectReader& r, const json& root, Scene& scene)
     }
 }
 
+/// A charge's burst follows from its height above the ground unless the scene names it: a
+/// surface burst within surfaceBurstHeightM of the ground, free air above it. A named surface
+/// burst well above the ground is an error: the hemispherical data would not apply.
+void resolveBurst(ObjectReader& c, size_t index, const GroundPlane& ground, Charge& charge)
+{
+    const double heightM = ground.enabled ? ground.normal.normalized().dot(charge.positionM) - ground.offsetM : 1e300;
+    const double surfaceM = surfaceBurstHeightM(charge.tntKg);
+    if (!c.has("burst")) {
+        charge.burst = heightM <= surfaceM ? BurstType::Surface : BurstType::FreeAir;
+        return;
+    }
+    if (charge.burst == BurstType::Surface && ground.enabled && heightM > surfaceM) {
+        std::ostringstream reason;
+        reason << "'surface', but charge " << index << " is " << heightM << " m above the ground; a surface burst of " << charge.tntKg
+               << " kg sits within " << surfaceM << " m of it (omit burst for free air)";
+        c.fail(c.keyPath("burst"), reason.str());
+    }
+}
+
 /// What follows from the values read, and what no single field can check.
 void completeScene(ObjectReader& r, Scene& scene)
 {
@@ -222,10 +241,11 @@ Scene parseScene(const std::string& text, const std::string& sourceName, const s
     });
     readMaterials(r, root, scene);
     r.array("objects", [&](ObjectReader& o, size_t i) { scene.objects.push_back(readObject(o, i, scene, baseDirectory)); });
-    r.array("charges", [&](ObjectReader& c, size_t) {
+    r.array("charges", [&](ObjectReader& c, size_t i) {
         Charge charge;
         readFields(c, charge);
         scene.charges.push_back(charge);
+        resolveBurst(c, i, scene.world.ground, scene.charges.back());
     });
     r.finish();
     completeScene(r, scene);

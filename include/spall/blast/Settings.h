@@ -7,6 +7,8 @@
 
 #include <Eigen/Core>
 
+#include <cmath>
+
 namespace spall {
 
 enum class BurstType { FreeAir, Surface };
@@ -33,6 +35,11 @@ struct Charge {
     double detonationTimeS = 0.0;   ///< (unit: s)
     BurstType burst = BurstType::Surface;
 };
+
+/// Height above the ground (unit: m) within which a charge of `tntKg` is a surface burst: two
+/// radii of a TNT sphere of density 1600 kg/m^3 (cast TNT), i.e. it rests on or almost on the
+/// ground, where the Kingery–Bulmash hemispherical data apply.
+inline double surfaceBurstHeightM(double tntKg) { return 2.0 * std::cbrt(3.0 * tntKg / (4.0 * M_PI * 1600.0)); }
 
 struct BlastSettings {
     BlastDataset dataset = BlastDataset::KingeryBulmash;
