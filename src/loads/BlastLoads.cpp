@@ -213,6 +213,7 @@ std::vector<Wrench> BlastLoads::stepWrenches(const std::vector<Body>& bodies, co
                                              double dtS) const
 {
     std::vector<Wrench> wrenches(bodies.size());
+    if (std::find(loaded.begin(), loaded.end(), 1) == loaded.end()) return wrenches;  // the wave is past every body
     if (mSettings.model != LoadModel::BlastEngineering) {
         forEachIndex(bodies.size(), [&](size_t i) {
             if (loaded[i]) wrenches[i] = wrenchOf(bodies[i], silhouettes({&bodies[i]}), nullptr, 0, timeS, dtS);

@@ -21,11 +21,8 @@ constexpr int kBlockShift = 3;  ///< blocks of 8^3 cells
 
 uint64_t blockKey(int64_t i, int64_t j, int64_t k) { return cellKey(i >> kBlockShift, j >> kBlockShift, k >> kBlockShift); }
 
-/// Cell of a world point: the nearest lattice point of spacing h.
-uint64_t cellKey(const Eigen::Vector3d& xM, double h)
-{
-    return cellKey(std::llround(xM.x() / h), std::llround(xM.y() / h), std::llround(xM.z() / h));
-}
+/// Cell of a point in cell units: the nearest lattice point.
+uint64_t cellKey(const Eigen::Vector3d& u) { return cellKey(std::llround(u.x()), std::llround(u.y()), std::llround(u.z())); }
 
 uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t i)
 {
@@ -41,13 +38,20 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     std::iota(mGroup.begin(), mGroup.end(), 0u);
     if (bodies.empty()) return;
     mVoxelSizeM = bodies.front().voxelSizeM;
+    // The lattice goes through a voxel centre of the first body considered: the pieces of one
+    // object then sit on it exactly, and each lookup is a single cell.
+    for (size_t b = 0; b < bodies.size(); ++b)
+        if (considered[b] && !bodies[b].boundaryVoxels.empty()) {
+            mOriginM = bodies[b].voxelWorldM(bodies[b].boundaryVoxels.front());
+            break;
+        }
     // Every considered body's boundary voxels into one sorted list of cells.
     std::vector<std::vector<Cell>> perBody(bodies.size());
     forEachIndex(bodies.size(), [&](size_t b) {
         if (!considered[b]) return;
         for (const openvdb::Coord& ijk : bodies[b].boundaryVoxels) {
-            const Eigen::Vector3d x = bodies[b].voxelWorldM(ijk);
-            perBody[b].push_back({cellKey(x, mVoxelSizeM), uint32_t(b), {float(x.x()), float(x.y()), float(x.z())}});
+            const Eigen::Vector3d u = cellUnits(bodies[b].voxelWorldM(ijk));
+            perBody[b].push_back({cellKey(u), uint32_t(b), {float(u.x()), float(u.y()), float(u.z())}});
         }
     });
     for (auto& cells : perBody) mCells.insert(mCells.end(), cells.begin(), cells.end());
@@ -55,8 +59,7 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     // Blocks hold their cells and those next to them: a voxel can contain points of the
     // neighbouring cells (bodies need not share the world's lattice).
     for (const Cell& c : mCells) {
-        const int64_t i = std::llround(c.centre[0] / mVoxelSizeM), j = std::llround(c.centre[1] / mVoxelSizeM),
-                      k = std::llround(c.centre[2] / mVoxelSizeM);
+        const int64_t i = std::llround(c.centre[0]), j = std::llround(c.centre[1]), k = std::llround(c.centre[2]);
         for (int corner = 0; corner < 8; ++corner)
             mBlockKeys.insert(blockKey(i + (corner & 1 ? 1 : -1), j + (corner & 2 ? 1 : -1), k + (corner & 4 ? 1 : -1)));
     }
@@ -92,11 +95,11 @@ bool Exposure::blocked(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM)
     const Eigen::Vector3d dir = (toM - fromM) / length;
     const double blockM = h * (1 << kBlockShift);
     for (double t = 0; t < length;) {
-        const Eigen::Vector3d x = fromM + t * dir;
-        const int64_t i = std::llround(x.x() / h), j = std::llround(x.y() / h), k = std::llround(x.z() / h);
+        const Eigen::Vector3d x = fromM + t * dir, u = cellUnits(x);
+        const int64_t i = std::llround(u.x()), j = std::llround(u.y()), k = std::llround(u.z());
         if (mBlockKeys.count(blockKey(i, j, k))) {
             if (bodyAt(x, kNoBody) >= 0) return true;
-            t += 0.5 * h;
+            t += h;
             continue;
         }
         // An empty block: go on from where the ray leaves it (its cells span lattice points
@@ -106,8 +109,8 @@ bool Exposure::blocked(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM)
         for (int a = 0; a < 3; ++a) {
             if (dir[a] == 0) continue;
             const int64_t lo = (index[a] >> kBlockShift) << kBlockShift;
-            const double face = (dir[a] > 0 ? (lo + (1 << kBlockShift) - 0.5) : (lo - 0.5)) * h;
-            exit = std::min(exit, (face - x[a]) / dir[a]);
+            const double face = dir[a] > 0 ? lo + (1 << kBlockShift) - 0.5 : lo - 0.5;  // in cell units
+            exit = std::min(exit, (face - u[a]) * h / dir[a]);
         }
         t += std::max(exit, 0.0) + 1e-6 * blockM;
     }
@@ -118,9 +121,10 @@ int64_t Exposure::bodyAt(const Eigen::Vector3d& xM, size_t exclude) const
 {
     // A voxel within half a cell of x may sit in the next cell along an axis where x lies near
     // a cell boundary (bodies from different objects need not share a lattice): look there too.
+    const Eigen::Vector3d u = cellUnits(xM);
     int64_t range[3][2];
     for (int a = 0; a < 3; ++a) {
-        const double v = xM[a] / mVoxelSizeM, nearest = std::round(v);
+        const double v = u[a], nearest = std::round(v);
         range[a][0] = range[a][1] = int64_t(nearest);
         if (std::abs(v - nearest) > 0.2) (v > nearest ? range[a][1] : range[a][0]) += v > nearest ? 1 : -1;
     }
@@ -131,8 +135,8 @@ int64_t Exposure::bodyAt(const Eigen::Vector3d& xM, size_t exclude) const
                 auto it = std::lower_bound(mCells.begin(), mCells.end(), key, [](const Cell& c, uint64_t x) { return c.key < x; });
                 for (; it != mCells.end() && it->key == key; ++it) {
                     if (it->body == exclude) continue;
-                    const double d = std::max({std::abs(it->centre[0] - xM.x()), std::abs(it->centre[1] - xM.y()), std::abs(it->centre[2] - xM.z())});
-                    if (d < 0.5 * mVoxelSizeM) return it->body;
+                    const double d = std::max({std::abs(it->centre[0] - u.x()), std::abs(it->centre[1] - u.y()), std::abs(it->centre[2] - u.z())});
+                    if (d < 0.5) return it->body;
                 }
             }
     return -1;

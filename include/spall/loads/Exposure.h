@@ -30,7 +30,7 @@ public:
     const std::vector<char>& coveredFaces(size_t bodyIndex) const { return mCovered[bodyIndex]; }
 
     /// True when the segment from `fromM` to `toM` (world) passes through a voxel of any
-    /// considered body (cells of the voxel size around their centres; sampled every half voxel,
+    /// considered body (cells of the voxel size around their centres; sampled every voxel,
     /// skipping empty blocks of 8^3 cells).
     bool blocked(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM) const;
 
@@ -42,13 +42,17 @@ private:
     struct Cell {
         uint64_t key;
         uint32_t body;
-        float centre[3];  ///< world centre of the voxel (unit: m)
+        float centre[3];  ///< centre of the voxel in cell units from the lattice origin
     };
     static constexpr size_t kNoBody = ~size_t(0);
     /// A body other than `exclude` with a voxel that contains x (world, unit: m), or -1.
     int64_t bodyAt(const Eigen::Vector3d& xM, size_t exclude) const;
 
+    /// World point x in cell units: (x - origin) / h.
+    Eigen::Vector3d cellUnits(const Eigen::Vector3d& xM) const { return (xM - mOriginM) / mVoxelSizeM; }
+
     double mVoxelSizeM = 1.0;
+    Eigen::Vector3d mOriginM = Eigen::Vector3d::Zero();  ///< a lattice point (unit: m)
     std::vector<Cell> mCells;  ///< sorted by key, then body
     std::unordered_set<uint64_t> mBlockKeys;  ///< every block of 8^3 cells holding one
     std::vector<std::vector<char>> mCovered;  ///< per considered body, per exposed face
