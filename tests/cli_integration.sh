@@ -157,6 +157,17 @@ for signal in KILL INT; do
   [[ -s "$out/preview.png" ]] || fail "SIG$signal: the resumed run wrote no preview"
   $py "$compare" "$dir/$whole" "$out" || fail "SIG$signal: the resumed run differs from the uninterrupted one"
 done
+# killed before its first checkpoint (long.json writes one every 30 s): --resume runs the
+# resolved scene again, says so, and ends as the uninterrupted run
+out="$dir/cut-early"
+"$spall" run "$dir/long.json" -o "$out" --quiet > /dev/null 2>&1 &
+pid=$!
+for _ in $(seq 600); do [[ -e "$out/fragments.0002.vdb" ]] && break; sleep 0.05; done
+kill -s KILL "$pid"; wait "$pid" 2> /dev/null || true
+[[ ! -e "$out/checkpoint.spall" ]] || fail "early kill: a checkpoint was written after all"
+"$spall" run --resume "$out" --quiet > /dev/null 2> "$dir/err.txt" || fail "early kill: --resume failed: $(cat "$dir/err.txt")"
+grep -q "started again from $out/scene.json" "$dir/err.txt" || fail "early kill: --resume did not say what it did: $(cat "$dir/err.txt")"
+$py "$compare" "$dir/whole" "$out" || fail "early kill: the restarted run differs from the uninterrupted one"
 # a full disk: a 2 MB tmpfs, about half of what the run writes. A clear error naming the file,
 # every frame and history row written so far readable, no partial file left looking whole, and
 # --resume finishes the run once there is room (here: after moving the directory elsewhere)

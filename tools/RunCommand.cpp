@@ -91,6 +91,9 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
         report = spall::runScene(scene, options, onFrame);
     }
     if (!quiet) std::fprintf(stderr, "\n");
+    if (report.restartedFromScene)
+        std::fprintf(stderr, "spall run: %s held no checkpoint yet, so the run started again from %s/scene.json; the frames "
+                             "written before were rewritten (the run is deterministic: they came out the same)\n", outDir.c_str(), outDir.c_str());
     printRunSummary(report, outDir);
     if (!report.complete) return 130;
     if (preview) std::printf("preview: %s\n", options.previewPath.c_str());

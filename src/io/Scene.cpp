@@ -125,7 +125,8 @@ ObjectSpec readObject(ObjectReader& o, size_t index, const Scene& scene, const s
     if (hasMesh) {
         std::filesystem::path mesh = o.string("mesh", "");
         if (mesh.is_relative()) mesh = std::filesystem::path(baseDirectory) / mesh;
-        spec.meshPath = mesh.lexically_normal().string();
+        // Absolute, so the resolved scene (scene.json, a checkpoint's copy) reads back from anywhere.
+        spec.meshPath = std::filesystem::absolute(mesh).lexically_normal().string();
     } else {
         spec.primitive = readPrimitive(*o.child("primitive"));
     }

@@ -206,8 +206,7 @@ Checkpoint readCheckpoint(const std::string& path)
 {
     std::ifstream in(path, std::ios::binary);
     if (!in)
-        throw IoError(path + ": no checkpoint to resume from (the run stopped before its first frame was complete, had "
-                             "output.checkpoint_every_s 0, or finished)");
+        throw IoError(path + ": no checkpoint (none was written yet, or the file cannot be opened)");
     Reader r(in, path);
     char magic[sizeof kMagic];
     in.read(magic, sizeof magic);

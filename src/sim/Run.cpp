@@ -196,6 +196,16 @@ RunReport resumeRun(const RunOptions& options, const std::function<bool(const Ru
     const std::string path = (dir / kCheckpointFileName).string();
     if (!fs::exists(path) && fs::exists(dir / "history.h5") && readHistory((dir / "history.h5").string()).runComplete)
         throw InputError(dir.string() + ": the run is complete (history.h5 says run_complete = 1); there is nothing to resume");
+    if (!fs::exists(path)) {
+        // Killed before its first checkpoint: run the resolved scene again from the start.
+        const fs::path scenePath = dir / "scene.json";
+        if (!fs::exists(scenePath))
+            throw IoError(dir.string() + ": nothing to resume: there is no " + path + " and no " + scenePath.string() +
+                          " (the run had not started writing)");
+        RunReport report = runScene(loadScene(scenePath.string()), options, onFrame);
+        report.restartedFromScene = true;
+        return report;
+    }
     Checkpoint checkpoint = readCheckpoint(path);
     const Scene scene = parseScene(checkpoint.sceneJson, path + " (scene)", dir.string());
     std::unique_ptr<HistoryWriter> history;

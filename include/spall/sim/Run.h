@@ -35,6 +35,9 @@ struct RunReport {
     size_t finalBodies = 0;
     int64_t fractureEvents = 0;
     double wallTimeS = 0;
+    /// --resume found no checkpoint and ran the scene again from OUTDIR/scene.json (the run is
+    /// deterministic: the frames already written come out the same).
+    bool restartedFromScene = false;
 };
 
 /// Runs a scene and writes OUTDIR/scene.json, fragments.NNNN.vdb, history.h5 and, after each
