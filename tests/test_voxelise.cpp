@@ -181,6 +181,22 @@ TEST(Voxelise, BadInputNamesTheFileAndReason)
     expectError((dir / "garbage.stl").string(), "cannot be read");
     std::ofstream(dir / "points.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
     expectError((dir / "points.obj").string(), "no");
+    // Headers that claim more elements than the file can hold are refused before any reader
+    // allocates for them (issue 21: a 300-byte OFF claiming 3.5 billion vertices).
+    std::ofstream(dir / "huge.off") << "OFF\n3500000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    expectError((dir / "huge.off").string(), "declares 3500000000 vertices and 1 faces");
+    std::ofstream(dir / "huge.ply") << "ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\n"
+                                       "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n";
+    expectError((dir / "huge.ply").string(), "declares 4000000000 vertex, 1 face");
+    {
+        std::ofstream stl(dir / "huge.stl", std::ios::binary);
+        const std::string header(80, 'x');
+        stl << header;
+        const unsigned char count[4] = {0xff, 0xff, 0xff, 0x7f};  // 2^31 - 1 triangles, little endian
+        stl.write(reinterpret_cast<const char*>(count), 4);
+        stl << std::string(100, '\0');
+    }
+    expectError((dir / "huge.stl").string(), "declares 2147483647 triangles");
     fs::remove_all(dir);
 
     VoxeliseSettings s;

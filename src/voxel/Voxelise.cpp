@@ -1,5 +1,7 @@
 #include <spall/voxel/Voxelise.h>
 
+#include "MeshHeader.h"
+
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -73,6 +75,7 @@ TriangleMesh loadMesh(const std::string& path, std::vector<std::string>* notes)
         if (!probe) throw InputError(path + ": cannot be read (permission denied?)");
         if (probe.peek() == std::ifstream::traits_type::eof()) throw InputError(path + ": file is empty");
     }
+    checkDeclaredCounts(path);
     Assimp::Importer importer;
     // Points and lines are dropped (they enclose nothing); identical vertices are welded so that
     // open edges can be counted.
