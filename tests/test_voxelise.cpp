@@ -227,3 +227,20 @@ TEST(Voxelise, PrimitivesHaveTheRightVoxelCounts)
     EXPECT_EQ(countLinks(*box.grid), 54);
     EXPECT_TRUE(linksAreSymmetric(*box.grid));
 }
+
+TEST(Voxelise, AnInterruptedMeshGivesNoResult)
+{
+    // Ctrl-C while a large mesh is voxelised: OpenVDB stops part-way, and that is an error, not
+    // a partial solid (issue 21).
+    initialiseOpenVdb();
+    struct StopAtOnce : Interrupter {
+        int asked = 0;
+        bool wasInterrupted(int) override { return ++asked > 0; }
+    } stop;
+    VoxeliseSettings s;
+    s.voxelSizeM = 0.05;
+    EXPECT_THROW(voxeliseMesh(icosphere(1.0, 3), s, "sphere", &stop), VoxeliseInterrupted);
+    EXPECT_GT(stop.asked, 0);
+    struct Never : Interrupter {} never;
+    EXPECT_GT(voxeliseMesh(icosphere(1.0, 3), s, "sphere", &never).voxelCount, 0);
+}

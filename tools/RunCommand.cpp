@@ -5,6 +5,7 @@
 #include <spall/io/Scene.h>
 #include <spall/sim/Checkpoint.h>
 #include <spall/sim/Run.h>
+#include <spall/voxel/Voxelise.h>
 
 #include <tbb/global_control.h>
 
@@ -20,6 +21,11 @@ namespace {
 std::atomic<bool> gStopRequested{false};
 
 extern "C" void requestStop(int) { gStopRequested = true; }
+
+/// Lets Ctrl-C and SIGTERM stop the voxelising of a large mesh too.
+struct StopRequest : spall::Interrupter {
+    bool wasInterrupted(int) override { return gStopRequested.load(); }
+};
 
 
 /// The per-frame callback: draws a progress bar with the time left (unless quiet) and says
@@ -71,8 +77,10 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
     std::signal(SIGINT, requestStop);
     std::signal(SIGTERM, requestStop);
 
+    StopRequest stopRequest;
     spall::RunOptions options;
     options.outputDirectory = outDir;
+    options.interrupter = &stopRequest;
     options.maxFrames = frames;
     if (preview) options.previewPath = (std::filesystem::path(outDir) / "preview.png").string();
     const auto onFrame = progressBar(quiet);
@@ -88,7 +96,12 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
             scene.fracture.seed = scene.seed;
         }
         if (!quiet) std::fprintf(stderr, "spall run: %s -> %s\n", scene.sourceName.c_str(), outDir.c_str());
-        report = spall::runScene(scene, options, onFrame);
+        try {
+            report = spall::runScene(scene, options, onFrame);
+        } catch (const spall::VoxeliseInterrupted& e) {
+            std::fprintf(stderr, "spall run: %s; no frame was written; start it again with: spall run --resume %s\n", e.what(), outDir.c_str());
+            return 130;
+        }
     }
     if (!quiet) std::fprintf(stderr, "\n");
     if (report.restartedFromScene)

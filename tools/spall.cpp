@@ -51,6 +51,7 @@ int main(int argc, char** argv)
     } catch (const spall::InputError& e) {
         std::cerr << "spall: error: " << e.what() << "\n";
         return 2;
+
     } catch (const std::exception& e) {
         std::cerr << "spall: error: " << e.what() << "\n";
         return 1;

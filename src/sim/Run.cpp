@@ -174,7 +174,7 @@ RunReport runScene(const Scene& scene, const RunOptions& options, const std::fun
     const nlohmann::json resolvedScene = sceneToJson(scene);
     writeFileAtomically((dir / "scene.json").string(), [&](std::ostream& out) { out << resolvedScene.dump(2) << "\n"; });
 
-    Simulation sim(scene);
+    Simulation sim(scene, options.interrupter);
     const int frameCount = options.maxFrames >= 0 ? std::min(options.maxFrames, scene.frameCount()) : scene.frameCount();
 
     std::unique_ptr<HistoryWriter> history;

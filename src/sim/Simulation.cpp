@@ -27,7 +27,7 @@ void anchorToGround(Body& body, const GroundPlane& ground)
 
 }  // namespace
 
-Simulation::Simulation(const Scene& scene) : mScene(scene)
+Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(scene)
 {
     initialiseOpenVdb();
     mField = std::make_unique<BlastField>(scene.charges, scene.blast);
@@ -37,7 +37,7 @@ Simulation::Simulation(const Scene& scene) : mScene(scene)
     for (size_t i = 0; i < scene.objects.size(); ++i) {
         const ObjectSpec& spec = scene.objects[i];
         VoxeliseResult vox = spec.primitive ? voxelisePrimitive(*spec.primitive, vs)
-                                            : voxeliseMesh(loadMesh(spec.meshPath), vs, spec.meshPath);
+                                            : voxeliseMesh(loadMesh(spec.meshPath), vs, spec.meshPath, interrupter);
         const Material& material = scene.material(spec.material);
         validateMaterial(material);
         Body body = makeBody(vox.grid, scene.voxelSizeM, material.densityKgM3);

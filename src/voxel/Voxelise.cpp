@@ -162,6 +162,8 @@ VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& se
             bool wasInterrupted(int percent = -1) { return inner->wasInterrupted(percent); }
         } adaptor{interrupter};
         sdf = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(adaptor, *transform, points, triangles, 3.0f);
+        // OpenVDB returns what it has when interrupted: that is no result.
+        if (interrupter->wasInterrupted()) throw VoxeliseInterrupted(sourceName + ": voxelising was interrupted");
     } else {
         sdf = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*transform, points, triangles, 3.0f);
     }

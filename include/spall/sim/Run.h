@@ -16,6 +16,8 @@ struct RunOptions {
     /// from the bodies in memory (no frame files are read back).
     std::string previewPath;
     int previewFrames = 6;
+    /// Asked while voxelising large meshes; may be null.
+    Interrupter* interrupter = nullptr;
 };
 
 /// What the progress callback sees after each frame.

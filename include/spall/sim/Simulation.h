@@ -55,8 +55,9 @@ struct StepRecord {
 class Simulation {
 public:
     /// Voxelises every object and places it (throws InputError for bad input, e.g. a charge
-    /// inside an object).
-    explicit Simulation(const Scene& scene);
+    /// inside an object). `interrupter` (may be null) can stop voxelising a large mesh
+    /// (VoxeliseInterrupted).
+    explicit Simulation(const Scene& scene, Interrupter* interrupter = nullptr);
     /// Continues from a saved state; `scene` is the simulation's own (Simulation::scene()).
     Simulation(const Scene& scene, SimulationState state);
 

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -51,8 +52,14 @@ struct TriangleMesh {
 /// Throws InputError naming the file and the reason.
 TriangleMesh loadMesh(const std::string& path, std::vector<std::string>* notes = nullptr);
 
+/// Thrown when an interrupter stopped the work (Ctrl-C, SIGTERM): nothing was produced.
+class VoxeliseInterrupted : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
 /// Solid interior of a mesh: voxel centres inside the surface. Throws InputError if the
-/// interior is not well defined.
+/// interior is not well defined, VoxeliseInterrupted when `interrupter` asks to stop.
 VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& settings,
                             const std::string& sourceName, Interrupter* interrupter = nullptr);
 
