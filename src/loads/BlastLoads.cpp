@@ -43,15 +43,13 @@ bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<
     return false;
 }
 
-double Silhouette::smallerHalfSizeM() const { return std::min(onGround ? 2.0 * halfHeightM : halfHeightM, halfWidthM); }
-
 double Silhouette::clearingTimeS() const
 {
-    const double height = onGround ? 2.0 * halfHeightM : halfHeightM;
+    const double height = clearingHeightM();
     return spall::clearingTimeS(std::min(height, halfWidthM), std::max(height, halfWidthM), shockSpeedMS);
 }
 
-double Silhouette::rearRiseTimeS() const { return 4.0 * smallerHalfSizeM() / shockSpeedMS; }
+double Silhouette::rearRiseTimeS() const { return 4.0 * std::min(clearingHeightM(), halfWidthM) / shockSpeedMS; }
 
 Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vector3d& chargeM, double shockSpeedMS,
                         const LoadGeometry& ground)
@@ -73,18 +71,17 @@ Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vect
     out.shockSpeedMS = shockSpeedMS;
     const Eigen::Vector3d sight = (0.5 * (lo + hi) - chargeM).normalized();
     const Eigen::Vector3d up = ground.enabled ? ground.normal : Eigen::Vector3d::UnitZ();
-    const Eigen::Vector3d vertical = up - up.dot(sight) * sight;
-    out.vertical = vertical.norm() > 1e-6 ? Eigen::Vector3d(vertical.normalized()) : sight.unitOrthogonal();
-    out.horizontal = sight.cross(out.vertical);
+    const Eigen::Vector3d across = up - up.dot(sight) * sight;
+    const Eigen::Vector3d vertical = across.norm() > 1e-6 ? Eigen::Vector3d(across.normalized()) : sight.unitOrthogonal();
+    const Eigen::Vector3d horizontal = sight.cross(vertical);
     double uLo = 1e300, uHi = -1e300, vLo = 1e300, vHi = -1e300, lowestM = 1e300;
     for (const Eigen::Vector3d& c : corners) {
-        uLo = std::min(uLo, c.dot(out.horizontal)), uHi = std::max(uHi, c.dot(out.horizontal));
-        vLo = std::min(vLo, c.dot(out.vertical)), vHi = std::max(vHi, c.dot(out.vertical));
+        uLo = std::min(uLo, c.dot(horizontal)), uHi = std::max(uHi, c.dot(horizontal));
+        vLo = std::min(vLo, c.dot(vertical)), vHi = std::max(vHi, c.dot(vertical));
         lowestM = std::min(lowestM, c.dot(up));
     }
     out.halfWidthM = 0.5 * (uHi - uLo);
     out.halfHeightM = 0.5 * (vHi - vLo);
-    out.centreM = 0.5 * (lo + hi);
     out.onGround = ground.enabled && lowestM <= ground.heightM + 0.5 * group.front()->voxelSizeM;
     return out;
 }

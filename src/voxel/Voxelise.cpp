@@ -122,6 +122,34 @@ double meshVolumeM3(const TriangleMesh& mesh)
     return std::abs(sixV) / 6.0;
 }
 
+namespace {
+
+/// OpenVDB builds an unsigned distance band and flood-fills the sign, so winding order and
+/// self-intersections do not matter; a narrow band of 3 voxels closes small holes.
+openvdb::FloatGrid::Ptr signedDistanceOf(const TriangleMesh& mesh, double h, const std::string& sourceName, Interrupter* interrupter)
+{
+    std::vector<openvdb::Vec3s> points;
+    points.reserve(mesh.positionsM.size());
+    for (const auto& p : mesh.positionsM) points.emplace_back(p.x(), p.y(), p.z());
+    std::vector<openvdb::Vec3I> triangles;
+    triangles.reserve(mesh.triangles.size());
+    for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
+    auto transform = openvdb::math::Transform::createLinearTransform(h);
+    if (!interrupter) return openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*transform, points, triangles, 3.0f);
+    struct VdbInterrupter {
+        Interrupter* inner;
+        void start(const char* = nullptr) {}
+        void end() {}
+        bool wasInterrupted(int percent = -1) { return inner->wasInterrupted(percent); }
+    } adaptor{interrupter};
+    auto sdf = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(adaptor, *transform, points, triangles, 3.0f);
+    // OpenVDB returns what it has when interrupted: that is no result.
+    if (interrupter->wasInterrupted()) throw VoxeliseInterrupted(sourceName + ": voxelising was interrupted");
+    return sdf;
+}
+
+}  // namespace
+
 VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& settings, const std::string& sourceName,
                             Interrupter* interrupter)
 {
@@ -144,29 +172,7 @@ VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& se
                                "flood fill and holes narrower than about 3 voxels are closed");
     }
 
-    // OpenVDB builds an unsigned distance band and flood-fills the sign, so winding order and
-    // self-intersections do not matter; a narrow band of 3 voxels closes small holes.
-    std::vector<openvdb::Vec3s> points;
-    points.reserve(mesh.positionsM.size());
-    for (const auto& p : mesh.positionsM) points.emplace_back(p.x(), p.y(), p.z());
-    std::vector<openvdb::Vec3I> triangles;
-    triangles.reserve(mesh.triangles.size());
-    for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
-    auto transform = openvdb::math::Transform::createLinearTransform(h);
-    openvdb::FloatGrid::Ptr sdf;
-    if (interrupter) {
-        struct VdbInterrupter {
-            Interrupter* inner;
-            void start(const char* = nullptr) {}
-            void end() {}
-            bool wasInterrupted(int percent = -1) { return inner->wasInterrupted(percent); }
-        } adaptor{interrupter};
-        sdf = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(adaptor, *transform, points, triangles, 3.0f);
-        // OpenVDB returns what it has when interrupted: that is no result.
-        if (interrupter->wasInterrupted()) throw VoxeliseInterrupted(sourceName + ": voxelising was interrupted");
-    } else {
-        sdf = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*transform, points, triangles, 3.0f);
-    }
+    const openvdb::FloatGrid::Ptr sdf = signedDistanceOf(mesh, h, sourceName, interrupter);
     auto interior = openvdb::tools::sdfInteriorMask(*sdf);
 
     result.grid = newLinkGrid(h);

@@ -46,18 +46,17 @@ bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<
 /// A body's outline as seen from a charge: the rectangle its bounding box covers across the
 /// line of sight, "up" from the ground. Its edges are free, except one resting on the ground.
 struct Silhouette {
-    Eigen::Vector3d centreM = Eigen::Vector3d::Zero();
-    Eigen::Vector3d horizontal = Eigen::Vector3d::UnitY(), vertical = Eigen::Vector3d::UnitZ();  ///< unit
     double halfWidthM = 0, halfHeightM = 0;
     bool onGround = false;
     double shockSpeedMS = 340.0;
 
-    /// UFC 3-340-02's S: the smaller of the half-width and the height above the ground (the
-    /// half-height when nothing is below) (unit: m).
-    double smallerHalfSizeM() const;
+    /// The height UFC 3-340-02 measures clearing over: above the ground, or from the centre
+    /// when nothing is below (unit: m).
+    double clearingHeightM() const { return onGround ? 2.0 * halfHeightM : halfHeightM; }
     /// UFC 3-340-02 eq. 2-4, tc = 4S/((1 + S/G) U), G the larger of the two (unit: s).
     double clearingTimeS() const;
-    /// UFC 3-340-02's rear-wall rise time 4S/U (unit: s).
+    /// UFC 3-340-02's rear-wall rise time 4S/U, S the smaller of the clearing height and the
+    /// half-width (unit: s).
     double rearRiseTimeS() const;
 };
 /// The outline of a group of bodies (one body, or bodies pressed together) seen from a charge.

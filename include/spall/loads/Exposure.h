@@ -26,8 +26,6 @@ public:
     {
         return !mCovered[bodyIndex].empty() && mCovered[bodyIndex][faceIndex];
     }
-    /// Per exposed face of the body, 1 when covered (empty when the body was not considered).
-    const std::vector<char>& coveredFaces(size_t bodyIndex) const { return mCovered[bodyIndex]; }
 
     /// True when the segment from `fromM` to `toM` (world) passes through a voxel of any
     /// considered body (cells of the voxel size around their centres; sampled every voxel,
