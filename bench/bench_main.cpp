@@ -100,17 +100,21 @@ void BM_Voxelise_PrimitiveBox(benchmark::State& state)
 }
 BENCHMARK(BM_Voxelise_PrimitiveBox)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+/// The same closed mesh through each inside test: the level set is the baseline.
+template <InsideTest kTest>
 void BM_Voxelise_TorusMesh(benchmark::State& state)
 {
     initialiseOpenVdb();
     const TriangleMesh mesh = loadMesh(SPALL_SOURCE_DIR "/assets/meshes/torus.obj");
     VoxeliseSettings s;
     s.voxelSizeM = 0.005;
+    s.insideTest = kTest;
     int64_t voxels = 0;
     for (auto _ : state) voxels = voxeliseMesh(mesh, s, "torus").voxelCount;
     state.counters["voxels_per_s"] = benchmark::Counter(double(voxels), benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_Voxelise_TorusMesh)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Voxelise_TorusMesh<InsideTest::LevelSet>)->Name("BM_Voxelise_TorusLevelSet")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Voxelise_TorusMesh<InsideTest::WindingNumber>)->Name("BM_Voxelise_TorusWindingNumber")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Pressure evaluations: the table (hot path) against the direct fits (polynomials, a log and
 // pow per quantity, a decay-coefficient solve).
@@ -295,6 +299,7 @@ public:
             {"BM_Pressure_Table/512", "BM_Pressure_DirectFits"},
             {"BM_Pressure_Snapshot", "BM_Pressure_Table/128"},
             {"BM_Loads_BlastEngineering", "BM_Loads_PaperReflected"},
+            {"BM_Voxelise_TorusWindingNumber", "BM_Voxelise_TorusLevelSet"},
         };
         std::printf("\nRatios to the baseline in this run (time / baseline time):\n");
         for (auto [name, base] : pairs) {

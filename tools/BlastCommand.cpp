@@ -16,18 +16,6 @@
 
 namespace {
 
-/// An enum-valued option; a bad value is an error naming the option.
-template <typename E>
-E parseOption(const std::string& option, const std::string& value)
-{
-    try {
-        return spall::parseEnum<E>(value);
-    } catch (const spall::InputError& e) {
-        throw spall::InputError(option + ": " + e.what());
-    }
-}
-
-
 /// The pressure history at the point, from detonation to past the negative phase: a plot for
 /// .png, else CSV.
 void writePressureCurve(const spall::BlastParameters& p, const std::string& path, const std::string& title)

@@ -3,11 +3,35 @@
 // which returns the exit code and throws spall's errors (tools/spall.cpp turns those into codes).
 #pragma once
 
+#include <spall/core/EnumNames.h>
+#include <spall/core/Error.h>
+
 #include <CLI/CLI.hpp>
 
 #include <functional>
 
 using CommandAction = std::function<int()>;
+
+/// Ctrl-C and SIGTERM set a flag that long commands poll, so they stop where what they wrote
+/// stays readable instead of dying mid-write.
+void stopOnSignals();
+bool stopRequested();
+
+/// The library's interrupter for the same flag.
+struct StopRequest : spall::Interrupter {
+    bool wasInterrupted(int) override { return stopRequested(); }
+};
+
+/// An enum-valued option; a bad value is an error naming the option.
+template <typename E>
+E parseOption(const std::string& option, const std::string& value)
+{
+    try {
+        return spall::parseEnum<E>(value);
+    } catch (const spall::InputError& e) {
+        throw spall::InputError(option + ": " + e.what());
+    }
+}
 
 void addVoxeliseCommand(CLI::App& app, CommandAction& action);
 void addBlastCommand(CLI::App& app, CommandAction& action);

@@ -9,24 +9,12 @@
 
 #include <tbb/global_control.h>
 
-#include <atomic>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <memory>
 
 namespace {
-
-std::atomic<bool> gStopRequested{false};
-
-extern "C" void requestStop(int) { gStopRequested = true; }
-
-/// Lets Ctrl-C and SIGTERM stop the voxelising of a large mesh too.
-struct StopRequest : spall::Interrupter {
-    bool wasInterrupted(int) override { return gStopRequested.load(); }
-};
-
 
 /// The per-frame callback: draws a progress bar with the time left (unless quiet) and says
 /// whether to go on (not after Ctrl-C or SIGTERM).
@@ -44,7 +32,7 @@ std::function<bool(const spall::RunProgress&)> progressBar(bool quiet)
                          static_cast<long long>(p.totalSteps), left);
             std::fflush(stderr);
         }
-        return !gStopRequested.load();
+        return !stopRequested();
     };
 }
 
@@ -74,8 +62,7 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
     std::unique_ptr<tbb::global_control> threadLimit;
     if (threads > 0) threadLimit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
     // Ctrl-C finishes the current frame, so everything written stays readable.
-    std::signal(SIGINT, requestStop);
-    std::signal(SIGTERM, requestStop);
+    stopOnSignals();
 
     StopRequest stopRequest;
     spall::RunOptions options;

@@ -14,7 +14,7 @@
 
 namespace {
 
-/// Percent progress on stderr, at most a few updates per second.
+/// Percent progress on stderr, at most a few updates per second; stops on Ctrl-C or SIGTERM.
 class ProgressPrinter : public spall::Interrupter {
 public:
     ProgressPrinter(std::string label, bool quiet) : mLabel(std::move(label)), mQuiet(quiet) {}
@@ -24,13 +24,13 @@ public:
     }
     bool wasInterrupted(int percent) override
     {
-        if (mQuiet || percent < 0) return false;
+        if (mQuiet || percent < 0) return stopRequested();
         const auto now = std::chrono::steady_clock::now();
-        if (mPrinted && now - mLast < std::chrono::milliseconds(250) && percent < 100) return false;
+        if (mPrinted && now - mLast < std::chrono::milliseconds(250) && percent < 100) return stopRequested();
         mLast = now;
         mPrinted = true;
         std::fprintf(stderr, "\r%s %3d%%", mLabel.c_str(), percent);
-        return false;
+        return stopRequested();
     }
 
 private:
@@ -75,11 +75,9 @@ spall::Primitive parsePrimitive(const std::string& spec)
 
 
 int runVoxelise(const std::string& input, const std::string& primitiveSpec, const std::string& output,
-                double voxelSize, int64_t maxVoxels, bool quiet)
+                const spall::VoxeliseSettings& settings, bool quiet)
 {
-    spall::VoxeliseSettings settings;
-    settings.voxelSizeM = voxelSize;
-    settings.maxVoxels = maxVoxels;
+    const double voxelSize = settings.voxelSizeM;
     spall::VoxeliseResult result;
     std::string source;
     const auto start = std::chrono::steady_clock::now();
@@ -90,8 +88,14 @@ int runVoxelise(const std::string& input, const std::string& primitiveSpec, cons
         source = input;
         std::vector<std::string> notes;
         const spall::TriangleMesh mesh = spall::loadMesh(input, &notes);
-        ProgressPrinter progress("voxelising " + input, quiet);
-        result = spall::voxeliseMesh(mesh, settings, input, &progress);
+        stopOnSignals();
+        try {
+            ProgressPrinter progress("voxelising " + input, quiet);
+            result = spall::voxeliseMesh(mesh, settings, input, &progress);
+        } catch (const spall::VoxeliseInterrupted& e) {
+            std::fprintf(stderr, "\nspall voxelise: %s; nothing was written\n", e.what());
+            return 130;
+        }
         result.notes.insert(result.notes.begin(), notes.begin(), notes.end());
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -103,7 +107,8 @@ int runVoxelise(const std::string& input, const std::string& primitiveSpec, cons
     std::cout << "voxelised " << source << " at " << voxelSize << " m\n"
               << "  voxels:        " << result.voxelCount << "\n"
               << "  links:         " << spall::countLinks(*result.grid) << "\n"
-              << "  volume:        " << mp.voxelCount * voxelSize * voxelSize * voxelSize << " m^3\n"
+              << "  volume:        " << mp.voxelCount * voxelSize * voxelSize * voxelSize << " m^3"
+              << (result.enclosedVolumeM3 > 0 ? " (the mesh encloses " + std::to_string(result.enclosedVolumeM3) + " m^3)" : "") << "\n"
               << "  extent:        " << box.dim().x() * voxelSize << " x " << box.dim().y() * voxelSize << " x "
               << box.dim().z() * voxelSize << " m\n"
               << "  throughput:    " << (seconds > 0 ? result.voxelCount / seconds : 0.0) << " voxels/s\n"
@@ -117,8 +122,8 @@ void addVoxeliseCommand(CLI::App& app, CommandAction& action)
 {
     struct Options {
         std::string input, primitive, output;
-        double voxelSizeM = 0.05;
-        int64_t maxVoxels = 200'000'000;
+        spall::VoxeliseSettings settings;
+        std::string inside = "auto";
         bool quiet = false;
     };
     auto o = std::make_shared<Options>();
@@ -127,13 +132,16 @@ void addVoxeliseCommand(CLI::App& app, CommandAction& action)
     sub->add_option("input", o->input, "Mesh file (OBJ, STL, PLY, OFF, glTF, ...)");
     sub->add_option("--primitive", o->primitive, "Instead of a mesh: box:X,Y,Z | sphere:R | cylinder:R,H (m)");
     sub->add_option("-o,--output", o->output, "Output .vdb")->required();
-    sub->add_option("--voxel-size", o->voxelSizeM, "Voxel edge (m)")->required();
-    sub->add_option("--max-voxels", o->maxVoxels, "Refuse results with more voxels than this");
+    sub->add_option("--voxel-size", o->settings.voxelSizeM, "Voxel edge (m)")->required();
+    sub->add_option("--max-voxels", o->settings.maxVoxels, "Refuse results with more voxels than this");
+    sub->add_option("--inside", o->inside,
+                    "How a mesh's inside is found: auto (level set if watertight, else winding number), level-set, winding-number");
     sub->add_flag("--quiet", o->quiet, "No progress on stderr");
     sub->callback([o, &action] {
         action = [o] {
             if (o->input.empty() == o->primitive.empty()) throw spall::InputError("give either a mesh file or --primitive, not both or neither");
-            return runVoxelise(o->input, o->primitive, o->output, o->voxelSizeM, o->maxVoxels, o->quiet);
+            o->settings.insideTest = parseOption<spall::InsideTest>("--inside", o->inside);
+            return runVoxelise(o->input, o->primitive, o->output, o->settings, o->quiet);
         };
     });
 }

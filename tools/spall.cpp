@@ -6,8 +6,26 @@
 
 #include <spall/core/Error.h>
 
+#include <atomic>
+#include <csignal>
 #include <iostream>
 #include <memory>
+
+namespace {
+
+std::atomic<bool> gStopRequested{false};
+
+extern "C" void requestStop(int) { gStopRequested = true; }
+
+}  // namespace
+
+void stopOnSignals()
+{
+    std::signal(SIGINT, requestStop);
+    std::signal(SIGTERM, requestStop);
+}
+
+bool stopRequested() { return gStopRequested.load(); }
 
 void addBenchCommands(CLI::App& app, CommandAction& action)
 {

@@ -1,6 +1,8 @@
 #include <spall/voxel/Voxelise.h>
 
 #include "MeshHeader.h"
+#include "MeshOrientation.h"
+#include "WindingNumber.h"
 
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
@@ -11,7 +13,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <map>
+#include <iomanip>
 #include <sstream>
 
 namespace spall {
@@ -38,22 +40,6 @@ void checkVoxelBudget(const Eigen::Vector3d& extentM, double h, int64_t maxVoxel
     }
 }
 
-/// Number of edges not shared by exactly two triangles (after welding equal positions).
-int64_t countOpenEdges(const TriangleMesh& mesh)
-{
-    std::map<std::pair<int, int>, int> uses;
-    for (const auto& t : mesh.triangles) {
-        for (int e = 0; e < 3; ++e) {
-            int a = t[e], b = t[(e + 1) % 3];
-            if (a > b) std::swap(a, b);
-            ++uses[{a, b}];
-        }
-    }
-    int64_t open = 0;
-    for (const auto& [edge, count] : uses) open += (count != 2);
-    return open;
-}
-
 LinkGrid::Ptr newLinkGrid(double h)
 {
     LinkGrid::Ptr grid = LinkGrid::create(0);
@@ -77,9 +63,8 @@ TriangleMesh loadMesh(const std::string& path, std::vector<std::string>* notes)
     }
     checkDeclaredCounts(path);
     Assimp::Importer importer;
-    // Points and lines are dropped (they enclose nothing); identical vertices are welded so that
-    // open edges can be counted.
-    importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+    // Points and lines come through as faces of one or two corners, counted and dropped below
+    // (they enclose nothing).
     const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                                                        aiProcess_SortByPType | aiProcess_PreTransformVertices);
     if (!scene) throw InputError(path + ": cannot be read as a mesh: " + importer.GetErrorString());
@@ -110,23 +95,11 @@ TriangleMesh loadMesh(const std::string& path, std::vector<std::string>* notes)
     return mesh;
 }
 
-double meshVolumeM3(const TriangleMesh& mesh)
-{
-    double sixV = 0.0;
-    for (const auto& t : mesh.triangles) {
-        const Eigen::Vector3d a = mesh.positionsM[t[0]].cast<double>();
-        const Eigen::Vector3d b = mesh.positionsM[t[1]].cast<double>();
-        const Eigen::Vector3d c = mesh.positionsM[t[2]].cast<double>();
-        sixV += a.dot(b.cross(c));
-    }
-    return std::abs(sixV) / 6.0;
-}
-
 namespace {
 
-/// OpenVDB builds an unsigned distance band and flood-fills the sign, so winding order and
-/// self-intersections do not matter; a narrow band of 3 voxels closes small holes.
-openvdb::FloatGrid::Ptr signedDistanceOf(const TriangleMesh& mesh, double h, const std::string& sourceName, Interrupter* interrupter)
+/// OpenVDB builds an unsigned distance band and flood-fills the sign: exact for watertight meshes
+/// whatever their winding; a hole wider than the 3-voxel band lets the outside flood in.
+void fillLevelSetInterior(const TriangleMesh& mesh, LinkGrid& solid, const std::string& sourceName, Interrupter* interrupter)
 {
     std::vector<openvdb::Vec3s> points;
     points.reserve(mesh.positionsM.size());
@@ -134,18 +107,51 @@ openvdb::FloatGrid::Ptr signedDistanceOf(const TriangleMesh& mesh, double h, con
     std::vector<openvdb::Vec3I> triangles;
     triangles.reserve(mesh.triangles.size());
     for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
-    auto transform = openvdb::math::Transform::createLinearTransform(h);
-    if (!interrupter) return openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*transform, points, triangles, 3.0f);
     struct VdbInterrupter {
         Interrupter* inner;
         void start(const char* = nullptr) {}
         void end() {}
-        bool wasInterrupted(int percent = -1) { return inner->wasInterrupted(percent); }
+        bool wasInterrupted(int percent = -1) { return inner && inner->wasInterrupted(percent); }
     } adaptor{interrupter};
-    auto sdf = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(adaptor, *transform, points, triangles, 3.0f);
+    const auto sdf = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(adaptor, solid.transform(), points, triangles, 3.0f);
     // OpenVDB returns what it has when interrupted: that is no result.
-    if (interrupter->wasInterrupted()) throw VoxeliseInterrupted(sourceName + ": voxelising was interrupted");
-    return sdf;
+    if (adaptor.wasInterrupted()) throw VoxeliseInterrupted(sourceName + ": voxelising was interrupted");
+    auto interior = openvdb::tools::sdfInteriorMask(*sdf);
+    interior->tree().voxelizeActiveTiles();
+    copyActiveTopology(solid.tree(), interior->tree(), 0);
+}
+
+std::string cubicMetres(double v)
+{
+    std::ostringstream out;
+    out << std::setprecision(3) << v << " m^3";
+    return out.str();
+}
+
+/// A fill that lost most of what the mesh encloses is an error, not a success; a smaller gap is a note.
+void checkFilledVolume(VoxeliseResult& result, double h, const std::string& sourceName)
+{
+    const double filled = static_cast<double>(result.voxelCount) * h * h * h;
+    const double enclosed = result.enclosedVolumeM3;
+    if (enclosed < 8.0 * h * h * h) return;  // a few voxels: discretisation decides, not the fill
+    if (filled < 0.5 * enclosed) {
+        throw InputError(sourceName + ": the voxels hold " + cubicMetres(filled) + " of the " + cubicMetres(enclosed) +
+                         " the mesh encloses: the fill lost most of the volume (is the mesh a surface with a large "
+                         "hole, or thinner than a voxel?)");
+    }
+    if (std::abs(filled - enclosed) > 0.05 * enclosed)
+        result.notes.push_back("the voxels hold " + cubicMetres(filled) + ", the mesh encloses " + cubicMetres(enclosed) +
+                               " (counted from the surface, closing holes by a cone from each shell's middle)");
+}
+
+void noteRepairs(VoxeliseResult& result, const MeshTopology& topology, InsideTest test)
+{
+    if (topology.turnedTriangles > 0)
+        result.notes.push_back(std::to_string(topology.turnedTriangles) + " triangles were wound against their neighbours and were turned");
+    if (topology.openEdges > 0)
+        result.notes.push_back(std::to_string(topology.openEdges) + " open edges (the mesh is not watertight): the inside comes from " +
+                               (test == InsideTest::WindingNumber ? "the generalised winding number, which bridges holes"
+                                                                  : "OpenVDB's sign flood fill, which closes only holes narrower than about 3 voxels"));
 }
 
 }  // namespace
@@ -155,9 +161,7 @@ VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& se
 {
     checkVoxelSize(settings.voxelSizeM);
     const double h = settings.voxelSizeM;
-    VoxeliseResult result;
     if (mesh.triangles.empty()) throw InputError(sourceName + ": mesh has no faces");
-
     Eigen::Vector3f lo = mesh.positionsM[0], hi = lo;
     for (const auto& p : mesh.positionsM) {
         lo = lo.cwiseMin(p);
@@ -165,28 +169,29 @@ VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& se
     }
     checkVoxelBudget((hi - lo).cast<double>(), h, settings.maxVoxels, sourceName);
 
-    const int64_t openEdges = countOpenEdges(mesh);
-    if (openEdges > 0) {
-        result.notes.push_back(std::to_string(openEdges) +
-                               " open edges (the mesh is not watertight): the interior comes from OpenVDB's sign "
-                               "flood fill and holes narrower than about 3 voxels are closed");
-    }
-
-    const openvdb::FloatGrid::Ptr sdf = signedDistanceOf(mesh, h, sourceName, interrupter);
-    auto interior = openvdb::tools::sdfInteriorMask(*sdf);
-
+    TriangleMesh outward = mesh;
+    const MeshTopology topology = orientOutward(outward);
+    InsideTest test = settings.insideTest;
+    if (test == InsideTest::Auto) test = topology.openEdges == 0 ? InsideTest::LevelSet : InsideTest::WindingNumber;
+    VoxeliseResult result;
+    result.enclosedVolumeM3 = topology.enclosedVolumeM3;
+    noteRepairs(result, topology, test);
     result.grid = newLinkGrid(h);
-    interior->tree().voxelizeActiveTiles();
-    copyActiveTopology(result.grid->tree(), interior->tree(), 0);
+    if (test == InsideTest::LevelSet)
+        fillLevelSetInterior(outward, *result.grid, sourceName, interrupter);
+    else
+        fillWindingNumberInterior(outward, *result.grid, sourceName, interrupter);
     result.voxelCount = static_cast<int64_t>(result.grid->activeVoxelCount());
     if (result.voxelCount == 0) {
-        throw InputError(sourceName + ": the mesh encloses no voxel centre at voxel size " + std::to_string(h) +
-                         " m (it is open, flat, or thinner than a voxel)");
+        throw InputError(sourceName + ": the mesh encloses no voxel centre at voxel size " + std::to_string(h) + " m (" +
+                         (topology.openEdges > 0 ? "it is an open surface, such as a plane or a terrain patch, that encloses nothing"
+                                                 : "it is flat or thinner than a voxel") + ")");
     }
     if (result.voxelCount > settings.maxVoxels) {
         throw InputError(sourceName + ": " + std::to_string(result.voxelCount) + " voxels, above the limit of " +
                          std::to_string(settings.maxVoxels));
     }
+    checkFilledVolume(result, h, sourceName);
     linkAllNeighbours(*result.grid);
     return result;
 }

@@ -13,9 +13,19 @@
 
 namespace spall {
 
+/// How a mesh's inside is found. Auto takes the level set for watertight meshes (exact and
+/// fastest) and the winding number for meshes with holes.
+enum class InsideTest { Auto, LevelSet, WindingNumber };
+template <>
+struct EnumNames<InsideTest> {
+    static constexpr std::pair<InsideTest, const char*> kNames[] = {
+        {InsideTest::Auto, "auto"}, {InsideTest::LevelSet, "level-set"}, {InsideTest::WindingNumber, "winding-number"}};
+};
+
 struct VoxeliseSettings {
     double voxelSizeM = 0.05;          ///< edge of a voxel (unit: m)
     int64_t maxVoxels = 200'000'000;   ///< refuse larger results (unit: voxels)
+    InsideTest insideTest = InsideTest::Auto;
 };
 
 enum class PrimitiveShape { Box, Sphere, Cylinder };
@@ -38,6 +48,8 @@ struct VoxeliseResult {
     /// Object-local position of index (0,0,0): local = index * h + offset (unit: m). Boxes use 0 or
     /// h/2 per axis so that their voxel cubes tile the box exactly; meshes use 0.
     Eigen::Vector3d localOffsetM = Eigen::Vector3d::Zero();
+    /// Volume the mesh encloses, for comparison with the voxels' (unit: m^3; 0 for primitives).
+    double enclosedVolumeM3 = 0.0;
     /// Repairs and observations a user should know about (open edges, dropped points, ...).
     std::vector<std::string> notes;
 };
@@ -58,14 +70,12 @@ public:
     using std::runtime_error::runtime_error;
 };
 
-/// Solid interior of a mesh: voxel centres inside the surface. Throws InputError if the
-/// interior is not well defined, VoxeliseInterrupted when `interrupter` asks to stop.
+/// Solid interior of a mesh: voxel centres inside the surface (see InsideTest). Throws InputError
+/// if the interior is not well defined or the fill lost most of the enclosed volume,
+/// VoxeliseInterrupted when `interrupter` asks to stop.
 VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& settings,
                             const std::string& sourceName, Interrupter* interrupter = nullptr);
 
 VoxeliseResult voxelisePrimitive(const Primitive& primitive, const VoxeliseSettings& settings);
-
-/// Volume enclosed by a closed, consistently wound mesh (divergence theorem; unit: m^3).
-double meshVolumeM3(const TriangleMesh& mesh);
 
 }  // namespace spall
