@@ -31,6 +31,47 @@ if "$spall" voxelise "$dir/bad.stl" --voxel-size 0.1 -o "$dir/bad.vdb" 2> "$dir/
 grep -q "bad.stl" "$dir/err.txt" || fail "error does not name the file: $(cat "$dir/err.txt")"
 [[ ! -e "$dir/bad.vdb" ]] || fail "output left behind"
 if "$spall" voxelise --primitive box:1,1,1 --voxel-size -1 -o "$dir/neg.vdb" 2> /dev/null; then fail "negative voxel size accepted"; fi
+# a sphere (r = 1.5 m, 14.1 m^3) with its top cap cut away: the winding number fills it; the
+# level set, forced, loses the inside through the hole and is refused
+cat > "$dir/holed_sphere.py" <<'PY'
+import math, sys
+n = int(sys.argv[2]); v = []; f = []
+for i in range(n + 1):
+    for j in range(2 * n):
+        t, p = math.pi * i / n, math.pi * j / n
+        v.append((1.5 * math.sin(t) * math.cos(p), 1.5 * math.sin(t) * math.sin(p), 1.5 * math.cos(t)))
+at = lambda i, j: i * 2 * n + j % (2 * n)
+for i in range(n):
+    for j in range(2 * n):
+        for tri in ((at(i, j), at(i + 1, j), at(i + 1, j + 1)), (at(i, j), at(i + 1, j + 1), at(i, j + 1))):
+            if not all(v[k][2] > 1.2 for k in tri): f.append(tri)
+with open(sys.argv[1], "w") as out:
+    out.writelines("v %f %f %f\n" % p for p in v)
+    out.writelines("f %d %d %d\n" % (a + 1, b + 1, c + 1) for a, b, c in f)
+PY
+$py "$dir/holed_sphere.py" "$dir/holed.obj" 64
+"$spall" voxelise "$dir/holed.obj" --voxel-size 0.05 -o "$dir/holed.vdb" --quiet > "$dir/holed.txt" 2> "$dir/err.txt" || fail "holed sphere: $(cat "$dir/err.txt")"
+grep -q "winding number" "$dir/err.txt" || fail "holed sphere: no note of the inside test: $(cat "$dir/err.txt")"
+awk '/volume:/ { exit !($2 > 13.4 && $2 < 14.8) }' "$dir/holed.txt" || fail "holed sphere: volume $(grep volume: "$dir/holed.txt")"
+if "$spall" voxelise "$dir/holed.obj" --voxel-size 0.05 --inside level-set -o "$dir/leak.vdb" --quiet > /dev/null 2> "$dir/err.txt"; then
+  fail "a near-empty level-set fill was accepted"
+fi
+grep -q "holed.obj: the voxels hold .* lost most of the volume" "$dir/err.txt" || fail "leaky fill: $(cat "$dir/err.txt")"
+[[ ! -e "$dir/leak.vdb" ]] || fail "leaky fill: output left behind"
+# Ctrl-C while voxelising a large mesh (320 000 triangles at 1 cm): stops within a second, exit
+# 130, nothing written
+$py "$dir/holed_sphere.py" "$dir/big-holed.obj" 400
+"$spall" voxelise "$dir/big-holed.obj" --voxel-size 0.01 -o "$dir/big.vdb" > /dev/null 2> "$dir/err.txt" &
+pid=$!
+for _ in $(seq 600); do grep -q "%" "$dir/err.txt" && break; sleep 0.05; done
+kill -s INT "$pid"
+start_ns=$(date +%s%N)
+status=0; wait "$pid" || status=$?
+stop_ms=$(( ($(date +%s%N) - start_ns) / 1000000 ))
+[[ $status -eq 130 ]] || fail "Ctrl-C while voxelising: exit status $status, expected 130: $(cat "$dir/err.txt")"
+(( stop_ms < 1000 )) || fail "Ctrl-C while voxelising: took $stop_ms ms to stop"
+grep -q "interrupted; nothing was written" "$dir/err.txt" || fail "Ctrl-C while voxelising: $(cat "$dir/err.txt")"
+[[ ! -e "$dir/big.vdb" ]] || fail "Ctrl-C while voxelising: output left behind"
 if "$spall" blast --tnt-kg 0 --distance-m 3 2> /dev/null; then fail "zero charge accepted"; fi
 # The burst follows the height above the ground; a surface burst 2 m up is refused.
 "$spall" blast --tnt-kg 20 --distance-m 4 --height-m 0.1 | grep -q "surface burst" || fail "a charge on the ground is not a surface burst"
@@ -138,7 +179,9 @@ $py "$compare" "$dir/default-1" "$dir/default-2" || fail "the default scene diff
 sed 's/"duration_s": 0.25/"duration_s": 0.5/' "$dir/scene.json" > "$dir/long.json"
 sed 's/"duration_s": 0.25/"duration_s": 0.5, "output": {"checkpoint_every_s": 1e-9}/' "$dir/scene.json" > "$dir/every.json"
 "$spall" run "$dir/long.json" -o "$dir/whole" --quiet --no-preview > /dev/null
+start_ns=$(date +%s%N)
 "$spall" run "$dir/every.json" -o "$dir/whole-every" --quiet --no-preview > /dev/null
+whole_s=$(( ($(date +%s%N) - start_ns) / 1000000 ))e-3
 for signal in KILL INT; do
   out="$dir/cut-$signal"
   if [[ $signal == KILL ]]; then scene=every whole=whole-every; else scene=long whole=whole; fi
@@ -168,6 +211,28 @@ kill -s KILL "$pid"; wait "$pid" 2> /dev/null || true
 "$spall" run --resume "$out" --quiet > /dev/null 2> "$dir/err.txt" || fail "early kill: --resume failed: $(cat "$dir/err.txt")"
 grep -q "started again from $out/scene.json" "$dir/err.txt" || fail "early kill: --resume did not say what it did: $(cat "$dir/err.txt")"
 $py "$compare" "$dir/whole" "$out" || fail "early kill: the restarted run differs from the uninterrupted one"
+# killed (SIGKILL) at random moments, resumed, killed again, until it finishes: each --resume
+# takes up whatever the kill left (a checkpoint, a frame half written, a resume half started) and
+# the run ends as the uninterrupted one. The moments are seeded, so they repeat from run to run.
+RANDOM=21
+out="$dir/cut-random"
+"$spall" run "$dir/every.json" -o "$out" --quiet --no-preview > /dev/null 2>&1 &
+pid=$!
+finished=0 delays=""
+for _ in 1 2 3; do
+  delay=$(awk -v r=$RANDOM -v t="$whole_s" 'BEGIN { printf "%.3f", (0.1 + 0.8 * r / 32767) * t }')
+  delays="$delays $delay"
+  sleep "$delay"
+  kill -s KILL "$pid" 2> /dev/null || true
+  status=0; wait "$pid" 2> /dev/null || status=$?
+  if [[ $status -eq 0 ]]; then finished=1; break; fi
+  "$spall" run --resume "$out" --quiet --no-preview > /dev/null 2> "$dir/err-random.txt" &
+  pid=$!
+done
+if [[ $finished -eq 0 ]]; then
+  wait "$pid" || fail "kills after$delays s: the last --resume failed: $(cat "$dir/err-random.txt")"
+fi
+$py "$compare" "$dir/whole-every" "$out" || fail "kills after$delays s: the resumed run differs from the uninterrupted one"
 # a full disk: a 2 MB tmpfs, about half of what the run writes. A clear error naming the file,
 # every frame and history row written so far readable, no partial file left looking whole, and
 # --resume finishes the run once there is room (here: after moving the directory elsewhere)

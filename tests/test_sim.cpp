@@ -2,6 +2,7 @@
 
 #include <spall/io/Scene.h>
 #include <spall/sim/Checkpoint.h>
+#include <spall/sim/MemoryBudget.h>
 #include <spall/sim/Simulation.h>
 
 #include <gtest/gtest.h>
@@ -302,4 +303,28 @@ TEST(Scene, BurstFollowsTheChargesHeightAboveTheGround)
     EXPECT_NE(errorOf(charges(R"({"position_m": [0, -4, 2.0], "tnt_kg": 20, "burst": "surface"})")).find("charges[0].burst: 'surface', but charge 0 is 2 m above the ground"),
               std::string::npos);
     EXPECT_NEAR(surfaceBurstHeightM(20.0), 2 * std::cbrt(3 * 20.0 / (4 * M_PI * 1600)), 1e-12);
+}
+
+// Issue 21: a scene too large for max_voxels or for the machine is refused before anything is
+// allocated, naming the figure and what to change.
+TEST(Scene, ObjectsBeyondTheVoxelBudgetOrTheMemoryAreRefusedBeforeVoxelising)
+{
+    auto scene = [](const std::string& extra) {
+        return R"({"voxel_size_m": 0.01, )" + extra +
+               R"("objects": [{"primitive": {"shape": "box", "size_m": [2, 2, 2]}, "position_m": [0, 0, 1]},
+                             {"primitive": {"shape": "box", "size_m": [2, 2, 2]}, "position_m": [5, 0, 1]}],
+               "charges": [{"position_m": [0, -4, 0.1], "tnt_kg": 1}]})";
+    };
+    // Each box alone (201^3 = 8.1 M voxels) is under the limit of 10 M; together they are not.
+    const std::string overVoxels = errorOf(scene(R"("max_voxels": 10000000, )"));
+    EXPECT_NE(overVoxels.find("max_voxels: the objects' bounding boxes hold up to 1.62e+07 voxels"), std::string::npos) << overVoxels;
+    // 24 bytes a voxel: 10^12 voxels need 24 TB, which no machine that runs this test has.
+    const double available = availableMemoryBytes();
+    ASSERT_GT(available, 0) << "MemAvailable is readable on Linux";
+    EXPECT_LT(available, 1e13);
+    const std::string overMemory = errorOf(R"({"voxel_size_m": 0.01, "max_voxels": 9000000000000000,
+        "objects": [{"primitive": {"shape": "box", "size_m": [100, 100, 100]}, "position_m": [0, 0, 50]}],
+        "charges": [{"position_m": [0, -60, 0.1], "tnt_kg": 1}]})");
+    EXPECT_NE(overMemory.find("voxel_size_m: up to 1e+12 voxels need about 2.4e+04 GB"), std::string::npos) << overMemory;
+    EXPECT_GT(estimateMemory(1e6).allBrokenBytes, 100 * estimateMemory(1e6).intactBytes) << "fragments cost far more than whole bodies";
 }

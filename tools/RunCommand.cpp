@@ -68,6 +68,7 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
     spall::RunOptions options;
     options.outputDirectory = outDir;
     options.interrupter = &stopRequest;
+    options.onNote = [](const std::string& note) { std::fprintf(stderr, "spall run: note: %s\n", note.c_str()); };
     options.maxFrames = frames;
     if (preview) options.previewPath = (std::filesystem::path(outDir) / "preview.png").string();
     const auto onFrame = progressBar(quiet);
@@ -86,8 +87,7 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
         try {
             report = spall::runScene(scene, options, onFrame);
         } catch (const spall::VoxeliseInterrupted& e) {
-            std::fprintf(stderr, "spall run: %s; no frame was written; start it again with: spall run --resume %s\n", e.what(), outDir.c_str());
-            return 130;
+            throw spall::VoxeliseInterrupted(std::string(e.what()) + "; no frame was written; start it again with: spall run --resume " + outDir);
         }
     }
     if (!quiet) std::fprintf(stderr, "\n");

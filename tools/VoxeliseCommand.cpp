@@ -93,8 +93,7 @@ int runVoxelise(const std::string& input, const std::string& primitiveSpec, cons
             ProgressPrinter progress("voxelising " + input, quiet);
             result = spall::voxeliseMesh(mesh, settings, input, &progress);
         } catch (const spall::VoxeliseInterrupted& e) {
-            std::fprintf(stderr, "\nspall voxelise: %s; nothing was written\n", e.what());
-            return 130;
+            throw spall::VoxeliseInterrupted(std::string(e.what()) + "; nothing was written");
         }
         result.notes.insert(result.notes.begin(), notes.begin(), notes.end());
     }

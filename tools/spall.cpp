@@ -5,6 +5,7 @@
 #include "Commands.h"
 
 #include <spall/core/Error.h>
+#include <spall/voxel/Voxelise.h>
 
 #include <atomic>
 #include <csignal>
@@ -69,6 +70,9 @@ int main(int argc, char** argv)
     } catch (const spall::InputError& e) {
         std::cerr << "spall: error: " << e.what() << "\n";
         return 2;
+    } catch (const spall::VoxeliseInterrupted& e) {
+        std::cerr << "\nspall: stopped: " << e.what() << "\n";
+        return 130;  // 128 + SIGINT, as a shell reports a command Ctrl-C stopped
 
     } catch (const std::exception& e) {
         std::cerr << "spall: error: " << e.what() << "\n";

@@ -175,6 +175,8 @@ RunReport runScene(const Scene& scene, const RunOptions& options, const std::fun
     writeFileAtomically((dir / "scene.json").string(), [&](std::ostream& out) { out << resolvedScene.dump(2) << "\n"; });
 
     Simulation sim(scene, options.interrupter);
+    if (options.onNote)
+        for (const std::string& note : sim.notes()) options.onNote(note);
     const int frameCount = options.maxFrames >= 0 ? std::min(options.maxFrames, scene.frameCount()) : scene.frameCount();
 
     std::unique_ptr<HistoryWriter> history;

@@ -4,10 +4,12 @@
 #include <spall/dynamics/Sleep.h>
 #include <spall/io/VdbIo.h>
 #include <spall/loads/BlastLoads.h>
+#include <spall/sim/MemoryBudget.h>
 
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <sstream>
 
 namespace spall {
 
@@ -25,19 +27,50 @@ void anchorToGround(Body& body, const GroundPlane& ground)
     }
 }
 
+/// Refuses, before anything is allocated, a scene whose objects' bounding boxes hold more voxels
+/// than max_voxels, or whose whole objects would not fit in the memory available.
+void checkSceneFits(const Scene& scene, const std::vector<TriangleMesh>& meshes)
+{
+    const double h = scene.voxelSizeM;
+    double upperBound = 0.0;
+    for (size_t i = 0; i < scene.objects.size(); ++i)
+        upperBound += scene.objects[i].primitive ? boundingBoxVoxels(*scene.objects[i].primitive, h) : boundingBoxVoxels(meshes[i], h);
+    std::ostringstream problem;
+    problem.precision(3);
+    if (upperBound > static_cast<double>(scene.maxVoxels)) {
+        problem << scene.sourceName << ": max_voxels: the objects' bounding boxes hold up to " << upperBound << " voxels at voxel_size_m "
+                << h << ", above max_voxels " << scene.maxVoxels << " (use a larger voxel_size_m: the count falls with its cube)";
+        throw InputError(problem.str());
+    }
+    const double needed = estimateMemory(upperBound).intactBytes, available = availableMemoryBytes();
+    if (available >= 0 && needed > available) {
+        problem << scene.sourceName << ": voxel_size_m: up to " << upperBound << " voxels need about " << needed / 1e9 << " GB, and "
+                << available / 1e9 << " GB of memory is available (use a larger voxel_size_m: memory falls with its cube)";
+        throw InputError(problem.str());
+    }
+}
+
 }  // namespace
 
 Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(scene)
 {
     initialiseOpenVdb();
     mField = std::make_unique<BlastField>(scene.charges, scene.blast);
-    VoxeliseSettings vs;
-    vs.voxelSizeM = scene.voxelSizeM;
-    vs.maxVoxels = scene.maxVoxels;
+    std::vector<TriangleMesh> meshes(scene.objects.size());
+    for (size_t i = 0; i < scene.objects.size(); ++i)
+        if (!scene.objects[i].primitive) {
+            std::vector<std::string> notes;
+            meshes[i] = loadMesh(scene.objects[i].meshPath, &notes);
+            for (const std::string& note : notes) mNotes.push_back(scene.objects[i].meshPath + ": " + note);
+        }
+    checkSceneFits(scene, meshes);
     for (size_t i = 0; i < scene.objects.size(); ++i) {
         const ObjectSpec& spec = scene.objects[i];
-        VoxeliseResult vox = spec.primitive ? voxelisePrimitive(*spec.primitive, vs)
-                                            : voxeliseMesh(loadMesh(spec.meshPath), vs, spec.meshPath, interrupter);
+        VoxeliseSettings vs;
+        vs.voxelSizeM = scene.voxelSizeM;
+        vs.maxVoxels = scene.maxVoxels - mState.initialVoxels;  // the limit is the scene's, over all objects
+        VoxeliseResult vox = spec.primitive ? voxelisePrimitive(*spec.primitive, vs) : voxeliseMesh(meshes[i], vs, spec.meshPath, interrupter);
+        for (const std::string& note : vox.notes) mNotes.push_back(spec.meshPath + ": " + note);
         const Material& material = scene.material(spec.material);
         validateMaterial(material);
         Body body = makeBody(vox.grid, scene.voxelSizeM, material.densityKgM3);
@@ -71,7 +104,21 @@ Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(sc
         if (scene.fracture.algorithm == FractureAlgorithm::DavisonStevens) body.damage = zeroDamageLike(*body.grid);
         mState.bodies.push_back(std::move(body));
     }
+    noteFragmentMemory();
     mStats.minDtS = scene.timeStep.maxTimeStepS;
+}
+
+void Simulation::noteFragmentMemory()
+{
+    const double available = availableMemoryBytes();
+    const double allBroken = estimateMemory(static_cast<double>(mState.initialVoxels)).allBrokenBytes;
+    if (available < 0 || allBroken <= available) return;
+    std::ostringstream note;
+    note.precision(3);
+    note << "if all " << mState.initialVoxels << " voxels broke free (the fracture rules can do that under a strong blast) "
+         << "the run would need about " << allBroken / 1e9 << " GB, and " << available / 1e9
+         << " GB is available: a larger voxel_size_m needs fewer (memory falls with its cube)";
+    mNotes.push_back(note.str());
 }
 
 Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene), mState(std::move(state))

@@ -29,13 +29,28 @@ void checkVoxelSize(double h)
     }
 }
 
-void checkVoxelBudget(const Eigen::Vector3d& extentM, double h, int64_t maxVoxels, const std::string& what)
+double boxVoxels(const Eigen::Vector3d& extentM, double h)
 {
-    const double estimate = std::ceil(extentM.x() / h + 1) * std::ceil(extentM.y() / h + 1) * std::ceil(extentM.z() / h + 1);
+    return std::ceil(extentM.x() / h + 1) * std::ceil(extentM.y() / h + 1) * std::ceil(extentM.z() / h + 1);
+}
+
+Eigen::Vector3d primitiveHalfExtentM(const Primitive& primitive)
+{
+    const Eigen::Vector3d& s = primitive.sizeM;
+    switch (primitive.shape) {
+    case PrimitiveShape::Box: return 0.5 * s;
+    case PrimitiveShape::Sphere: return Eigen::Vector3d::Constant(s.x());
+    case PrimitiveShape::Cylinder: return Eigen::Vector3d(s.x(), s.x(), 0.5 * s.z());
+    }
+    return 0.5 * s;
+}
+
+void checkVoxelBudget(double estimate, double h, int64_t maxVoxels, const std::string& what)
+{
     if (estimate > static_cast<double>(maxVoxels)) {
         std::ostringstream msg;
-        msg << what << ": at voxel size " << h << " m the bounding box holds about " << static_cast<double>(estimate)
-            << " voxels, above the limit of " << maxVoxels << " (raise --max-voxels or use a larger voxel size)";
+        msg << what << ": at voxel size " << h << " m the bounding box holds about " << estimate << " voxels, above the limit of "
+            << maxVoxels << " (max_voxels in a scene, --max-voxels for spall voxelise; or use a larger voxel size)";
         throw InputError(msg.str());
     }
 }
@@ -156,18 +171,22 @@ void noteRepairs(VoxeliseResult& result, const MeshTopology& topology, InsideTes
 
 }  // namespace
 
+double boundingBoxVoxels(const TriangleMesh& mesh, double h)
+{
+    Eigen::AlignedBox3f bounds;
+    for (const auto& p : mesh.positionsM) bounds.extend(p);
+    return mesh.positionsM.empty() ? 0.0 : boxVoxels(bounds.sizes().cast<double>(), h);
+}
+
+double boundingBoxVoxels(const Primitive& primitive, double h) { return boxVoxels(2.0 * primitiveHalfExtentM(primitive), h); }
+
 VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& settings, const std::string& sourceName,
                             Interrupter* interrupter)
 {
     checkVoxelSize(settings.voxelSizeM);
     const double h = settings.voxelSizeM;
     if (mesh.triangles.empty()) throw InputError(sourceName + ": mesh has no faces");
-    Eigen::Vector3f lo = mesh.positionsM[0], hi = lo;
-    for (const auto& p : mesh.positionsM) {
-        lo = lo.cwiseMin(p);
-        hi = hi.cwiseMax(p);
-    }
-    checkVoxelBudget((hi - lo).cast<double>(), h, settings.maxVoxels, sourceName);
+    checkVoxelBudget(boundingBoxVoxels(mesh, h), h, settings.maxVoxels, sourceName);
 
     TriangleMesh outward = mesh;
     const MeshTopology topology = orientOutward(outward);
@@ -202,13 +221,8 @@ VoxeliseResult voxelisePrimitive(const Primitive& primitive, const VoxeliseSetti
     const double h = settings.voxelSizeM;
     const Eigen::Vector3d& s = primitive.sizeM;
     if (!(s.minCoeff() > 0.0) || !s.allFinite()) throw InputError("primitive size must be positive and finite (unit: m)");
-    Eigen::Vector3d half = Eigen::Vector3d::Zero();
-    switch (primitive.shape) {
-    case PrimitiveShape::Box: half = 0.5 * s; break;
-    case PrimitiveShape::Sphere: half = Eigen::Vector3d::Constant(s.x()); break;
-    case PrimitiveShape::Cylinder: half = Eigen::Vector3d(s.x(), s.x(), 0.5 * s.z()); break;
-    }
-    checkVoxelBudget(2.0 * half, h, settings.maxVoxels, "primitive");
+    const Eigen::Vector3d half = primitiveHalfExtentM(primitive);
+    checkVoxelBudget(boundingBoxVoxels(primitive, h), h, settings.maxVoxels, "primitive");
 
     // A box is rounded to whole voxels per axis and centred: an odd count puts a voxel centre on
     // the axis (offset 0), an even count puts a face there (offset h/2), so the voxel cubes tile the

@@ -18,6 +18,9 @@ struct RunOptions {
     int previewFrames = 6;
     /// Asked while voxelising large meshes; may be null.
     Interrupter* interrupter = nullptr;
+    /// Told what setting the scene up found that a user should know (mesh repairs, memory at
+    /// risk), before the first step; may be empty.
+    std::function<void(const std::string&)> onNote;
 };
 
 /// What the progress callback sees after each frame.

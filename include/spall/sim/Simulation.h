@@ -79,6 +79,8 @@ public:
     const BlastField& field() const { return *mField; }
     const Scene& scene() const { return mScene; }
     int64_t initialVoxelCount() const { return mState.initialVoxels; }
+    /// What setting the scene up found that a user should know (mesh repairs, memory at risk).
+    const std::vector<std::string>& notes() const { return mNotes; }
     StepStats takeStepStats();
 
     /// Called after every step (costs nothing when unset).
@@ -97,6 +99,8 @@ private:
     /// The paper's adaptive step: halve while bodies interpenetrate beyond the tolerance.
     void adaptStepToPenetration(double maxPenetrationM);
     std::pair<Eigen::Vector3d, Eigen::Vector3d> totalMomenta() const;
+    /// A note when the memory available could not hold every voxel as a fragment of its own.
+    void noteFragmentMemory();
 
     Scene mScene;
     std::unique_ptr<BlastField> mField;
@@ -104,6 +108,7 @@ private:
     StepStats mStats;
     std::function<void(const Simulation&, const StepRecord&)> mObserver;
     StepRecord mRecord;  ///< filled while a step runs, for the observer
+    std::vector<std::string> mNotes;
 };
 
 /// Bodies alone in a world (no charges, no fracture), for the collision benchmark and tests.

@@ -5,7 +5,7 @@
 #include <spall/core/Error.h>
 #include <spall/voxel/Body.h>
 
-#include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <stdexcept>
 #include <string>
@@ -77,5 +77,10 @@ VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& se
                             const std::string& sourceName, Interrupter* interrupter = nullptr);
 
 VoxeliseResult voxelisePrimitive(const Primitive& primitive, const VoxeliseSettings& settings);
+
+/// Voxels in the object's bounding box at voxel size h (unit: m): an upper bound on its voxel
+/// count, known before anything is allocated.
+double boundingBoxVoxels(const TriangleMesh& mesh, double h);
+double boundingBoxVoxels(const Primitive& primitive, double h);
 
 }  // namespace spall
