@@ -31,6 +31,16 @@ if "$spall" voxelise "$dir/bad.stl" --voxel-size 0.1 -o "$dir/bad.vdb" 2> "$dir/
 grep -q "bad.stl" "$dir/err.txt" || fail "error does not name the file: $(cat "$dir/err.txt")"
 [[ ! -e "$dir/bad.vdb" ]] || fail "output left behind"
 if "$spall" voxelise --primitive box:1,1,1 --voxel-size -1 -o "$dir/neg.vdb" 2> /dev/null; then fail "negative voxel size accepted"; fi
+# a header that claims 3.5 billion vertices in a 45-byte file: refused in well under a second,
+# with or without a memory limit, naming the counts
+printf 'OFF\n3500000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n' > "$dir/huge.off"
+for limit in unlimited 2000000; do
+  start_ns=$(date +%s%N)
+  if (ulimit -v "$limit"; "$spall" voxelise "$dir/huge.off" --voxel-size 0.1 -o "$dir/huge.vdb" 2> "$dir/err.txt"); then fail "huge header accepted"; fi
+  took_ms=$(( ($(date +%s%N) - start_ns) / 1000000 ))
+  grep -q "huge.off.*declares 3500000000 vertices" "$dir/err.txt" || fail "huge header (ulimit -v $limit): $(cat "$dir/err.txt")"
+  (( took_ms < 500 )) || fail "huge header (ulimit -v $limit): took $took_ms ms"
+done
 # a sphere (r = 1.5 m, 14.1 m^3) with its top cap cut away: the winding number fills it; the
 # level set, forced, loses the inside through the hole and is refused
 cat > "$dir/holed_sphere.py" <<'PY'

@@ -48,6 +48,10 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(, "material": "cheese"}]})").find("objects[0].material"), std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(, "spin": 1}]})").find("objects[0].spin: unknown key"), std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{"mesh": "missing.obj"}]})").find("missing.obj"), std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(, "shell_thickness_m": 0.2}]})").find("objects[0].shell_thickness_m: applies to meshes only"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(, "inside": "level-set"}]})").find("objects[0].inside: applies to meshes only"),
+              std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "charges": [{"position_m": [0, 0, 0], "tnt_kg": 1}]})").find("inside object"),
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "charges": [{"tnt_kg": -2}]})").find("charges[0].tnt_kg"), std::string::npos);
@@ -105,7 +109,9 @@ const char* kEveryKeyScene = R"({
   "materials": {"stone": {"density_kg_m3": 2500, "mean_yield_Pa": 60000, "yield_variation": 0.2, "weakening_fraction": 0.3,
                           "orientation_factor": 0.05, "damage_rate_per_s": 200, "damage_stress_scale_per_Pa": 1e-5}},
   "objects": [{"name": "block", "primitive": {"shape": "box", "size_m": [1, 1, 1]}, "position_m": [0, 0, 0.5],
-               "rotation_deg": [0, 0, 5], "material": "stone", "anchor": "ground"}],
+               "rotation_deg": [0, 0, 5], "material": "stone", "anchor": "ground"},
+              {"name": "sheet", "mesh": "/meshes/sheet.obj", "position_m": [0, 0, 2], "rotation_deg": [0, 0, 0],
+               "material": "stone", "anchor": "none", "inside": "winding-number", "shell_thickness_m": 0.2}],
   "charges": [{"position_m": [0, -3, 0], "tnt_kg": 2, "detonation_time_s": 0.01, "burst": "free-air"}],
   "blast": {"dataset": "kinney-graham", "table_nodes_per_decade": 64},
   "fracture": {"algorithm": "davison-stevens", "weakening": false, "orientation": false, "min_fragment_voxels": 3,

@@ -235,7 +235,7 @@ TEST(Voxelise, MeshesWithHolesAreFilledByTheWindingNumber)
     }
 
     // A unit box missing its bottom face.
-    TriangleMesh topless = boxMesh({0, 0, 0}, {1, 1, 1});
+    TriangleMesh topless = boxMesh({0.01f, 0.01f, 0.01f}, {1.01f, 1.01f, 1.01f});  // no voxel centre on a face
     topless.triangles.erase(topless.triangles.begin(), topless.triangles.begin() + 2);
     EXPECT_NEAR(filledVolumeM3(topless, 0.05, InsideTest::Auto), 1.0, 0.05);
 
@@ -273,6 +273,9 @@ TEST(Voxelise, AnOpenSurfaceThatEnclosesNothingIsRefused)
     initialiseOpenVdb();
     TriangleMesh plane;
     plane.positionsM = {{0, 0, 0}, {2, 0, 0}, {2, 2, 0.1f}, {0, 2, 0.1f}};
+    TriangleMesh onVoxelCentres = plane;  // every voxel centre on its diagonal lies on the surface
+    for (auto& p : onVoxelCentres.positionsM) p.z() = 0;
+    EXPECT_THROW(filledVolumeM3(onVoxelCentres, 0.05, InsideTest::Auto), InputError);
     plane.triangles = {{0, 1, 2}, {0, 2, 3}};
     try {
         filledVolumeM3(plane, 0.05, InsideTest::Auto);
@@ -280,6 +283,25 @@ TEST(Voxelise, AnOpenSurfaceThatEnclosesNothingIsRefused)
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("open surface"), std::string::npos) << e.what();
     }
+}
+
+TEST(Voxelise, AnOpenSurfaceBecomesAShellOfTheThicknessAsked)
+{
+    // A 2 m square sheet, 0.3 m thick: the voxels within 0.15 m of it make the square's parallel
+    // body, whose volume Steiner's formula gives: 2 r A + (pi r^2 / 2) P + (4/3) pi r^3.
+    initialiseOpenVdb();
+    TriangleMesh sheet;
+    sheet.positionsM = {{0, 0, 0.013f}, {2, 0, 0.013f}, {2, 2, 0.013f}, {0, 2, 0.013f}};
+    sheet.triangles = {{0, 1, 2}, {0, 2, 3}};
+    VoxeliseSettings s;
+    s.voxelSizeM = 0.025;
+    s.shellThicknessM = 0.3;
+    const double r = 0.15, area = 4.0, perimeter = 8.0;
+    const double steiner = 2 * r * area + M_PI * r * r / 2 * perimeter + 4.0 / 3.0 * M_PI * r * r * r;
+    const VoxeliseResult result = voxeliseMesh(sheet, s, "sheet");
+    EXPECT_NEAR(result.voxelCount * std::pow(0.025, 3), steiner, 0.05 * steiner);
+    s.shellThicknessM = 0.01;
+    EXPECT_THROW(voxeliseMesh(sheet, s, "sheet"), InputError) << "a shell thinner than a voxel";
 }
 
 TEST(Voxelise, StrayPointsAndLinesAreDropped)

@@ -135,6 +135,9 @@ void addVoxeliseCommand(CLI::App& app, CommandAction& action)
     sub->add_option("--max-voxels", o->settings.maxVoxels, "Refuse results with more voxels than this");
     sub->add_option("--inside", o->inside,
                     "How a mesh's inside is found: auto (level set if watertight, else winding number), level-set, winding-number");
+    sub->add_option("--shell-thickness", o->settings.shellThicknessM,
+                    "Instead of the inside, a shell this thick around the surface, for a sheet or a terrain patch (m)")
+        ->check(CLI::NonNegativeNumber);
     sub->add_flag("--quiet", o->quiet, "No progress on stderr");
     sub->callback([o, &action] {
         action = [o] {

@@ -24,6 +24,8 @@ const std::vector<Field<ObjectSpec>>& fieldTable<ObjectSpec>()
         {"rotation_deg", &ObjectSpec::rotationDeg},
         {"material", &ObjectSpec::material},
         {"anchor", choice(&ObjectSpec::anchor)},
+        {"inside", choice(&ObjectSpec::inside)},
+        {"shell_thickness_m", &ObjectSpec::shellThicknessM, closed(0, 1e3)},
     };
     return table;
 }
@@ -129,6 +131,8 @@ ObjectSpec readObject(ObjectReader& o, size_t index, const Scene& scene, const s
         spec.meshPath = std::filesystem::absolute(mesh).lexically_normal().string();
     } else {
         spec.primitive = readPrimitive(*o.child("primitive"));
+        if (spec.inside != InsideTest::Auto) o.fail(o.keyPath("inside"), "applies to meshes only; a primitive's inside is exact");
+        if (spec.shellThicknessM > 0) o.fail(o.keyPath("shell_thickness_m"), "applies to meshes only");
     }
     return spec;
 }

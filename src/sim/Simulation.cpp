@@ -69,6 +69,8 @@ Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(sc
         VoxeliseSettings vs;
         vs.voxelSizeM = scene.voxelSizeM;
         vs.maxVoxels = scene.maxVoxels - mState.initialVoxels;  // the limit is the scene's, over all objects
+        vs.insideTest = spec.inside;
+        vs.shellThicknessM = spec.shellThicknessM;
         VoxeliseResult vox = spec.primitive ? voxelisePrimitive(*spec.primitive, vs) : voxeliseMesh(meshes[i], vs, spec.meshPath, interrupter);
         for (const std::string& note : vox.notes) mNotes.push_back(spec.meshPath + ": " + note);
         const Material& material = scene.material(spec.material);

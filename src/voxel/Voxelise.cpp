@@ -112,6 +112,14 @@ TriangleMesh loadMesh(const std::string& path, std::vector<std::string>* notes)
 
 namespace {
 
+/// spall's interrupter as OpenVDB asks for one.
+struct VdbInterrupter {
+    Interrupter* inner;
+    void start(const char* = nullptr) {}
+    void end() {}
+    bool wasInterrupted(int percent = -1) { return inner && inner->wasInterrupted(percent); }
+};
+
 /// OpenVDB builds an unsigned distance band and flood-fills the sign: exact for watertight meshes
 /// whatever their winding; a hole wider than the 3-voxel band lets the outside flood in.
 void fillLevelSetInterior(const TriangleMesh& mesh, LinkGrid& solid, const std::string& sourceName, Interrupter* interrupter)
@@ -122,18 +130,37 @@ void fillLevelSetInterior(const TriangleMesh& mesh, LinkGrid& solid, const std::
     std::vector<openvdb::Vec3I> triangles;
     triangles.reserve(mesh.triangles.size());
     for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
-    struct VdbInterrupter {
-        Interrupter* inner;
-        void start(const char* = nullptr) {}
-        void end() {}
-        bool wasInterrupted(int percent = -1) { return inner && inner->wasInterrupted(percent); }
-    } adaptor{interrupter};
+    VdbInterrupter adaptor{interrupter};
     const auto sdf = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(adaptor, solid.transform(), points, triangles, 3.0f);
     // OpenVDB returns what it has when interrupted: that is no result.
     if (adaptor.wasInterrupted()) throw VoxeliseInterrupted(sourceName + ": voxelising was interrupted");
     auto interior = openvdb::tools::sdfInteriorMask(*sdf);
     interior->tree().voxelizeActiveTiles();
     copyActiveTopology(solid.tree(), interior->tree(), 0);
+}
+
+/// Voxels whose centres lie within half the thickness of the surface: OpenVDB's unsigned distance
+/// (in metres) over a band just wide enough.
+void fillShell(const TriangleMesh& mesh, double thicknessM, LinkGrid& solid, const std::string& sourceName, Interrupter* interrupter)
+{
+    const double h = solid.voxelSize()[0];
+    if (thicknessM < h) {
+        std::ostringstream msg;
+        msg << sourceName << ": a shell " << thicknessM << " m thick is thinner than a voxel (" << h << " m): it would not hold together";
+        throw InputError(msg.str());
+    }
+    std::vector<openvdb::Vec3s> points;
+    for (const auto& p : mesh.positionsM) points.emplace_back(p.x(), p.y(), p.z());
+    std::vector<openvdb::Vec3I> triangles;
+    for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
+    VdbInterrupter adaptor{interrupter};
+    const float halfWidthVoxels = static_cast<float>(0.5 * thicknessM / h) + 1.0f;
+    const auto distance = openvdb::tools::meshToUnsignedDistanceField<openvdb::FloatGrid>(
+        adaptor, solid.transform(), points, triangles, std::vector<openvdb::Vec4I>(), halfWidthVoxels);
+    if (adaptor.wasInterrupted()) throw VoxeliseInterrupted(sourceName + ": voxelising was interrupted");
+    auto accessor = solid.getAccessor();
+    for (auto it = distance->cbeginValueOn(); it; ++it)
+        if (*it <= 0.5 * thicknessM) accessor.setValueOn(it.getCoord(), 0);
 }
 
 std::string cubicMetres(double v)
@@ -194,23 +221,26 @@ VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& se
     if (test == InsideTest::Auto) test = topology.openEdges == 0 ? InsideTest::LevelSet : InsideTest::WindingNumber;
     VoxeliseResult result;
     result.enclosedVolumeM3 = topology.enclosedVolumeM3;
-    noteRepairs(result, topology, test);
+    if (settings.shellThicknessM == 0.0) noteRepairs(result, topology, test);
     result.grid = newLinkGrid(h);
-    if (test == InsideTest::LevelSet)
+    if (settings.shellThicknessM > 0.0)
+        fillShell(outward, settings.shellThicknessM, *result.grid, sourceName, interrupter);
+    else if (test == InsideTest::LevelSet)
         fillLevelSetInterior(outward, *result.grid, sourceName, interrupter);
     else
         fillWindingNumberInterior(outward, *result.grid, sourceName, interrupter);
     result.voxelCount = static_cast<int64_t>(result.grid->activeVoxelCount());
     if (result.voxelCount == 0) {
         throw InputError(sourceName + ": the mesh encloses no voxel centre at voxel size " + std::to_string(h) + " m (" +
-                         (topology.openEdges > 0 ? "it is an open surface, such as a plane or a terrain patch, that encloses nothing"
+                         (topology.openEdges > 0 ? "it is an open surface, such as a plane or a terrain patch, that encloses nothing; "
+                                                   "shell_thickness_m (--shell-thickness) makes a solid of it"
                                                  : "it is flat or thinner than a voxel") + ")");
     }
     if (result.voxelCount > settings.maxVoxels) {
         throw InputError(sourceName + ": " + std::to_string(result.voxelCount) + " voxels, above the limit of " +
                          std::to_string(settings.maxVoxels));
     }
-    checkFilledVolume(result, h, sourceName);
+    if (settings.shellThicknessM == 0.0) checkFilledVolume(result, h, sourceName);
     linkAllNeighbours(*result.grid);
     return result;
 }

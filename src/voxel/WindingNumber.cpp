@@ -23,6 +23,9 @@ double solidAngle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eige
 {
     const double la = a.norm(), lb = b.norm(), lc = c.norm();
     const double numerator = a.dot(b.cross(c));
+    // In the triangle's plane the angle is 0 beside it and undefined on it: a point on the
+    // surface takes only what the rest of the mesh gives, so a lone sheet has no inside.
+    if (numerator == 0.0) return 0.0;
     const double denominator = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
     return 2.0 * std::atan2(numerator, denominator);
 }

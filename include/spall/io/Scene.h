@@ -32,6 +32,8 @@ struct ObjectSpec {
     Eigen::Vector3d rotationDeg = Eigen::Vector3d::Zero();   ///< about x, then y, then z, world axes (unit: degrees)
     std::string material = "brick-masonry";
     AnchorMode anchor = AnchorMode::None;
+    InsideTest inside = InsideTest::Auto;  ///< meshes only (docs/voxelisation.md)
+    double shellThicknessM = 0.0;          ///< meshes only: > 0 makes a shell of the surface (unit: m)
 };
 
 struct OutputSettings {

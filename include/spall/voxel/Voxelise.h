@@ -26,6 +26,9 @@ struct VoxeliseSettings {
     double voxelSizeM = 0.05;          ///< edge of a voxel (unit: m)
     int64_t maxVoxels = 200'000'000;   ///< refuse larger results (unit: voxels)
     InsideTest insideTest = InsideTest::Auto;
+    /// Above 0: instead of its inside, the voxels whose centres lie within half this of the
+    /// surface, for surfaces with no inside (a sheet, a terrain patch) (unit: m).
+    double shellThicknessM = 0.0;
 };
 
 enum class PrimitiveShape { Box, Sphere, Cylinder };
