@@ -50,64 +50,83 @@ void checkSceneFits(const Scene& scene, const std::vector<TriangleMesh>& meshes)
     }
 }
 
+/// A charge inside an object would need contact detonation physics the model does not have.
+void refuseChargesInside(const Body& body, const std::string& objectName, const Scene& scene)
+{
+    for (size_t c = 0; c < scene.charges.size(); ++c) {
+        const Eigen::Vector3d local = (body.motion.orientation.inverse() * (scene.charges[c].positionM - body.motion.positionM) +
+                                       body.mass.centreOfMassLocalM) / body.voxelSizeM;
+        const openvdb::Coord ijk(static_cast<int>(std::lround(local.x())), static_cast<int>(std::lround(local.y())),
+                                 static_cast<int>(std::lround(local.z())));
+        if (body.grid->tree().isValueOn(ijk))
+            throw InputError(scene.sourceName + ": charges[" + std::to_string(c) + "].position_m: the charge is inside object '" + objectName + "'");
+    }
+}
+
 }  // namespace
 
 Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(scene)
 {
     initialiseOpenVdb();
     mField = std::make_unique<BlastField>(scene.charges, scene.blast);
-    std::vector<TriangleMesh> meshes(scene.objects.size());
-    for (size_t i = 0; i < scene.objects.size(); ++i)
-        if (!scene.objects[i].primitive) {
-            std::vector<std::string> notes;
-            meshes[i] = loadMesh(scene.objects[i].meshPath, &notes);
-            for (const std::string& note : notes) mNotes.push_back(scene.objects[i].meshPath + ": " + note);
-        }
+    const std::vector<TriangleMesh> meshes = loadMeshes();
     checkSceneFits(scene, meshes);
     for (size_t i = 0; i < scene.objects.size(); ++i) {
-        const ObjectSpec& spec = scene.objects[i];
-        VoxeliseSettings vs;
-        vs.voxelSizeM = scene.voxelSizeM;
-        vs.maxVoxels = scene.maxVoxels - mState.initialVoxels;  // the limit is the scene's, over all objects
-        vs.insideTest = spec.inside;
-        vs.shellThicknessM = spec.shellThicknessM;
-        VoxeliseResult vox = spec.primitive ? voxelisePrimitive(*spec.primitive, vs) : voxeliseMesh(meshes[i], vs, spec.meshPath, interrupter);
-        for (const std::string& note : vox.notes) mNotes.push_back(spec.meshPath + ": " + note);
-        const Material& material = scene.material(spec.material);
-        validateMaterial(material);
-        Body body = makeBody(vox.grid, scene.voxelSizeM, material.densityKgM3);
-        body.id = mState.nextId++;
-        body.materialIndex = static_cast<int>(std::find_if(scene.materials.begin(), scene.materials.end(),
-                                                           [&](const Material& m) { return m.name == spec.material; }) -
-                                              scene.materials.begin());
-        if (body.materialIndex >= static_cast<int>(scene.materials.size())) {
-            mScene.materials.push_back(material);
-            body.materialIndex = static_cast<int>(mScene.materials.size() - 1);
-        }
-        // world = t + Q (index h + offset): the centre of mass goes to t + Q (c + offset).
-        body.motion.orientation = rotationFromDegrees(spec.rotationDeg);
-        body.motion.positionM = spec.positionM + body.motion.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
-        if (spec.anchor == AnchorMode::Ground) {
-            anchorToGround(body, scene.world.ground);
-            refreshDerivedData(body);
-            body.motion.positionM = spec.positionM + body.motion.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
-            if (!body.anchored) throw InputError(scene.sourceName + ": objects[" + std::to_string(i) + "].anchor: no voxel of '" + spec.name + "' touches the ground");
-        }
-        // A charge inside an object would need contact detonation physics the model does not have.
-        for (size_t c = 0; c < scene.charges.size(); ++c) {
-            const Eigen::Vector3d local = (body.motion.orientation.inverse() * (scene.charges[c].positionM - body.motion.positionM) +
-                                           body.mass.centreOfMassLocalM) / body.voxelSizeM;
-            const openvdb::Coord ijk(static_cast<int>(std::lround(local.x())), static_cast<int>(std::lround(local.y())),
-                                     static_cast<int>(std::lround(local.z())));
-            if (body.grid->tree().isValueOn(ijk))
-                throw InputError(scene.sourceName + ": charges[" + std::to_string(c) + "].position_m: the charge is inside object '" + spec.name + "'");
-        }
+        Body body = placeObject(i, voxeliseObject(scene.objects[i], meshes[i], interrupter));
         mState.initialVoxels += body.mass.voxelCount;
         if (scene.fracture.algorithm == FractureAlgorithm::DavisonStevens) body.damage = zeroDamageLike(*body.grid);
         mState.bodies.push_back(std::move(body));
     }
     noteFragmentMemory();
     mStats.minDtS = scene.timeStep.maxTimeStepS;
+}
+
+std::vector<TriangleMesh> Simulation::loadMeshes()
+{
+    std::vector<TriangleMesh> meshes(mScene.objects.size());
+    for (size_t i = 0; i < mScene.objects.size(); ++i) {
+        if (mScene.objects[i].primitive) continue;
+        std::vector<std::string> notes;
+        meshes[i] = loadMesh(mScene.objects[i].meshPath, &notes);
+        for (const std::string& note : notes) mNotes.push_back(mScene.objects[i].meshPath + ": " + note);
+    }
+    return meshes;
+}
+
+VoxeliseResult Simulation::voxeliseObject(const ObjectSpec& spec, const TriangleMesh& mesh, Interrupter* interrupter)
+{
+    VoxeliseSettings vs;
+    vs.voxelSizeM = mScene.voxelSizeM;
+    vs.maxVoxels = mScene.maxVoxels - mState.initialVoxels;  // the limit is the scene's, over all objects
+    vs.insideTest = spec.inside;
+    vs.shellThicknessM = spec.shellThicknessM;
+    VoxeliseResult vox = spec.primitive ? voxelisePrimitive(*spec.primitive, vs) : voxeliseMesh(mesh, vs, spec.meshPath, interrupter);
+    for (const std::string& note : vox.notes) mNotes.push_back(spec.meshPath + ": " + note);
+    return vox;
+}
+
+Body Simulation::placeObject(size_t index, const VoxeliseResult& vox)
+{
+    const ObjectSpec& spec = mScene.objects[index];
+    const Material material = mScene.material(spec.material);
+    validateMaterial(material);
+    Body body = makeBody(vox.grid, mScene.voxelSizeM, material.densityKgM3);
+    body.id = mState.nextId++;
+    const auto known = std::find_if(mScene.materials.begin(), mScene.materials.end(), [&](const Material& m) { return m.name == spec.material; });
+    body.materialIndex = static_cast<int>(known - mScene.materials.begin());
+    if (known == mScene.materials.end()) mScene.materials.push_back(material);  // a preset the scene did not list
+    // world = t + Q (index h + offset): the centre of mass goes to t + Q (c + offset).
+    body.motion.orientation = rotationFromDegrees(spec.rotationDeg);
+    body.motion.positionM = spec.positionM + body.motion.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
+    if (spec.anchor == AnchorMode::Ground) {
+        anchorToGround(body, mScene.world.ground);
+        refreshDerivedData(body);
+        body.motion.positionM = spec.positionM + body.motion.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
+        if (!body.anchored)
+            throw InputError(mScene.sourceName + ": objects[" + std::to_string(index) + "].anchor: no voxel of '" + spec.name + "' touches the ground");
+    }
+    refuseChargesInside(body, spec.name, mScene);
+    return body;
 }
 
 void Simulation::noteFragmentMemory()

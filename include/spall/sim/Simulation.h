@@ -101,6 +101,10 @@ private:
     std::pair<Eigen::Vector3d, Eigen::Vector3d> totalMomenta() const;
     /// A note when the memory available could not hold every voxel as a fragment of its own.
     void noteFragmentMemory();
+    /// Setting up: each object's mesh (empty for primitives), its voxels, its body in place.
+    std::vector<TriangleMesh> loadMeshes();
+    VoxeliseResult voxeliseObject(const ObjectSpec& spec, const TriangleMesh& mesh, Interrupter* interrupter);
+    Body placeObject(size_t index, const VoxeliseResult& vox);
 
     Scene mScene;
     std::unique_ptr<BlastField> mField;
