@@ -350,6 +350,10 @@ TEST(Voxelise, BadInputNamesTheFileAndReason)
     std::ofstream(dir / "huge.ply") << "ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\n"
                                        "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n";
     expectError((dir / "huge.ply").string(), "declares 4000000000 vertex, 1 face");
+    std::ofstream(dir / "bad-index.ply") << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                            "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                                            "0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n";
+    expectError((dir / "bad-index.ply").string(), "uses vertex");
     {
         std::ofstream stl(dir / "huge.stl", std::ios::binary);
         const std::string header(80, 'x');

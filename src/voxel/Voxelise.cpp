@@ -101,6 +101,10 @@ TriangleMesh loadMesh(const std::string& path, std::vector<std::string>* notes)
                 ++skipped;
                 continue;
             }
+            for (unsigned k = 0; k < 3; ++k)
+                if (face.mIndices[k] >= am->mNumVertices)
+                    throw InputError(path + ": face " + std::to_string(f) + " of mesh " + std::to_string(m) + " uses vertex " +
+                                     std::to_string(face.mIndices[k]) + " of " + std::to_string(am->mNumVertices));
             mesh.triangles.emplace_back(base + int(face.mIndices[0]), base + int(face.mIndices[1]), base + int(face.mIndices[2]));
         }
     }
