@@ -353,7 +353,13 @@ TEST(Voxelise, BadInputNamesTheFileAndReason)
     std::ofstream(dir / "bad-index.ply") << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                                             "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
                                             "0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n";
-    expectError((dir / "bad-index.ply").string(), "uses vertex");
+    expectError((dir / "bad-index.ply").string(), "is out of range");
+    // Found by fuzz_mesh: a face line of NUL bytes left a face with no indices, on which assimp's
+    // triangulation aborts the process (an assertion); its validation step refuses it first.
+    std::ofstream(dir / "nul-face.off") << "OFF\n8 10 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n3 4 5 7\n"
+                                           "3 4 7 6\n3 0 1 5\n3 0 5 4\n3 2 6 7"
+                                        << std::string(87, '\0') << "\n3 2 7 3\n3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n";
+    expectError((dir / "nul-face.off").string(), "Validation failed");
     {
         std::ofstream stl(dir / "huge.stl", std::ios::binary);
         const std::string header(80, 'x');

@@ -79,8 +79,9 @@ TriangleMesh loadMesh(const std::string& path, std::vector<std::string>* notes)
     checkDeclaredCounts(path);
     Assimp::Importer importer;
     // Points and lines come through as faces of one or two corners, counted and dropped below
-    // (they enclose nothing).
-    const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+    // (they enclose nothing). Validation first: it refuses indices out of range and empty faces,
+    // on which later steps would read out of bounds or abort.
+    const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                                                        aiProcess_SortByPType | aiProcess_PreTransformVertices);
     if (!scene) throw InputError(path + ": cannot be read as a mesh: " + importer.GetErrorString());
 
@@ -101,10 +102,6 @@ TriangleMesh loadMesh(const std::string& path, std::vector<std::string>* notes)
                 ++skipped;
                 continue;
             }
-            for (unsigned k = 0; k < 3; ++k)
-                if (face.mIndices[k] >= am->mNumVertices)
-                    throw InputError(path + ": face " + std::to_string(f) + " of mesh " + std::to_string(m) + " uses vertex " +
-                                     std::to_string(face.mIndices[k]) + " of " + std::to_string(am->mNumVertices));
             mesh.triangles.emplace_back(base + int(face.mIndices[0]), base + int(face.mIndices[1]), base + int(face.mIndices[2]));
         }
     }
