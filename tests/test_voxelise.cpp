@@ -360,6 +360,13 @@ TEST(Voxelise, BadInputNamesTheFileAndReason)
                                            "3 4 7 6\n3 0 1 5\n3 0 5 4\n3 2 6 7"
                                         << std::string(87, '\0') << "\n3 2 7 3\n3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n";
     expectError((dir / "nul-face.off").string(), "Validation failed");
+    // Found by fuzz_mesh: a face line that starts with ';' made assimp flag the mesh as holding
+    // polygons when it held none, and its triangulation aborted the process. It reads now.
+    std::ofstream(dir / "semicolon-face.ply") << "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+                                                 "property float z\nelement face 10\nproperty list uchar int vertex_indices\n"
+                                                 "end_header\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n3 4 5 7\n"
+                                                 "3 4 7 6\n3 0 1 5\n3 0 5 4\n3 2 4 7\n3 2 7 3\n3 0 4 6\n3 0 6 2\n; 1 3 7\n3 1 7 5\n";
+    EXPECT_GT(loadMesh((dir / "semicolon-face.ply").string()).triangles.size(), 0u);
     {
         std::ofstream stl(dir / "huge.stl", std::ios::binary);
         const std::string header(80, 'x');

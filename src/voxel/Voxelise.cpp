@@ -78,11 +78,10 @@ TriangleMesh loadMesh(const std::string& path, std::vector<std::string>* notes)
     }
     checkDeclaredCounts(path);
     Assimp::Importer importer;
-    // Points and lines come through as faces of one or two corners, counted and dropped below
-    // (they enclose nothing). Validation first: it refuses indices out of range and empty faces,
-    // on which later steps would read out of bounds or abort.
-    const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                                                       aiProcess_SortByPType | aiProcess_PreTransformVertices);
+    // Validation refuses indices out of range and empty faces. spall splits polygons itself:
+    // assimp's triangulation aborts the process on a mesh flagged as holding polygons that holds
+    // none (found by fuzz_mesh on a malformed PLY).
+    const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure | aiProcess_PreTransformVertices);
     if (!scene) throw InputError(path + ": cannot be read as a mesh: " + importer.GetErrorString());
 
     TriangleMesh mesh;
@@ -98,11 +97,14 @@ TriangleMesh loadMesh(const std::string& path, std::vector<std::string>* notes)
         }
         for (unsigned f = 0; f < am->mNumFaces; ++f) {
             const aiFace& face = am->mFaces[f];
-            if (face.mNumIndices != 3) {
+            if (face.mNumIndices < 3) {  // a point or a line encloses nothing
                 ++skipped;
                 continue;
             }
-            mesh.triangles.emplace_back(base + int(face.mIndices[0]), base + int(face.mIndices[1]), base + int(face.mIndices[2]));
+            // A fan from the first corner: exact for convex polygons, and for any planar polygon
+            // its triangles' solid angles add up to the polygon's, which is all the winding number needs.
+            for (unsigned k = 1; k + 1 < face.mNumIndices; ++k)
+                mesh.triangles.emplace_back(base + int(face.mIndices[0]), base + int(face.mIndices[k]), base + int(face.mIndices[k + 1]));
         }
     }
     if (mesh.triangles.empty()) throw InputError(path + ": the file holds no triangles (no faces to enclose a volume)");
