@@ -354,6 +354,10 @@ TEST(Voxelise, BadInputNamesTheFileAndReason)
                                             "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
                                             "0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n";
     expectError((dir / "bad-index.ply").string(), "is out of range");
+    // Found by fuzz_mesh: assimp's PLY reader spins forever on a header that never ends.
+    std::ofstream(dir / "endless.ply") << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                          "property float z\ne\x07nd_header\n0 0 0\n1 0 0\n0 1 0\n";
+    expectError((dir / "endless.ply").string(), "the PLY header has no end_header line");
     // Found by fuzz_mesh: a face line of NUL bytes left a face with no indices, on which assimp's
     // triangulation aborts the process (an assertion); its validation step refuses it first.
     std::ofstream(dir / "nul-face.off") << "OFF\n8 10 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n3 4 5 7\n"

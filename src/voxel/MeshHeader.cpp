@@ -48,7 +48,8 @@ void checkOff(const std::string& path, uintmax_t fileBytes)
                 static_cast<uintmax_t>(std::min(needed, 1e30L)), fileBytes);
 }
 
-/// PLY: every element takes at least one byte per property in binary, two ("0 ") in ASCII.
+/// PLY: a header that ends and declares its elements; every element takes at least one byte per
+/// property in binary, two ("0 ") in ASCII.
 void checkPly(const std::string& path, uintmax_t fileBytes)
 {
     std::ifstream in(path);
@@ -59,7 +60,9 @@ void checkPly(const std::string& path, uintmax_t fileBytes)
     int properties = 0;
     std::string declared;
     auto closeElement = [&] { needed += count * properties * (ascii ? 2 : 1); };
-    while (std::getline(in, line) && line.rfind("end_header", 0) != 0) {
+    bool ended = false;
+    while (!ended && std::getline(in, line)) {
+        ended = line.rfind("end_header", 0) == 0;
         std::istringstream words(line);
         std::string keyword, name;
         words >> keyword;
@@ -76,6 +79,9 @@ void checkPly(const std::string& path, uintmax_t fileBytes)
             ++properties;
         }
     }
+    // assimp's PLY reader can spin forever on a header it cannot end (found by fuzz_mesh).
+    if (!ended) throw InputError(path + ": the PLY header has no end_header line");
+    if (declared.empty()) throw InputError(path + ": the PLY header declares no elements");
     closeElement();
     if (needed > static_cast<long double>(fileBytes)) tooMany(path, declared, static_cast<uintmax_t>(std::min(needed, 1e30L)), fileBytes);
 }
