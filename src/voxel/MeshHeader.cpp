@@ -48,7 +48,7 @@ void checkOff(const std::string& path, uintmax_t fileBytes)
                 static_cast<uintmax_t>(std::min(needed, 1e30L)), fileBytes);
 }
 
-/// PLY: a header that ends and declares its elements; every element takes at least one byte per
+/// PLY: a header that ends and declares vertices; every element takes at least one byte per
 /// property in binary, two ("0 ") in ASCII.
 void checkPly(const std::string& path, uintmax_t fileBytes)
 {
@@ -60,9 +60,10 @@ void checkPly(const std::string& path, uintmax_t fileBytes)
     int properties = 0;
     std::string declared;
     auto closeElement = [&] { needed += count * properties * (ascii ? 2 : 1); };
-    bool ended = false;
+    bool ended = false, declaresVertices = false;
     while (!ended && std::getline(in, line)) {
-        ended = line.rfind("end_header", 0) == 0;
+        while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+        ended = line == "end_header";
         std::istringstream words(line);
         std::string keyword, name;
         words >> keyword;
@@ -72,6 +73,7 @@ void checkPly(const std::string& path, uintmax_t fileBytes)
         } else if (keyword == "element") {
             closeElement();
             words >> name >> count;
+            declaresVertices = declaresVertices || name == "vertex";
             if (count < 0) throw InputError(path + ": the header declares a negative count of " + name);
             properties = 0;
             declared += (declared.empty() ? "" : ", ") + std::to_string(static_cast<unsigned long long>(count)) + " " + name;
@@ -81,7 +83,7 @@ void checkPly(const std::string& path, uintmax_t fileBytes)
     }
     // assimp's PLY reader can spin forever on a header it cannot end (found by fuzz_mesh).
     if (!ended) throw InputError(path + ": the PLY header has no end_header line");
-    if (declared.empty()) throw InputError(path + ": the PLY header declares no elements");
+    if (!declaresVertices) throw InputError(path + ": the PLY header declares no vertex element");
     closeElement();
     if (needed > static_cast<long double>(fileBytes)) tooMany(path, declared, static_cast<uintmax_t>(std::min(needed, 1e30L)), fileBytes);
 }
