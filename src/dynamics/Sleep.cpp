@@ -1,5 +1,6 @@
 #include <spall/dynamics/Sleep.h>
 
+#include <spall/core/DisjointSets.h>
 #include <spall/dynamics/Integrate.h>
 
 #include <algorithm>
@@ -42,23 +43,15 @@ void updateSleep(std::vector<Body>& bodies, const std::vector<BodyPair>& touchin
         if (b.anchored || b.motion.asleep) continue;
         b.motion.restTimeS = (!loaded[i] && maxVoxelSpeedMS(b) < sleep.speedMS) ? b.motion.restTimeS + dt : 0.0;
     }
-    std::vector<int> parent(bodies.size());
-    for (size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
-    auto root = [&](int i) {
-        while (parent[i] != i) i = parent[i] = parent[parent[i]];
-        return i;
-    };
+    DisjointSets islands(bodies.size());
     for (const BodyPair& p : touching)
-        if (!bodies[p.a].anchored && !bodies[p.b].anchored) {
-            const int ra = root(p.a), rb = root(p.b);
-            parent[std::max(ra, rb)] = std::min(ra, rb);
-        }
+        if (!bodies[p.a].anchored && !bodies[p.b].anchored) islands.join(uint32_t(p.a), uint32_t(p.b));
     std::vector<char> restless(bodies.size(), 0);
     for (size_t i = 0; i < bodies.size(); ++i)
-        if (!bodies[i].anchored && !bodies[i].motion.asleep && bodies[i].motion.restTimeS < sleep.timeS) restless[root(static_cast<int>(i))] = 1;
+        if (!bodies[i].anchored && !bodies[i].motion.asleep && bodies[i].motion.restTimeS < sleep.timeS) restless[islands.root(uint32_t(i))] = 1;
     for (size_t i = 0; i < bodies.size(); ++i) {
         Body& b = bodies[i];
-        if (b.anchored || b.motion.asleep || restless[root(static_cast<int>(i))]) continue;
+        if (b.anchored || b.motion.asleep || restless[islands.root(uint32_t(i))]) continue;
         b.motion.asleep = true;
         b.motion.linearVelocityMS.setZero();
         b.motion.angularVelocityRadS.setZero();

@@ -1,10 +1,10 @@
 #include <spall/loads/Exposure.h>
 
+#include <spall/core/DisjointSets.h>
 #include <spall/core/Parallel.h>
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 
 namespace spall {
 
@@ -24,18 +24,12 @@ uint64_t blockKey(int64_t i, int64_t j, int64_t k) { return cellKey(i >> kBlockS
 /// Cell of a point in cell units: the nearest lattice point.
 uint64_t cellKey(const Eigen::Vector3d& u) { return cellKey(std::llround(u.x()), std::llround(u.y()), std::llround(u.z())); }
 
-uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t i)
-{
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-}
 
 }  // namespace
 
 Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& considered)
     : mCovered(bodies.size()), mGroup(bodies.size())
 {
-    std::iota(mGroup.begin(), mGroup.end(), 0u);
     if (bodies.empty()) return;
     mVoxelSizeM = bodies.front().voxelSizeM;
     // The lattice goes through a voxel centre of the first body considered: the pieces of one
@@ -79,13 +73,11 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
             touching[b].push_back(uint32_t(other));
         }
     });
-    // Groups of bodies pressed together: union-find, roots the lowest index.
+    // Groups of bodies pressed together, each named by its lowest index.
+    DisjointSets groups(bodies.size());
     for (size_t b = 0; b < bodies.size(); ++b)
-        for (uint32_t other : touching[b]) {
-            const uint32_t ra = findRoot(mGroup, uint32_t(b)), rb = findRoot(mGroup, other);
-            mGroup[std::max(ra, rb)] = std::min(ra, rb);
-        }
-    for (size_t b = 0; b < bodies.size(); ++b) mGroup[b] = findRoot(mGroup, uint32_t(b));
+        for (uint32_t other : touching[b]) groups.join(uint32_t(b), other);
+    for (size_t b = 0; b < bodies.size(); ++b) mGroup[b] = groups.root(uint32_t(b));
 }
 
 bool Exposure::blocked(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM) const
