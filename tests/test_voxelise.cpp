@@ -358,12 +358,11 @@ TEST(Voxelise, BadInputNamesTheFileAndReason)
     std::ofstream(dir / "endless.ply") << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                                           "property float z\ne\x07nd_header\n0 0 0\n1 0 0\n0 1 0\n";
     expectError((dir / "endless.ply").string(), "the PLY header has no end_header line");
-    std::ofstream(dir / "no-vertices.ply") << "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\n"
-                                              "end_header\xff\xff\n3 0 1 2\n";
-    expectError((dir / "no-vertices.ply").string(), "the PLY header has no end_header line");
-    std::ofstream(dir / "no-vertices2.ply") << "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\n"
-                                               "end_header\n3 0 1 2\n";
-    expectError((dir / "no-vertices2.ply").string(), "declares no vertex element");
+    const std::string facesOnly = "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\n";
+    std::ofstream(dir / "end-header-and-bytes.ply") << facesOnly << "end_header\xff\xff\n3 0 1 2\n";
+    expectError((dir / "end-header-and-bytes.ply").string(), "the PLY header has no end_header line");
+    std::ofstream(dir / "no-vertices.ply") << facesOnly << "end_header\n3 0 1 2\n";
+    expectError((dir / "no-vertices.ply").string(), "declares no vertex element");
     // Found by fuzz_mesh: a face line of NUL bytes left a face with no indices, on which assimp's
     // triangulation aborts the process (an assertion); its validation step refuses it first.
     std::ofstream(dir / "nul-face.off") << "OFF\n8 10 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n3 4 5 7\n"

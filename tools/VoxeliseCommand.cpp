@@ -24,12 +24,13 @@ public:
     }
     bool wasInterrupted(int percent) override
     {
-        if (mQuiet || percent < 0) return stopRequested();
         const auto now = std::chrono::steady_clock::now();
-        if (mPrinted && now - mLast < std::chrono::milliseconds(250) && percent < 100) return stopRequested();
-        mLast = now;
-        mPrinted = true;
-        std::fprintf(stderr, "\r%s %3d%%", mLabel.c_str(), percent);
+        const bool due = !mPrinted || now - mLast >= std::chrono::milliseconds(250) || percent >= 100;
+        if (!mQuiet && percent >= 0 && due) {
+            mLast = now;
+            mPrinted = true;
+            std::fprintf(stderr, "\r%s %3d%%", mLabel.c_str(), percent);
+        }
         return stopRequested();
     }
 

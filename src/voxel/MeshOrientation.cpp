@@ -2,25 +2,52 @@
 
 #include <algorithm>
 #include <array>
-#include <map>
 #include <cmath>
+#include <cstdint>
+#include <numeric>
 
 namespace spall {
 
 namespace {
 
-using EdgeKey = std::pair<int, int>;
+/// Every (undirected edge, triangle) use, sorted by edge and then triangle: the triangles that
+/// share an edge are one run of equal keys.
+class EdgeUses {
+public:
+    explicit EdgeUses(const TriangleMesh& mesh)
+    {
+        mUses.reserve(3 * mesh.triangles.size());
+        for (int t = 0; t < static_cast<int>(mesh.triangles.size()); ++t)
+            for (int e = 0; e < 3; ++e) mUses.push_back({key(mesh.triangles[t][e], mesh.triangles[t][(e + 1) % 3]), t});
+        std::sort(mUses.begin(), mUses.end());
+    }
 
-EdgeKey undirected(int a, int b) { return a < b ? EdgeKey{a, b} : EdgeKey{b, a}; }
+    /// The other triangle across edge (a, b) of triangle t, or -1 when the edge is open or shared
+    /// by more than two triangles (no neighbour to agree with).
+    int across(int a, int b, int t) const
+    {
+        const auto [first, last] = std::equal_range(mUses.begin(), mUses.end(), std::pair<uint64_t, int>{key(a, b), -1},
+                                                    [](const auto& x, const auto& y) { return x.first < y.first; });
+        if (last - first != 2) return -1;
+        return first->second == t ? (first + 1)->second : first->second;
+    }
 
-/// For every undirected edge, the triangles that use it.
-std::map<EdgeKey, std::vector<int>> edgeUses(const TriangleMesh& mesh)
-{
-    std::map<EdgeKey, std::vector<int>> uses;
-    for (int t = 0; t < static_cast<int>(mesh.triangles.size()); ++t)
-        for (int e = 0; e < 3; ++e) uses[undirected(mesh.triangles[t][e], mesh.triangles[t][(e + 1) % 3])].push_back(t);
-    return uses;
-}
+    /// Edges not used by exactly two triangles.
+    int64_t openEdges() const
+    {
+        int64_t open = 0;
+        for (size_t run = 0, next = 0; run < mUses.size(); run = next) {
+            while (next < mUses.size() && mUses[next].first == mUses[run].first) ++next;
+            open += (next - run != 2);
+        }
+        return open;
+    }
+
+private:
+    static uint64_t key(int a, int b) { return (uint64_t(uint32_t(std::min(a, b))) << 32) | uint32_t(std::max(a, b)); }
+
+    std::vector<std::pair<uint64_t, int>> mUses;
+};
 
 /// True when triangle t runs from a to b along one of its edges.
 bool runsFromTo(const Eigen::Vector3i& t, int a, int b)
@@ -55,7 +82,7 @@ Eigen::Vector3d vertexMean(const TriangleMesh& mesh, const std::vector<int>& she
 
 /// Shells: triangles joined across two-triangle edges (a breadth-first walk), turning each
 /// newly reached triangle to run the shared edge the other way from the one it came from.
-std::vector<std::vector<int>> walkShells(TriangleMesh& mesh, const std::map<EdgeKey, std::vector<int>>& uses)
+std::vector<std::vector<int>> walkShells(TriangleMesh& mesh, const EdgeUses& uses)
 {
     const int n = static_cast<int>(mesh.triangles.size());
     std::vector<char> reached(n, 0);
@@ -68,10 +95,8 @@ std::vector<std::vector<int>> walkShells(TriangleMesh& mesh, const std::map<Edge
             const Eigen::Vector3i t = mesh.triangles[shell[next]];
             for (int e = 0; e < 3; ++e) {
                 const int a = t[e], b = t[(e + 1) % 3];
-                const std::vector<int>& users = uses.at(undirected(a, b));
-                if (users.size() != 2) continue;  // open or non-manifold: no neighbour to agree with
-                const int other = users[0] == shell[next] ? users[1] : users[0];
-                if (reached[other]) continue;
+                const int other = uses.across(a, b, shell[next]);
+                if (other < 0 || reached[other]) continue;
                 reached[other] = 1;
                 if (runsFromTo(mesh.triangles[other], a, b)) turn(mesh.triangles[other]);
                 shell.push_back(other);
@@ -86,15 +111,24 @@ std::vector<std::vector<int>> walkShells(TriangleMesh& mesh, const std::map<Edge
 /// drops triangles that two of their corners then share, which bound nothing.
 void weldEqualPositions(TriangleMesh& mesh)
 {
-    std::map<std::array<float, 3>, int> firstAt;
-    std::vector<int> welded(mesh.positionsM.size());
+    // Sorted by position, then index: each run of equal positions maps to its first vertex, and the
+    // kept vertices stay in the order they came.
+    const auto& p = mesh.positionsM;
+    std::vector<int> order(p.size());
+    std::iota(order.begin(), order.end(), 0);
+    const auto position = [&](int v) { return std::array<float, 3>{p[v].x(), p[v].y(), p[v].z()}; };
+    std::sort(order.begin(), order.end(), [&](int x, int y) { return std::pair(position(x), x) < std::pair(position(y), y); });
+    std::vector<int> welded(p.size());
+    for (size_t i = 0; i < order.size(); ++i)
+        welded[order[i]] = (i > 0 && position(order[i]) == position(order[i - 1])) ? welded[order[i - 1]] : order[i];
+    std::vector<int> newIndex(p.size());
     std::vector<Eigen::Vector3f> unique;
-    for (size_t v = 0; v < mesh.positionsM.size(); ++v) {
-        const Eigen::Vector3f& p = mesh.positionsM[v];
-        const auto [it, isNew] = firstAt.try_emplace({p.x(), p.y(), p.z()}, static_cast<int>(unique.size()));
-        if (isNew) unique.push_back(p);
-        welded[v] = it->second;
+    for (size_t v = 0; v < p.size(); ++v) {
+        if (welded[v] != static_cast<int>(v)) continue;
+        newIndex[v] = static_cast<int>(unique.size());
+        unique.push_back(p[v]);
     }
+    for (int& w : welded) w = newIndex[w];
     std::vector<Eigen::Vector3i> kept;
     kept.reserve(mesh.triangles.size());
     for (const auto& t : mesh.triangles) {
@@ -112,10 +146,9 @@ MeshTopology orientOutward(TriangleMesh& mesh)
     MeshTopology topology;
     weldEqualPositions(mesh);
     const std::vector<Eigen::Vector3i> asGiven = mesh.triangles;
-    const auto uses = edgeUses(mesh);
-    for (const auto& [edge, users] : uses) topology.openEdges += (users.size() != 2);
+    const EdgeUses uses(mesh);
+    topology.openEdges = uses.openEdges();
     const auto shells = walkShells(mesh, uses);
-    topology.shells = static_cast<int64_t>(shells.size());
     double sixV = 0.0;
     for (const auto& shell : shells) {
         const double sixShell = sixConeVolume(mesh, shell, vertexMean(mesh, shell));

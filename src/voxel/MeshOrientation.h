@@ -10,7 +10,6 @@ namespace spall {
 struct MeshTopology {
     int64_t openEdges = 0;          ///< edges used by one triangle, or by more than two
     int64_t turnedTriangles = 0;    ///< triangles whose winding was reversed to agree with their neighbours
-    int64_t shells = 0;             ///< groups of triangles joined across edges
     /// Volume inside the outward-wound mesh (unit: m^3): the divergence theorem over each shell,
     /// taken about the shell's vertex mean, so an open shell counts the cone from that point to its
     /// hole. Exact for closed shells; overlapping shells count their overlap twice.

@@ -123,18 +123,27 @@ struct VdbInterrupter {
     bool wasInterrupted(int percent = -1) { return inner && inner->wasInterrupted(percent); }
 };
 
+/// The mesh as OpenVDB's mesh converters take it.
+struct VdbMesh {
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec3I> triangles;
+
+    explicit VdbMesh(const TriangleMesh& mesh)
+    {
+        points.reserve(mesh.positionsM.size());
+        for (const auto& p : mesh.positionsM) points.emplace_back(p.x(), p.y(), p.z());
+        triangles.reserve(mesh.triangles.size());
+        for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
+    }
+};
+
 /// OpenVDB builds an unsigned distance band and flood-fills the sign: exact for watertight meshes
 /// whatever their winding; a hole wider than the 3-voxel band lets the outside flood in.
 void fillLevelSetInterior(const TriangleMesh& mesh, LinkGrid& solid, const std::string& sourceName, Interrupter* interrupter)
 {
-    std::vector<openvdb::Vec3s> points;
-    points.reserve(mesh.positionsM.size());
-    for (const auto& p : mesh.positionsM) points.emplace_back(p.x(), p.y(), p.z());
-    std::vector<openvdb::Vec3I> triangles;
-    triangles.reserve(mesh.triangles.size());
-    for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
+    const VdbMesh vdb(mesh);
     VdbInterrupter adaptor{interrupter};
-    const auto sdf = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(adaptor, solid.transform(), points, triangles, 3.0f);
+    const auto sdf = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(adaptor, solid.transform(), vdb.points, vdb.triangles, 3.0f);
     // OpenVDB returns what it has when interrupted: that is no result.
     if (adaptor.wasInterrupted()) throw VoxeliseInterrupted(sourceName + ": voxelising was interrupted");
     auto interior = openvdb::tools::sdfInteriorMask(*sdf);
@@ -152,14 +161,11 @@ void fillShell(const TriangleMesh& mesh, double thicknessM, LinkGrid& solid, con
         msg << sourceName << ": a shell " << thicknessM << " m thick is thinner than a voxel (" << h << " m): it would not hold together";
         throw InputError(msg.str());
     }
-    std::vector<openvdb::Vec3s> points;
-    for (const auto& p : mesh.positionsM) points.emplace_back(p.x(), p.y(), p.z());
-    std::vector<openvdb::Vec3I> triangles;
-    for (const auto& t : mesh.triangles) triangles.emplace_back(t[0], t[1], t[2]);
+    const VdbMesh vdb(mesh);
     VdbInterrupter adaptor{interrupter};
     const float halfWidthVoxels = static_cast<float>(0.5 * thicknessM / h) + 1.0f;
     const auto distance = openvdb::tools::meshToUnsignedDistanceField<openvdb::FloatGrid>(
-        adaptor, solid.transform(), points, triangles, std::vector<openvdb::Vec4I>(), halfWidthVoxels);
+        adaptor, solid.transform(), vdb.points, vdb.triangles, std::vector<openvdb::Vec4I>(), halfWidthVoxels);
     if (adaptor.wasInterrupted()) throw VoxeliseInterrupted(sourceName + ": voxelising was interrupted");
     auto accessor = solid.getAccessor();
     for (auto it = distance->cbeginValueOn(); it; ++it)

@@ -204,13 +204,6 @@ void classifyCube(const WindingNumberField& field, const openvdb::Coord& blockOr
                      half, h, mask);
 }
 
-BlockMask classifyBlock(const WindingNumberField& field, const openvdb::Coord& origin, double h)
-{
-    BlockMask mask{};
-    classifyCube(field, origin, openvdb::Coord(0), kBlock, h, mask);
-    return mask;
-}
-
 }  // namespace
 
 void fillWindingNumberInterior(const TriangleMesh& mesh, LinkGrid& solid, const std::string& sourceName, Interrupter* interrupter)
@@ -230,7 +223,7 @@ void fillWindingNumberInterior(const TriangleMesh& mesh, LinkGrid& solid, const 
     for (size_t begin = 0; begin < origins.size(); begin += kBlocksPerReport) {
         const size_t end = std::min(origins.size(), begin + kBlocksPerReport);
         tbb::parallel_for(tbb::blocked_range<size_t>(begin, end), [&](const tbb::blocked_range<size_t>& range) {
-            for (size_t b = range.begin(); b != range.end(); ++b) masks[b] = classifyBlock(field, origins[b], h);
+            for (size_t b = range.begin(); b != range.end(); ++b) classifyCube(field, origins[b], openvdb::Coord(0), kBlock, h, masks[b]);
         });
         if (interrupter && interrupter->wasInterrupted(static_cast<int>(100 * end / origins.size())))
             throw VoxeliseInterrupted(sourceName + ": voxelising was interrupted");
