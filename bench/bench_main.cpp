@@ -229,7 +229,7 @@ void loadsPass(benchmark::State& state, LoadModel model)
     }
     const double t = field.tableParameters(0, 4.5).arrivalTimeS + 1e-4;
     const std::vector<OpenWindow> windows = field.openWindows(t);
-    const BlastLoads loads(field, windows, LoadSettings{model}, LoadGeometry{true, Eigen::Vector3d::UnitZ(), 0.0, {}});
+    const BlastLoads loads(field, windows, LoadSettings{model}, LoadGeometry{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}});
     const std::vector<char> loaded(bodies.size(), 1);
     for (auto _ : state) benchmark::DoNotOptimize(loads.stepWrenches(bodies, loaded, t, 2e-5));
     state.counters["faces_per_s"] = benchmark::Counter(6000.0, benchmark::Counter::kIsIterationInvariantRate);

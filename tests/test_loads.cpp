@@ -220,7 +220,7 @@ TEST(Loads, FiniteWallClearsAsTheCfdReferenceSays)
     // the CFD: spall gives 0.966, 10.4 % high. Issue 16 asks for 10 %; the bound below is
     // today's, and tightens when the relief model does.
     const BlastField field({Charge{Eigen::Vector3d::Zero(), 0.365, 0.0, BurstType::Surface}}, BlastSettings());
-    const LoadGeometry ground{true, Eigen::Vector3d::UnitZ(), 0.0, {}};
+    const LoadGeometry ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
     const double h = 0.1;
     const Body low = test::boxBody(1, 200, 5, h, 2000.0, Eigen::Vector3d(2.0 + 0.5 * h, 0, 0.25));
     const Body tall = test::boxBody(1, 200, 35, h, 2000.0, Eigen::Vector3d(2.0 + 0.5 * h, 0, 1.75));
@@ -264,35 +264,76 @@ TEST(Loads, SlabTakesTheSameImpulseIntactOrInTouchingLayers)
     EXPECT_NEAR(broken.y(), whole.y(), 0.15 * whole.y()) << "intact " << whole.y() << " N s, in layers " << broken.y() << " N s";
 }
 
-TEST(Loads, BoxBehindABlastWallIsShadowed)
+TEST(Loads, BoxBehindABlastWallTakesTheDiffractedLoad)
 {
-    // shared/reference/blast-loads-cfd.md, target T2: a 0.2 m block on the ground 1.4 m behind
-    // a 1 m high, 0.1 m thick barrier whose front face is 2 m from a 0.36 kg surface burst (the
-    // barrier a long static box). With / without the barrier the CFD gives 0.476 of the block's
-    // front-face impulse and 0.376 of its net impulse. spall loads a shadowed face as a rear
-    // wall (UFC 3-340-02 §2-15.4: the side-on pulse wrapping around, with rear drag and rise):
-    // front face 0.376, within 30 % of the CFD; but front and rear then nearly cancel (net
-    // -0.02), where the CFD's wrapped-around flow still pushes the block (0.376): the net is
-    // only bounded here, and stays open in issue 16 (it needs a diffraction model that
-    // attenuates the wave behind the barrier and keeps its flow).
+    // shared/reference/blast-loads-cfd.md: 0.2 m blocks behind a 1 m high, 0.1 m thick barrier
+    // whose front face is 2 m from a 0.36 kg surface burst (the barrier a long static box):
+    // T1 0.3 m behind it at mid-height, T2 1.4 m behind it on the ground. With / without the
+    // barrier the CFD gives, for the block's front face and for its net push:
+    // T1 0.17-0.24 and 0.09, T2 0.476 and 0.376. spall loads the shadowed faces with the wave
+    // diffracted over the barrier's top (loads/Diffraction.h): T1 0.22 and 0.12, T2 0.48 and
+    // 0.43. T1's net push is 34 % over the CFD's: its block stands in the eddy the barrier's
+    // top sheds, which a ray model does not have (docs/accuracy.md); it is bounded at 40 %.
     const BlastField field({Charge{Eigen::Vector3d::Zero(), 0.365, 0.0, BurstType::Surface}}, BlastSettings());
-    const LoadGeometry open{true, Eigen::Vector3d::UnitZ(), 0.0, {}};
+    const LoadGeometry open{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
     LoadGeometry walled = open;
     walled.obstacles.push_back({Eigen::Vector3d(2.05, 0, 0.5), Eigen::Vector3d(0.05, 10, 0.5), Eigen::Quaterniond::Identity()});
-    const std::vector<Body> block{test::boxBody(2, 2, 2, 0.1, 2000.0, Eigen::Vector3d(3.6, 0, 0.1))};
-    const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::Surface, 0.365, 3.6);
-    const double dt = p.positiveDurationS / 200, until = p.arrivalTimeS + 1.2 * p.positiveDurationS;
-    auto netImpulse = [&](const LoadGeometry& geometry) {
-        double total = 0;
-        for (double t = 0; t < until; t += dt) {
-            const auto windows = field.openWindows(t);
-            total += BlastLoads(field, windows, LoadSettings(), geometry).stepWrenches(block, {1}, t, dt)[0].forceN.x() * dt;
-        }
-        return total;
+    struct Target {
+        Eigen::Vector3d centreM;
+        double frontRatio, netRatio, netTolerance;
     };
-    auto front = [](const ExposedFace& f) { return f.face == kNegX; };
-    const double frontRatio = faceImpulseOn(block[0], field, walled, dt, until, front) / faceImpulseOn(block[0], field, open, dt, until, front);
-    const double netRatio = netImpulse(walled) / netImpulse(open);
-    EXPECT_NEAR(frontRatio, 0.476, 0.3 * 0.476);
-    EXPECT_LT(std::abs(netRatio), 0.5) << "the barrier hardly shields";
+    for (const Target& target : {Target{{2.5, 0, 0.5}, 0.205, 0.09, 0.4}, Target{{3.6, 0, 0.1}, 0.476, 0.376, 0.3}}) {
+        const std::vector<Body> block{test::boxBody(2, 2, 2, 0.1, 2000.0, target.centreM)};
+        const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::Surface, 0.365, target.centreM.norm());
+        const double dt = p.positiveDurationS / 200, until = p.arrivalTimeS + p.positiveDurationS + p.negativeDurationS;
+        auto netImpulse = [&](const LoadGeometry& geometry) {  // as the CFD's: the running integral's maximum
+            double total = 0, largest = 0;
+            for (double t = 0; t < until; t += dt) {
+                const auto windows = field.openWindows(t);
+                total += BlastLoads(field, windows, LoadSettings(), geometry).stepWrenches(block, {1}, t, dt)[0].forceN.x() * dt;
+                largest = std::max(largest, total);
+            }
+            return largest;
+        };
+        auto front = [](const ExposedFace& f) { return f.face == kNegX; };
+        const double positiveEnd = p.arrivalTimeS + p.positiveDurationS;
+        const double frontRatio = faceImpulseOn(block[0], field, walled, dt, positiveEnd, front) /
+                                  faceImpulseOn(block[0], field, open, dt, positiveEnd, front);
+        const double netRatio = netImpulse(walled) / netImpulse(open);
+        std::printf("target at x %.1f: front %.3f (CFD %.3f), net %.3f (CFD %.3f)\n", target.centreM.x(), frontRatio, target.frontRatio,
+                    netRatio, target.netRatio);
+        EXPECT_NEAR(frontRatio, target.frontRatio, 0.3 * target.frontRatio);
+        EXPECT_NEAR(netRatio, target.netRatio, target.netTolerance * target.netRatio);
+    }
+}
+
+TEST(Loads, DiffractedWaveBehindABarrierKeepsWhatTheCfdFinds)
+{
+    // shared/reference/blast-loads-cfd.md: at free points 0.3-2 m behind the 1 m barrier and
+    // 0.1-1 m up, the side-on positive impulse is 0.43-0.65 of what it is without the barrier.
+    // spall's diffracted wave keeps 0.35-0.94: close behind and low down it matches, but near
+    // the line of sight over the top it loses almost nothing, where the CFD loses a third (the
+    // ray model has no penumbra; docs/accuracy.md). Checked: the weakest point within 30 % of
+    // the CFD's, every point weakened, and the wave travelling on over the top.
+    const BlastField field({Charge{Eigen::Vector3d::Zero(), 0.365, 0.0, BurstType::Surface}}, BlastSettings());
+    LoadGeometry walled{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
+    const ObstacleBox barrier{Eigen::Vector3d(2.05, 0, 0.5), Eigen::Vector3d(0.05, 10, 0.5), Eigen::Quaterniond::Identity()};
+    auto sideOnImpulse = [](const PointPulse& p) {
+        return p.peakOverpressurePa * p.positiveDurationS * friedlanderImpulseFraction(p.decayCoefficient);
+    };
+    double lowest = 1, highest = 0;
+    for (double behind : {0.3, 0.7, 1.2, 2.0})
+        for (double height : {0.1, 0.4, 0.7, 1.0}) {
+            const Eigen::Vector3d point(2.1 + behind, 0, height);
+            const EdgePath path = shortestPathAround(barrier, Eigen::Vector3d::Zero(), point, walled, 0.01);
+            const DiffractedWave wave = diffractedWave(path, Eigen::Vector3d::Zero(), point);
+            const double ratio = sideOnImpulse(field.pulseAt(0, wave.equivalentDistanceM * wave.equivalentDistanceM)) /
+                                 sideOnImpulse(field.pulseAt(0, point.squaredNorm()));
+            lowest = std::min(lowest, ratio), highest = std::max(highest, ratio);
+            EXPECT_GT(wave.directionM.x(), 0.0);
+            EXPECT_LE(wave.directionM.z(), 1e-12) << "the wave comes over the top";
+        }
+    std::printf("side-on impulse behind the barrier / without it: %.2f-%.2f (CFD 0.43-0.65)\n", lowest, highest);
+    EXPECT_NEAR(lowest, 0.43, 0.3 * 0.43);
+    EXPECT_LT(highest, 1.0);
 }

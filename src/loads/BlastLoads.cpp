@@ -52,7 +52,7 @@ double Silhouette::clearingTimeS() const
 double Silhouette::rearRiseTimeS() const { return 4.0 * std::min(clearingHeightM(), halfWidthM) / shockSpeedMS; }
 
 Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vector3d& chargeM, double shockSpeedMS,
-                        const LoadGeometry& ground)
+                        const LoadGround& ground)
 {
     // The corners of every member's oriented index box, in the world.
     std::vector<Eigen::Vector3d> corners;
@@ -86,36 +86,27 @@ Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vect
     return out;
 }
 
-namespace {
-
-/// True when the segment from a to b meets the box (slab test in the box's frame).
-bool segmentMeetsBox(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const ObstacleBox& box)
-{
-    const Eigen::Matrix3d toBox = box.orientation.toRotationMatrix().transpose();
-    const Eigen::Vector3d p = toBox * (a - box.centreM), d = toBox * (b - a);
-    double enter = 0.0, leave = 1.0;
-    for (int axis = 0; axis < 3; ++axis) {
-        const double lo = -box.halfExtentM[axis], hi = box.halfExtentM[axis];
-        if (std::abs(d[axis]) < 1e-15) {
-            if (p[axis] < lo || p[axis] > hi) return false;
-            continue;
-        }
-        double t0 = (lo - p[axis]) / d[axis], t1 = (hi - p[axis]) / d[axis];
-        if (t0 > t1) std::swap(t0, t1);
-        enter = std::max(enter, t0);
-        leave = std::min(leave, t1);
-        if (enter > leave) return false;
-    }
-    return true;
-}
-
-}  // namespace
-
-bool BlastLoads::inShadow(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure) const
+const ObstacleBox* BlastLoads::shadowCaster(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure,
+                                             size_t exclude) const
 {
     for (const ObstacleBox& box : mGeometry.obstacles)
-        if (segmentMeetsBox(xM, chargeM, box)) return true;
-    return exposure && exposure->blocked(xM, chargeM);
+        if (segmentMeetsBox(xM, chargeM, box)) return &box;
+    if (!exposure) return nullptr;
+    const int64_t body = exposure->firstBlocker(xM, chargeM, exclude);
+    return body >= 0 ? &exposure->boundsOf(size_t(body)) : nullptr;
+}
+
+PointPulse BlastLoads::pulseOnFace(const OpenWindow& window, const PointPulse& direct, const Eigen::Vector3d& probeM,
+                                   const Exposure* exposure, size_t exclude, double groundToleranceM, Eigen::Vector3d& travelM) const
+{
+    const Eigen::Vector3d& charge = mField.charges()[window.charge].positionM;
+    const ObstacleBox* caster = shadowCaster(probeM, charge, exposure, exclude);
+    if (!caster) return direct;
+    const EdgePath path = shortestPathAround(*caster, charge, probeM, mGeometry, groundToleranceM);
+    const DiffractedWave wave = diffractedWave(path, charge, probeM);
+    travelM = wave.directionM;
+    const double equivalent = wave.equivalentDistanceM;
+    return diffractedPulse(direct, mField.pulseAt(window.charge, equivalent * equivalent), path.lengthM - (probeM - charge).norm());
 }
 
 std::vector<char> BlastLoads::loadedBodies(const std::vector<Body>& bodies) const
@@ -133,7 +124,7 @@ std::vector<Silhouette> BlastLoads::silhouettes(const std::vector<const Body*>& 
     for (size_t w = 0; w < mWindows.size(); ++w) {
         const Eigen::Vector3d& charge = mField.charges()[mWindows[w].charge].positionM;
         const double speed = mField.pulseAt(mWindows[w].charge, (group.front()->motion.positionM - charge).squaredNorm()).shockSpeedMS;
-        outlines[w] = silhouetteOf(group, charge, speed, mGeometry);
+        outlines[w] = silhouetteOf(group, charge, speed, mGeometry.ground);
     }
     return outlines;
 }
@@ -159,11 +150,16 @@ void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouet
             const Eigen::Vector3d rHat = r / std::sqrt(r2);
             const double cosine = -normal.dot(rHat);
             if (mSettings.model == LoadModel::BlastEngineering) {
-                const PointPulse pulse = mField.pulseAt(window.charge, r2);
+                const PointPulse direct = mField.pulseAt(window.charge, r2);
+                if (timeS + dtS <= direct.arrivalTimeS || timeS >= direct.arrivalTimeS + direct.positiveDurationS + direct.negativeDurationS)
+                    continue;
+                // A face that looks at the charge is shadowed by anything, its own body too (a
+                // concave pocket); one that looks away only by something else.
+                Eigen::Vector3d travel = rHat;
+                const PointPulse pulse = pulseOnFace(window, direct, x + 0.5 * h * normal, exposure,
+                                                     cosine > 0.0 ? Exposure::kNoBody : bodyIndex, 0.5 * h, travel);
                 const double from = timeS - pulse.arrivalTimeS;
-                if (from + dtS <= 0.0 || from >= pulse.positiveDurationS + pulse.negativeDurationS) continue;
-                const bool shadow = cosine > 0.0 && inShadow(x + 0.5 * h * normal, mField.charges()[window.charge].positionM, exposure);
-                const FaceExposure face{shadow ? -1.0 : cosine, outlines[w].clearingTimeS(), outlines[w].rearRiseTimeS()};
+                const FaceExposure face{-normal.dot(travel), outlines[w].clearingTimeS(), outlines[w].rearRiseTimeS()};
                 const double impulse = faceImpulsePaS(pulse, face, from, from + dtS, p0);
                 if (impulse != 0.0) f(i, Eigen::Vector3d(-impulse * area * normal), arm, normal);
                 continue;

@@ -25,10 +25,22 @@ uint64_t blockKey(int64_t i, int64_t j, int64_t k) { return cellKey(i >> kBlockS
 uint64_t cellKey(const Eigen::Vector3d& u) { return cellKey(std::llround(u.x()), std::llround(u.y()), std::llround(u.z())); }
 
 
+/// The body's index bounds (voxels as cubes) as an oriented box in the world.
+ObstacleBox worldBounds(const Body& body)
+{
+    const openvdb::CoordBBox& box = body.indexBounds;
+    const Eigen::Vector3d lo(box.min().x(), box.min().y(), box.min().z()), hi(box.max().x(), box.max().y(), box.max().z());
+    ObstacleBox out;
+    out.orientation = body.motion.orientation;
+    out.centreM = body.motion.positionM + body.motion.orientation * (0.5 * (lo + hi) * body.voxelSizeM - body.mass.centreOfMassLocalM);
+    out.halfExtentM = (0.5 * (hi - lo) + Eigen::Vector3d::Constant(0.5)) * body.voxelSizeM;
+    return out;
+}
+
 }  // namespace
 
 Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& considered)
-    : mCovered(bodies.size()), mGroup(bodies.size())
+    : mCovered(bodies.size()), mGroup(bodies.size()), mBounds(bodies.size())
 {
     if (bodies.empty()) return;
     mVoxelSizeM = bodies.front().voxelSizeM;
@@ -43,6 +55,7 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     std::vector<std::vector<Cell>> perBody(bodies.size());
     forEachIndex(bodies.size(), [&](size_t b) {
         if (!considered[b]) return;
+        mBounds[b] = worldBounds(bodies[b]);
         for (const openvdb::Coord& ijk : bodies[b].boundaryVoxels) {
             const Eigen::Vector3d u = cellUnits(bodies[b].voxelWorldM(ijk));
             perBody[b].push_back({cellKey(u), uint32_t(b), {float(u.x()), float(u.y()), float(u.z())}});
@@ -54,8 +67,11 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     // neighbouring cells (bodies need not share the world's lattice).
     for (const Cell& c : mCells) {
         const int64_t i = std::llround(c.centre[0]), j = std::llround(c.centre[1]), k = std::llround(c.centre[2]);
-        for (int corner = 0; corner < 8; ++corner)
-            mBlockKeys.insert(blockKey(i + (corner & 1 ? 1 : -1), j + (corner & 2 ? 1 : -1), k + (corner & 4 ? 1 : -1)));
+        for (int corner = 0; corner < 8; ++corner) {
+            const auto [owner, added] =
+                mBlockOwners.try_emplace(blockKey(i + (corner & 1 ? 1 : -1), j + (corner & 2 ? 1 : -1), k + (corner & 4 ? 1 : -1)), c.body);
+            if (!added && owner->second != c.body) owner->second = kManyBodies;
+        }
     }
     // Per face: is the cell across it another body's?
     std::vector<std::vector<uint32_t>> touching(bodies.size());
@@ -80,17 +96,19 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     for (size_t b = 0; b < bodies.size(); ++b) mGroup[b] = groups.root(uint32_t(b));
 }
 
-bool Exposure::blocked(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM) const
+int64_t Exposure::firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM, size_t exclude) const
 {
     const double h = mVoxelSizeM, length = (toM - fromM).norm();
-    if (mCells.empty() || !(length > 0)) return false;
+    if (mCells.empty() || !(length > 0)) return -1;
     const Eigen::Vector3d dir = (toM - fromM) / length;
     const double blockM = h * (1 << kBlockShift);
     for (double t = 0; t < length;) {
         const Eigen::Vector3d x = fromM + t * dir, u = cellUnits(x);
         const int64_t i = std::llround(u.x()), j = std::llround(u.y()), k = std::llround(u.z());
-        if (mBlockKeys.count(blockKey(i, j, k))) {
-            if (bodyAt(x, kNoBody) >= 0) return true;
+        // A block holding only the excluded body's cells is passed like an empty one.
+        const auto owner = mBlockOwners.find(blockKey(i, j, k));
+        if (owner != mBlockOwners.end() && owner->second != exclude) {
+            if (const int64_t body = bodyAt(x, exclude); body >= 0) return body;
             t += h;
             continue;
         }
@@ -106,7 +124,7 @@ bool Exposure::blocked(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM)
         }
         t += std::max(exit, 0.0) + 1e-6 * blockM;
     }
-    return false;
+    return -1;
 }
 
 int64_t Exposure::bodyAt(const Eigen::Vector3d& xM, size_t exclude) const

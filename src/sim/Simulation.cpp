@@ -229,7 +229,7 @@ void Simulation::step(double targetS)
     const std::vector<char> cracked = fractureBodies(windows, dt);
     splitBodies(cracked);
 
-    LoadGeometry geometry{mScene.world.ground.enabled, mScene.world.ground.normal.normalized(), mScene.world.ground.offsetM, {}};
+    LoadGeometry geometry{{mScene.world.ground.enabled, mScene.world.ground.normal.normalized(), mScene.world.ground.offsetM}, {}};
     for (const StaticBox& box : mScene.world.colliders) geometry.obstacles.push_back({box.centreM, box.halfExtentM, box.orientation});
     const BlastLoads blast(*mField, windows, mScene.loads, geometry);
     const std::vector<char> loaded = blast.loadedBodies(mState.bodies);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <spall/blast/Blast.h>
+#include <spall/loads/Diffraction.h>
 #include <spall/loads/Exposure.h>
 #include <spall/loads/FacePulse.h>
 #include <spall/loads/Settings.h>
@@ -20,23 +21,6 @@ namespace spall {
 struct Wrench {
     Eigen::Vector3d forceN = Eigen::Vector3d::Zero();    ///< (unit: N)
     Eigen::Vector3d torqueNm = Eigen::Vector3d::Zero();  ///< (unit: N m)
-};
-
-/// A static box that casts a blast shadow (a scene collider).
-struct ObstacleBox {
-    Eigen::Vector3d centreM = Eigen::Vector3d::Zero();
-    Eigen::Vector3d halfExtentM = Eigen::Vector3d::Ones();
-    Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< box to world
-};
-
-/// The static world as the loads stage needs it: the ground (a face region resting on it clears
-/// only over its other edges; UFC 3-340-02: S is the smaller of a wall's height and half-width)
-/// and the boxes that cast shadows.
-struct LoadGeometry {
-    bool enabled = false;                               ///< the ground
-    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< unit, pointing up
-    double heightM = 0.0;                               ///< offset along the normal (unit: m)
-    std::vector<ObstacleBox> obstacles;
 };
 
 /// True when the body's bounding sphere meets some open window's distance range: only then can
@@ -61,7 +45,7 @@ struct Silhouette {
 };
 /// The outline of a group of bodies (one body, or bodies pressed together) seen from a charge.
 Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vector3d& chargeM, double shockSpeedMS,
-                        const LoadGeometry& ground);
+                        const LoadGround& ground);
 
 /// The blast's loads during one step: the field and the windows open at the step's start.
 class BlastLoads {
@@ -100,8 +84,15 @@ private:
     template <typename F>
     void forEachFaceImpulse(const Body& body, const std::vector<Silhouette>& outlines, const Exposure* exposure, size_t bodyIndex,
                             double timeS, double dtS, size_t firstFace, size_t endFace, F&& f) const;
-    /// True when the straight path from x to the charge crosses a body or an obstacle box.
-    bool inShadow(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure) const;
+    /// The obstacle box or the bounds of the first body (not `exclude`) that the straight path
+    /// from x to the charge crosses, or null.
+    const ObstacleBox* shadowCaster(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure,
+                                    size_t exclude) const;
+    /// The pulse at a face whose outward point is `probeM`: the direct one, or when something
+    /// stands between the face and the charge, the wave diffracted around it, with the
+    /// direction it travels in `travelM` (left as is for the direct wave).
+    PointPulse pulseOnFace(const OpenWindow& window, const PointPulse& direct, const Eigen::Vector3d& probeM, const Exposure* exposure,
+                           size_t exclude, double groundToleranceM, Eigen::Vector3d& travelM) const;
     /// The group's silhouette from each open window's charge (blast engineering only).
     std::vector<Silhouette> silhouettes(const std::vector<const Body*>& group) const;
     /// stepWrench with the outlines and the faces to skip given.

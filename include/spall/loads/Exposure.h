@@ -4,12 +4,13 @@
 // has broken into pieces that still touch.
 #pragma once
 
+#include <spall/loads/LoadGeometry.h>
 #include <spall/voxel/Body.h>
 
 #include <Eigen/Core>
 
 #include <cstdint>
-#include <unordered_set>
+#include <unordered_map>
 #include <vector>
 
 namespace spall {
@@ -27,10 +28,15 @@ public:
         return !mCovered[bodyIndex].empty() && mCovered[bodyIndex][faceIndex];
     }
 
-    /// True when the segment from `fromM` to `toM` (world) passes through a voxel of any
-    /// considered body (cells of the voxel size around their centres; sampled every voxel,
-    /// skipping empty blocks of 8^3 cells).
-    bool blocked(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM) const;
+    /// The first considered body other than `exclude` (from `fromM`) with a voxel on the
+    /// segment from `fromM` to `toM` (world; cells of the voxel size around voxel centres,
+    /// sampled every voxel, skipping empty blocks of 8^3 cells), or -1.
+    int64_t firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM, size_t exclude) const;
+
+    /// A considered body's oriented bounding box in the world: what the wave goes round.
+    const ObstacleBox& boundsOf(size_t bodyIndex) const { return mBounds[bodyIndex]; }
+
+    static constexpr size_t kNoBody = ~size_t(0);
 
     /// Per body: the lowest index of the group of bodies pressed together that it belongs to
     /// (itself when it touches none, or was not considered).
@@ -42,7 +48,6 @@ private:
         uint32_t body;
         float centre[3];  ///< centre of the voxel in cell units from the lattice origin
     };
-    static constexpr size_t kNoBody = ~size_t(0);
     /// A body other than `exclude` with a voxel that contains x (world, unit: m), or -1.
     int64_t bodyAt(const Eigen::Vector3d& xM, size_t exclude) const;
 
@@ -52,9 +57,12 @@ private:
     double mVoxelSizeM = 1.0;
     Eigen::Vector3d mOriginM = Eigen::Vector3d::Zero();  ///< a lattice point (unit: m)
     std::vector<Cell> mCells;  ///< sorted by key, then body
-    std::unordered_set<uint64_t> mBlockKeys;  ///< every block of 8^3 cells holding one
+    /// Every block of 8^3 cells holding a cell: the one body with cells there, or kManyBodies.
+    std::unordered_map<uint64_t, uint32_t> mBlockOwners;
+    static constexpr uint32_t kManyBodies = ~uint32_t(0);
     std::vector<std::vector<char>> mCovered;  ///< per considered body, per exposed face
     std::vector<uint32_t> mGroup;
+    std::vector<ObstacleBox> mBounds;  ///< per body (considered ones only)
 };
 
 }  // namespace spall

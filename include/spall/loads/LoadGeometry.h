@@ -1,0 +1,34 @@
+// The static world as the loads stage needs it: the ground and the boxes that cast shadows.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <vector>
+
+namespace spall {
+
+/// A box that casts a blast shadow: a scene's static collider, or a body's oriented bounds.
+struct ObstacleBox {
+    Eigen::Vector3d centreM = Eigen::Vector3d::Zero();
+    Eigen::Vector3d halfExtentM = Eigen::Vector3d::Ones();
+    Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< box to world
+};
+
+/// True when the segment from a to b meets the box (slab test in the box's frame).
+bool segmentMeetsBox(const Eigen::Vector3d& aM, const Eigen::Vector3d& bM, const ObstacleBox& box);
+
+/// The ground plane: a face region resting on it clears only over its other edges (UFC
+/// 3-340-02: S is the smaller of a wall's height and half-width), and no wave goes under it.
+struct LoadGround {
+    bool enabled = false;
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< unit, pointing up
+    double heightM = 0.0;                               ///< offset along the normal (unit: m)
+};
+
+struct LoadGeometry {
+    LoadGround ground;
+    std::vector<ObstacleBox> obstacles;
+};
+
+}  // namespace spall

@@ -1,0 +1,28 @@
+#include <spall/loads/LoadGeometry.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace spall {
+
+bool segmentMeetsBox(const Eigen::Vector3d& aM, const Eigen::Vector3d& bM, const ObstacleBox& box)
+{
+    const Eigen::Matrix3d toBox = box.orientation.toRotationMatrix().transpose();
+    const Eigen::Vector3d p = toBox * (aM - box.centreM), d = toBox * (bM - aM);
+    double enter = 0.0, leave = 1.0;
+    for (int axis = 0; axis < 3; ++axis) {
+        const double lo = -box.halfExtentM[axis], hi = box.halfExtentM[axis];
+        if (std::abs(d[axis]) < 1e-15) {
+            if (p[axis] < lo || p[axis] > hi) return false;
+            continue;
+        }
+        double t0 = (lo - p[axis]) / d[axis], t1 = (hi - p[axis]) / d[axis];
+        if (t0 > t1) std::swap(t0, t1);
+        enter = std::max(enter, t0);
+        leave = std::min(leave, t1);
+        if (enter > leave) return false;
+    }
+    return true;
+}
+
+}  // namespace spall
