@@ -159,7 +159,7 @@ void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouet
                 const PointPulse pulse = pulseOnFace(window, direct, x + 0.5 * h * normal, exposure,
                                                      cosine > 0.0 ? Exposure::kNoBody : bodyIndex, 0.5 * h, travel);
                 const double from = timeS - pulse.arrivalTimeS;
-                const FaceExposure face{-normal.dot(travel), outlines[w].clearingTimeS(), outlines[w].rearRiseTimeS()};
+                const FaceExposure face = faceExposure(pulse, -normal.dot(travel), outlines[w].clearingTimeS(), outlines[w].rearRiseTimeS(), p0);
                 const double impulse = faceImpulsePaS(pulse, face, from, from + dtS, p0);
                 if (impulse != 0.0) f(i, Eigen::Vector3d(-impulse * area * normal), arm, normal);
                 continue;

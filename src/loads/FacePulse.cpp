@@ -1,5 +1,7 @@
 #include <spall/loads/FacePulse.h>
 
+#include <spall/loads/ObliqueReflection.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -22,7 +24,7 @@ double positivePhasePa(const PointPulse& pulse, const FaceExposure& face, double
     double reflected = ps;
     if (c > 0.0) {
         const double pr = friedlanderOverpressure(pulse.reflectedPeakPa, pulse.positiveDurationS, pulse.reflectedDecayCoefficient, tau);
-        reflected = ps + (pr - ps) * c * c;
+        reflected = ps + (pr - ps) * face.reflectedFraction;
     }
     // UFC 3-340-02 §2-15.3: the reflected pressure falls linearly to the stagnation pressure
     // at the clearing time, and follows it from then on.
@@ -46,6 +48,11 @@ double gaussLegendre(F&& f, double a, double b, int n)
 }
 
 }  // namespace
+
+FaceExposure faceExposure(const PointPulse& pulse, double cosIncidence, double clearingTimeS, double rearRiseTimeS, double ambientPa)
+{
+    return {cosIncidence, clearingTimeS, rearRiseTimeS, reflectedExcessFraction(pulse.peakOverpressurePa, ambientPa, cosIncidence)};
+}
 
 double dragCoefficient(double cosIncidence)
 {

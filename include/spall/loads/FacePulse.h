@@ -20,7 +20,14 @@ struct FaceExposure {
     /// it, 4S/U for the body's silhouette (UFC 3-340-02 §2-15.4, rear wall); a face at incidence
     /// a > 90 degrees takes -cos(a) of it (unit: s).
     double rearRiseTimeS = 0.0;
+    /// The fraction of the normally reflected excess (Pr - Ps) the face sees at its incidence
+    /// (loads/ObliqueReflection.h): 1 head-on, 0 at grazing and on faces looking away.
+    double reflectedFraction = 1.0;
 };
+
+/// How a face at incidence cos(alpha) meets `pulse`: its reflected fraction from the pulse's
+/// peak side-on pressure (the angle dependence is taken at the peak, for the whole pulse).
+FaceExposure faceExposure(const PointPulse& pulse, double cosIncidence, double clearingTimeS, double rearRiseTimeS, double ambientPa);
 
 /// Drag coefficient of a face against its angle of incidence: +1 head-on (UFC 3-340-02 §2-15.3,
 /// front wall), -0.4 at grazing incidence (side walls and roof, for dynamic pressures up to
@@ -43,11 +50,8 @@ inline double clearingTimeS(double smallerM, double largerM, double shockSpeedMS
 /// Overpressure on the face (unit: Pa, positive pushes into it) at `sinceArrivalS` after the
 /// wave reaches it: p = r (s + w (p_a - s)), with s = p_s + Cd q the stagnation pressure,
 /// w = max(0, 1 - tau/tc) the part not yet cleared, r the rise on faces looking away, and p_a
-/// the reflected pressure at incidence a, interpolated in cos^2(a) between the normally
-/// reflected p_r and the side-on p_s (p_a = p_s for faces looking away). The interpolation
-/// never falls below side-on, unlike ConWep's cos^2(a) p_r + (1 - cos a)^2 p_s, and follows
-/// UFC 3-340-02 Fig. 2-193 for regular reflection but not its Mach-reflection rise near
-/// 40-50 degrees (docs/accuracy.md).
+/// the reflected pressure at incidence a, p_a = p_s + f (p_r - p_s) with f the face's
+/// reflected fraction (p_a = p_s for faces looking away).
 double faceOverpressurePa(const PointPulse& pulse, const FaceExposure& face, double sinceArrivalS, double ambientPa);
 
 /// The same pressure integrated from `fromS` to `toS` after arrival (unit: Pa s): Gauss–Legendre
