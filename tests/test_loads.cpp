@@ -290,6 +290,7 @@ TEST(Loads, SlabTakesTheSameImpulseIntactOrInTouchingLayers)
         return total;
     };
     const Eigen::Vector3d whole = momentum(intact), broken = momentum(layers);
+    std::printf("slab momentum: intact %.1f N s, in touching layers %.1f N s\n", whole.y(), broken.y());
     EXPECT_GT(whole.y(), 0.0);
     EXPECT_NEAR(broken.y(), whole.y(), 0.15 * whole.y()) << "intact " << whole.y() << " N s, in layers " << broken.y() << " N s";
 }

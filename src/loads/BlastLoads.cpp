@@ -87,20 +87,20 @@ Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vect
 }
 
 const ObstacleBox* BlastLoads::shadowCaster(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure,
-                                             size_t exclude) const
+                                             size_t excludeGroup) const
 {
     for (const ObstacleBox& box : mGeometry.obstacles)
         if (segmentMeetsBox(xM, chargeM, box)) return &box;
     if (!exposure) return nullptr;
-    const int64_t body = exposure->firstBlocker(xM, chargeM, exclude);
-    return body >= 0 ? &exposure->boundsOf(size_t(body)) : nullptr;
+    const int64_t body = exposure->firstBlocker(xM, chargeM, excludeGroup);
+    return body >= 0 ? &exposure->groupBoundsOf(size_t(body)) : nullptr;
 }
 
 PointPulse BlastLoads::pulseOnFace(const OpenWindow& window, const PointPulse& direct, const Eigen::Vector3d& probeM,
-                                   const Exposure* exposure, size_t exclude, double groundToleranceM, Eigen::Vector3d& travelM) const
+                                   const Exposure* exposure, size_t excludeGroup, double groundToleranceM, Eigen::Vector3d& travelM) const
 {
     const Eigen::Vector3d& charge = mField.charges()[window.charge].positionM;
-    const ObstacleBox* caster = shadowCaster(probeM, charge, exposure, exclude);
+    const ObstacleBox* caster = shadowCaster(probeM, charge, exposure, excludeGroup);
     if (!caster) return direct;
     const EdgePath path = shortestPathAround(*caster, charge, probeM, mGeometry, groundToleranceM);
     const DiffractedWave wave = diffractedWave(path, charge, probeM);
@@ -154,10 +154,11 @@ void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouet
                 if (timeS + dtS <= direct.arrivalTimeS || timeS >= direct.arrivalTimeS + direct.positiveDurationS + direct.negativeDurationS)
                     continue;
                 // A face that looks at the charge is shadowed by anything, its own body too (a
-                // concave pocket); one that looks away only by something else.
+                // concave pocket); one that looks away only by something outside the group of
+                // bodies pressed together that is loaded as one object with it.
+                const size_t excludeGroup = cosine > 0.0 || !exposure ? Exposure::kNoBody : exposure->groupOf()[bodyIndex];
                 Eigen::Vector3d travel = rHat;
-                const PointPulse pulse = pulseOnFace(window, direct, x + 0.5 * h * normal, exposure,
-                                                     cosine > 0.0 ? Exposure::kNoBody : bodyIndex, 0.5 * h, travel);
+                const PointPulse pulse = pulseOnFace(window, direct, x + 0.5 * h * normal, exposure, excludeGroup, 0.5 * h, travel);
                 const double from = timeS - pulse.arrivalTimeS;
                 const FaceExposure face = faceExposure(pulse, -normal.dot(travel), outlines[w].clearingTimeS(), outlines[w].rearRiseTimeS(), p0);
                 const double impulse = faceImpulsePaS(pulse, face, from, from + dtS, p0);

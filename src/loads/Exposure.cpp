@@ -40,7 +40,7 @@ ObstacleBox worldBounds(const Body& body)
 }  // namespace
 
 Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& considered)
-    : mCovered(bodies.size()), mGroup(bodies.size()), mBounds(bodies.size())
+    : mCovered(bodies.size()), mGroup(bodies.size()), mGroupBounds(bodies.size())
 {
     if (bodies.empty()) return;
     mVoxelSizeM = bodies.front().voxelSizeM;
@@ -55,7 +55,6 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     std::vector<std::vector<Cell>> perBody(bodies.size());
     forEachIndex(bodies.size(), [&](size_t b) {
         if (!considered[b]) return;
-        mBounds[b] = worldBounds(bodies[b]);
         for (const openvdb::Coord& ijk : bodies[b].boundaryVoxels) {
             const Eigen::Vector3d u = cellUnits(bodies[b].voxelWorldM(ijk));
             perBody[b].push_back({cellKey(u), uint32_t(b), {float(u.x()), float(u.y()), float(u.z())}});
@@ -63,16 +62,6 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     });
     for (auto& cells : perBody) mCells.insert(mCells.end(), cells.begin(), cells.end());
     std::sort(mCells.begin(), mCells.end(), [](const Cell& a, const Cell& c) { return a.key != c.key ? a.key < c.key : a.body < c.body; });
-    // Blocks hold their cells and those next to them: a voxel can contain points of the
-    // neighbouring cells (bodies need not share the world's lattice).
-    for (const Cell& c : mCells) {
-        const int64_t i = std::llround(c.centre[0]), j = std::llround(c.centre[1]), k = std::llround(c.centre[2]);
-        for (int corner = 0; corner < 8; ++corner) {
-            const auto [owner, added] =
-                mBlockOwners.try_emplace(blockKey(i + (corner & 1 ? 1 : -1), j + (corner & 2 ? 1 : -1), k + (corner & 4 ? 1 : -1)), c.body);
-            if (!added && owner->second != c.body) owner->second = kManyBodies;
-        }
-    }
     // Per face: is the cell across it another body's?
     std::vector<std::vector<uint32_t>> touching(bodies.size());
     forEachIndex(bodies.size(), [&](size_t b) {
@@ -83,7 +72,7 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
         for (size_t f = 0; f < body.exposedFaces.size(); ++f) {
             const ExposedFace& face = body.exposedFaces[f];
             const Eigen::Vector3d across = body.voxelWorldM(face.voxel) + body.voxelSizeM * (rot * faceNormal(face.face));
-            const int64_t other = bodyAt(across, b);
+            const int64_t other = bodyAt(across, [b](size_t body) { return body == b; });
             if (other < 0) continue;
             mCovered[b][f] = 1;
             touching[b].push_back(uint32_t(other));
@@ -94,9 +83,46 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     for (size_t b = 0; b < bodies.size(); ++b)
         for (uint32_t other : touching[b]) groups.join(uint32_t(b), other);
     for (size_t b = 0; b < bodies.size(); ++b) mGroup[b] = groups.root(uint32_t(b));
+    // Blocks hold their cells and those next to them: a voxel can contain points of the
+    // neighbouring cells (bodies need not share the world's lattice).
+    for (const Cell& c : mCells) {
+        const int64_t i = std::llround(c.centre[0]), j = std::llround(c.centre[1]), k = std::llround(c.centre[2]);
+        for (int corner = 0; corner < 8; ++corner) {
+            const auto [owner, added] =
+                mBlockOwners.try_emplace(blockKey(i + (corner & 1 ? 1 : -1), j + (corner & 2 ? 1 : -1), k + (corner & 4 ? 1 : -1)), mGroup[c.body]);
+            if (!added && owner->second != mGroup[c.body]) owner->second = kManyGroups;
+        }
+    }
+    boundGroups(bodies, considered);
 }
 
-int64_t Exposure::firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM, size_t exclude) const
+void Exposure::boundGroups(const std::vector<Body>& bodies, const std::vector<char>& considered)
+{
+    std::vector<uint32_t> members(bodies.size(), 0);
+    for (size_t b = 0; b < bodies.size(); ++b)
+        if (considered[b]) ++members[mGroup[b]];
+    std::vector<Eigen::Vector3d> lo(bodies.size(), Eigen::Vector3d::Constant(1e300)), hi(bodies.size(), Eigen::Vector3d::Constant(-1e300));
+    for (size_t b = 0; b < bodies.size(); ++b) {
+        if (!considered[b]) continue;
+        const ObstacleBox box = worldBounds(bodies[b]);
+        const size_t g = mGroup[b];
+        if (members[g] == 1) {
+            mGroupBounds[g] = box;
+            continue;
+        }
+        const Eigen::Matrix3d rot = box.orientation.toRotationMatrix();
+        for (int c = 0; c < 8; ++c) {
+            const Eigen::Vector3d corner =
+                box.centreM + rot * Eigen::Vector3d((c & 1 ? 1 : -1) * box.halfExtentM.x(), (c & 2 ? 1 : -1) * box.halfExtentM.y(),
+                                                    (c & 4 ? 1 : -1) * box.halfExtentM.z());
+            lo[g] = lo[g].cwiseMin(corner), hi[g] = hi[g].cwiseMax(corner);
+        }
+    }
+    for (size_t g = 0; g < bodies.size(); ++g)
+        if (members[g] > 1) mGroupBounds[g] = {0.5 * (lo[g] + hi[g]), 0.5 * (hi[g] - lo[g]), Eigen::Quaterniond::Identity()};
+}
+
+int64_t Exposure::firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM, size_t excludeGroup) const
 {
     const double h = mVoxelSizeM, length = (toM - fromM).norm();
     if (mCells.empty() || !(length > 0)) return -1;
@@ -105,10 +131,10 @@ int64_t Exposure::firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector
     for (double t = 0; t < length;) {
         const Eigen::Vector3d x = fromM + t * dir, u = cellUnits(x);
         const int64_t i = std::llround(u.x()), j = std::llround(u.y()), k = std::llround(u.z());
-        // A block holding only the excluded body's cells is passed like an empty one.
+        // A block holding only cells of the excluded group is passed like an empty one.
         const auto owner = mBlockOwners.find(blockKey(i, j, k));
-        if (owner != mBlockOwners.end() && owner->second != exclude) {
-            if (const int64_t body = bodyAt(x, exclude); body >= 0) return body;
+        if (owner != mBlockOwners.end() && owner->second != excludeGroup) {
+            if (const int64_t body = bodyAt(x, [&](size_t b) { return mGroup[b] == excludeGroup; }); body >= 0) return body;
             t += h;
             continue;
         }
@@ -127,7 +153,8 @@ int64_t Exposure::firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector
     return -1;
 }
 
-int64_t Exposure::bodyAt(const Eigen::Vector3d& xM, size_t exclude) const
+template <typename Skip>
+int64_t Exposure::bodyAt(const Eigen::Vector3d& xM, Skip&& skip) const
 {
     // A voxel within half a cell of x may sit in the next cell along an axis where x lies near
     // a cell boundary (bodies from different objects need not share a lattice): look there too.
@@ -144,7 +171,7 @@ int64_t Exposure::bodyAt(const Eigen::Vector3d& xM, size_t exclude) const
                 const uint64_t key = cellKey(i, j, k);
                 auto it = std::lower_bound(mCells.begin(), mCells.end(), key, [](const Cell& c, uint64_t x) { return c.key < x; });
                 for (; it != mCells.end() && it->key == key; ++it) {
-                    if (it->body == exclude) continue;
+                    if (skip(it->body)) continue;
                     const double d = std::max({std::abs(it->centre[0] - u.x()), std::abs(it->centre[1] - u.y()), std::abs(it->centre[2] - u.z())});
                     if (d < 0.5) return it->body;
                 }

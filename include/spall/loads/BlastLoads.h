@@ -84,15 +84,15 @@ private:
     template <typename F>
     void forEachFaceImpulse(const Body& body, const std::vector<Silhouette>& outlines, const Exposure* exposure, size_t bodyIndex,
                             double timeS, double dtS, size_t firstFace, size_t endFace, F&& f) const;
-    /// The obstacle box or the bounds of the first body (not `exclude`) that the straight path
-    /// from x to the charge crosses, or null.
+    /// The obstacle box, or the bounds of the group of the first body (outside `excludeGroup`),
+    /// that the straight path from x to the charge crosses, or null.
     const ObstacleBox* shadowCaster(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure,
-                                    size_t exclude) const;
+                                    size_t excludeGroup) const;
     /// The pulse at a face whose outward point is `probeM`: the direct one, or when something
     /// stands between the face and the charge, the wave diffracted around it, with the
     /// direction it travels in `travelM` (left as is for the direct wave).
     PointPulse pulseOnFace(const OpenWindow& window, const PointPulse& direct, const Eigen::Vector3d& probeM, const Exposure* exposure,
-                           size_t exclude, double groundToleranceM, Eigen::Vector3d& travelM) const;
+                           size_t excludeGroup, double groundToleranceM, Eigen::Vector3d& travelM) const;
     /// The group's silhouette from each open window's charge (blast engineering only).
     std::vector<Silhouette> silhouettes(const std::vector<const Body*>& group) const;
     /// stepWrench with the outlines and the faces to skip given.

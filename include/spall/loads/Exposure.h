@@ -28,13 +28,16 @@ public:
         return !mCovered[bodyIndex].empty() && mCovered[bodyIndex][faceIndex];
     }
 
-    /// The first considered body other than `exclude` (from `fromM`) with a voxel on the
-    /// segment from `fromM` to `toM` (world; cells of the voxel size around voxel centres,
-    /// sampled every voxel, skipping empty blocks of 8^3 cells), or -1.
-    int64_t firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM, size_t exclude) const;
+    /// The first considered body (from `fromM`) outside the group `excludeGroup` (kNoBody: none
+    /// excluded) with a voxel on the segment from `fromM` to `toM` (world; cells of the voxel
+    /// size around voxel centres, sampled every voxel, skipping blocks of 8^3 cells that hold
+    /// none), or -1.
+    int64_t firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM, size_t excludeGroup) const;
 
-    /// A considered body's oriented bounding box in the world: what the wave goes round.
-    const ObstacleBox& boundsOf(size_t bodyIndex) const { return mBounds[bodyIndex]; }
+    /// The bounds of the group of bodies pressed together that a considered body belongs to,
+    /// in the world: what the wave goes round. A body alone: its oriented box; a group: the
+    /// world-axis box round its members' boxes.
+    const ObstacleBox& groupBoundsOf(size_t bodyIndex) const { return mGroupBounds[mGroup[bodyIndex]]; }
 
     static constexpr size_t kNoBody = ~size_t(0);
 
@@ -48,8 +51,11 @@ private:
         uint32_t body;
         float centre[3];  ///< centre of the voxel in cell units from the lattice origin
     };
-    /// A body other than `exclude` with a voxel that contains x (world, unit: m), or -1.
-    int64_t bodyAt(const Eigen::Vector3d& xM, size_t exclude) const;
+    /// A body that `skip(body)` does not skip with a voxel that contains x (world, unit: m), or -1.
+    /// mGroupBounds from the groups and the members' oriented boxes.
+    void boundGroups(const std::vector<Body>& bodies, const std::vector<char>& considered);
+    template <typename Skip>
+    int64_t bodyAt(const Eigen::Vector3d& xM, Skip&& skip) const;
 
     /// World point x in cell units: (x - origin) / h.
     Eigen::Vector3d cellUnits(const Eigen::Vector3d& xM) const { return (xM - mOriginM) / mVoxelSizeM; }
@@ -57,12 +63,12 @@ private:
     double mVoxelSizeM = 1.0;
     Eigen::Vector3d mOriginM = Eigen::Vector3d::Zero();  ///< a lattice point (unit: m)
     std::vector<Cell> mCells;  ///< sorted by key, then body
-    /// Every block of 8^3 cells holding a cell: the one body with cells there, or kManyBodies.
-    std::unordered_map<uint64_t, uint32_t> mBlockOwners;
-    static constexpr uint32_t kManyBodies = ~uint32_t(0);
+    /// Every block of 8^3 cells holding a cell: the one group with cells there, or kManyGroups.
+    std::unordered_map<uint64_t, size_t> mBlockOwners;
+    static constexpr size_t kManyGroups = kNoBody - 1;
     std::vector<std::vector<char>> mCovered;  ///< per considered body, per exposed face
     std::vector<uint32_t> mGroup;
-    std::vector<ObstacleBox> mBounds;  ///< per body (considered ones only)
+    std::vector<ObstacleBox> mGroupBounds;  ///< per group, at its lowest member's index
 };
 
 }  // namespace spall
