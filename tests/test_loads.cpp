@@ -370,3 +370,41 @@ TEST(Loads, DiffractedWaveBehindABarrierKeepsWhatTheCfdFinds)
     EXPECT_NEAR(lowest, 0.43, 0.3 * 0.43);
     EXPECT_LT(highest, 1.0);
 }
+
+TEST(Loads, GroundReflectsAFreeAirCharge)
+{
+    // A free-air charge above the ground gets the ground's reflection as an image charge.
+    // Reference: just above the height where a charge counts as a surface burst, the wave on a
+    // wall standing on the ground is Kingery–Bulmash's hemispherical surface burst; the linear
+    // image sums two free-air waves where the real ones merge (docs/accuracy.md).
+    const double tnt = 1.0, h = 0.1;
+    const LoadGeometry ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
+    const Body wall = test::boxBody(1, 100, 20, h, 2000.0, Eigen::Vector3d(3.0 + 0.5 * h, 0, 1.0));
+    auto strip = [](const ExposedFace& f) { return f.face == kNegX && f.voxel.y() >= 48 && f.voxel.y() <= 51 && f.voxel.z() < 5; };
+    const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::Surface, tnt, 3.0);
+    const double dt = p.positiveDurationS / 200, until = 2 * (p.arrivalTimeS + p.positiveDurationS);
+    const double height = 1.05 * surfaceBurstHeightM(tnt);
+    const Charge air{Eigen::Vector3d(0, 0, height), tnt, 0.0, BurstType::FreeAir};
+    const double surface = faceImpulseOn(wall, BlastField({Charge{Eigen::Vector3d::Zero(), tnt, 0.0, BurstType::Surface}}, BlastSettings()),
+                                         ground, dt, until, strip);
+    const double imaged = faceImpulseOn(wall, BlastField(withGroundImages({air}, Eigen::Vector3d::UnitZ(), 0.0), BlastSettings()), ground, dt,
+                                        until, strip);
+    const double alone = faceImpulseOn(wall, BlastField({air}, BlastSettings()), ground, dt, until, strip);
+    std::printf("wall strip 3 m from 1 kg at %.2f m: free air %.1f, with the ground's image %.1f, surface burst %.1f N s\n", height, alone,
+                imaged, surface);
+    EXPECT_GT(imaged, 1.5 * alone);
+    EXPECT_NEAR(imaged, surface, 0.15 * surface);
+}
+
+TEST(Loads, ABlockOnTheGroundIsPressedIntoItNotLifted)
+{
+    // No air under a face resting on the ground, and the ground's reflection does not wrap round
+    // what stands on it: a block under an air burst is pushed down.
+    const LoadGeometry ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
+    const Charge air{Eigen::Vector3d(0.5, 0, 1.5), 1.0, 0.0, BurstType::FreeAir};
+    const BlastField field(withGroundImages({air}, Eigen::Vector3d::UnitZ(), 0.0), BlastSettings());
+    const Body block = test::boxBody(4, 4, 4, 0.1, 2000.0, Eigen::Vector3d(0, 0, 0.2));
+    const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::FreeAir, 1.0, 1.5);
+    const Wrench total = impulseOnHeldBody(block, field, LoadSettings(), ground, p.positiveDurationS / 200, 0.05);
+    EXPECT_LT(total.forceN.z(), 0.0);
+}

@@ -34,4 +34,18 @@ const std::vector<Field<BlastSettings>>& fieldTable<BlastSettings>()
     return table;
 }
 
+std::vector<Charge> withGroundImages(const std::vector<Charge>& charges, const Eigen::Vector3d& groundNormal, double groundHeightM)
+{
+    std::vector<Charge> all = charges;
+    const Eigen::Vector3d n = groundNormal.normalized();
+    for (const Charge& c : charges) {
+        const double height = n.dot(c.positionM) - groundHeightM;
+        if (c.burst != BurstType::FreeAir || !(height > 0.0)) continue;
+        Charge image = c;
+        image.positionM = c.positionM - 2.0 * height * n;
+        all.push_back(image);
+    }
+    return all;
+}
+
 }  // namespace spall

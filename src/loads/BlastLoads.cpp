@@ -86,6 +86,17 @@ Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vect
     return out;
 }
 
+bool BlastLoads::onGround(const Eigen::Vector3d& faceCentreM, const Eigen::Vector3d& normal, double voxelSizeM) const
+{
+    const LoadGround& ground = mGeometry.ground;
+    return ground.enabled && normal.dot(ground.normal) < -0.5 && faceCentreM.dot(ground.normal) - ground.heightM <= 0.5 * voxelSizeM;
+}
+
+bool BlastLoads::belowGround(const Eigen::Vector3d& xM) const
+{
+    return mGeometry.ground.enabled && xM.dot(mGeometry.ground.normal) < mGeometry.ground.heightM;
+}
+
 const ObstacleBox* BlastLoads::shadowCaster(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure,
                                              size_t excludeGroup) const
 {
@@ -142,6 +153,7 @@ void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouet
         const Eigen::Vector3d normal = rot.col(faceAxis(face.face)) * faceSign(face.face);
         const Eigen::Vector3d arm = rot * body.voxelOffsetM(face.voxel) + 0.5 * h * normal;
         const Eigen::Vector3d x = body.motion.positionM + arm;
+        if (onGround(x, normal, h)) continue;  // resting on the ground: no air there
         for (size_t w = 0; w < mWindows.size(); ++w) {
             const OpenWindow& window = mWindows[w];
             const Eigen::Vector3d r = x - mField.charges()[window.charge].positionM;
@@ -149,6 +161,9 @@ void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouet
             if (r2 < window.minDistanceM * window.minDistanceM || r2 > window.maxDistanceM * window.maxDistanceM || r2 <= 0) continue;
             const Eigen::Vector3d rHat = r / std::sqrt(r2);
             const double cosine = -normal.dot(rHat);
+            // The ground's reflection (an image charge) loads only faces that look toward the
+            // ground it comes from: it does not wrap round bodies standing on that ground.
+            if (cosine <= 0.0 && belowGround(mField.charges()[window.charge].positionM)) continue;
             if (mSettings.model == LoadModel::BlastEngineering) {
                 const PointPulse direct = mField.pulseAt(window.charge, r2);
                 if (timeS + dtS <= direct.arrivalTimeS || timeS >= direct.arrivalTimeS + direct.positiveDurationS + direct.negativeDurationS)

@@ -63,12 +63,20 @@ void refuseChargesInside(const Body& body, const std::string& objectName, const 
     }
 }
 
+/// The free field: the scene's charges, with the ground's reflection of those in free air.
+std::unique_ptr<BlastField> makeField(const Scene& scene)
+{
+    const GroundPlane& ground = scene.world.ground;
+    return std::make_unique<BlastField>(ground.enabled ? withGroundImages(scene.charges, ground.normal, ground.offsetM) : scene.charges,
+                                        scene.blast);
+}
+
 }  // namespace
 
 Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(scene)
 {
     initialiseOpenVdb();
-    mField = std::make_unique<BlastField>(scene.charges, scene.blast);
+    mField = makeField(scene);
     const std::vector<TriangleMesh> meshes = loadMeshes();
     checkSceneFits(scene, meshes);
     for (size_t i = 0; i < scene.objects.size(); ++i) {
@@ -146,7 +154,7 @@ Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene
 {
     requireVoxelSize(mState.bodies, scene.voxelSizeM);
     initialiseOpenVdb();
-    mField = std::make_unique<BlastField>(scene.charges, scene.blast);
+    mField = makeField(scene);
     mStats.minDtS = scene.timeStep.maxTimeStepS;
 }
 

@@ -41,6 +41,13 @@ struct Charge {
 /// ground, where the Kingery–Bulmash hemispherical data apply.
 inline double surfaceBurstHeightM(double tntKg) { return 2.0 * std::cbrt(3.0 * tntKg / (4.0 * M_PI * 1600.0)); }
 
+/// The charges with the ground's reflection: each free-air charge above the ground gets an image,
+/// its mirror through the ground plane (normal . x = heightM), of the same mass and time. The
+/// image's wave is the wave the ground reflects, superposed linearly on the direct one (exact
+/// for weak waves; docs/accuracy.md for where the two merge). Surface bursts already carry the
+/// ground in their hemispherical data.
+std::vector<Charge> withGroundImages(const std::vector<Charge>& charges, const Eigen::Vector3d& groundNormal, double groundHeightM);
+
 struct BlastSettings {
     BlastDataset dataset = BlastDataset::KingeryBulmash;
     /// Table nodes per decade of scaled distance; see docs/accuracy.md for the error it buys

@@ -84,6 +84,12 @@ private:
     template <typename F>
     void forEachFaceImpulse(const Body& body, const std::vector<Silhouette>& outlines, const Exposure* exposure, size_t bodyIndex,
                             double timeS, double dtS, size_t firstFace, size_t endFace, F&& f) const;
+    /// True when a face (centre, outward normal) lies on the ground, facing into it, within
+    /// half a voxel: it touches no air.
+    bool onGround(const Eigen::Vector3d& faceCentreM, const Eigen::Vector3d& normal, double voxelSizeM) const;
+    /// True for a point under the ground: a charge there is a free-air charge's image, the wave
+    /// the ground reflects (blast/Settings.h, withGroundImages).
+    bool belowGround(const Eigen::Vector3d& xM) const;
     /// The obstacle box, or the bounds of the group of the first body (outside `excludeGroup`),
     /// that the straight path from x to the charge crosses, or null.
     const ObstacleBox* shadowCaster(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure,
