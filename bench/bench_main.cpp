@@ -157,7 +157,7 @@ void BM_Pressure_Snapshot(benchmark::State& state)
 {
     BlastSettings bs;
     const BlastField field({Charge{Eigen::Vector3d::Zero(), 10.0, 0.0, BurstType::FreeAir}}, bs);
-    const PressureSnapshot snapshot(field, 0.02);
+    const PressureSnapshot snapshot(field, 0.02, 0.0);
     double sum = 0;
     for (auto _ : state) {
         for (int i = 0; i < kPressureSamples; ++i) sum += snapshot.sample(Eigen::Vector3d(1.0 + 20.0 * i / kPressureSamples, 0.1, 0.2)).overpressurePa;
@@ -182,7 +182,7 @@ void BM_Loading_Links256(benchmark::State& state)
     // across the block varies by less than the links' spread of limits (a factor of 3).
     const BlastField field({Charge{Eigen::Vector3d(-40.0, 0, 0), 100.0, 0.0, BurstType::FreeAir}}, bs);
     const BlastParameters far = field.tableParameters(0, 41.4);
-    const PressureSnapshot pressure(field, far.arrivalTimeS + 0.05 * far.positiveDurationS);
+    const PressureSnapshot pressure(field, far.arrivalTimeS + 0.05 * far.positiveDurationS, 0.0);
     double lowestPa = std::numeric_limits<double>::infinity();
     for (double r = 38.6; r <= 41.4; r += 0.01) lowestPa = std::min(lowestPa, pressure.overpressurePa(0, r));
     Material m = findMaterialPreset("reinforced-concrete");

@@ -288,7 +288,7 @@ TEST(PressureSnapshot, MatchesTheFieldAndBoundsItsShells)
     std::mt19937_64 rng(7);
     int compared = 0;
     for (double t = 1e-5; t < 0.3; t *= 1.6) {
-        const PressureSnapshot snapshot(field, t);
+        const PressureSnapshot snapshot(field, t, 0.0);
         const auto& windows = snapshot.windows();
         double scalePa = 1.0;  // the sum of the windows' largest pressures
         for (size_t w = 0; w < windows.size(); ++w) {

@@ -32,7 +32,7 @@ int64_t loadOver(Body& body, const Material& m, const BlastField& field, double 
     const double dt = (t1 - t0) / n;
     for (int i = 0; i < n; ++i) {
         const double t = t0 + i * dt;
-        broken += loadLinks(body, m, PressureSnapshot(field, t), dt, s).brokenLinks;
+        broken += loadLinks(body, m, PressureSnapshot(field, t, dt), dt, s).brokenLinks;
     }
     return broken;
 }
@@ -49,7 +49,7 @@ TEST(Fracture, BreaksExactlyTheLinksAboveTheirLimit)
     s.orientation = false;
     s.weakening = false;
     const double t = field.tableParameters(0, 2.6).arrivalTimeS + 1e-4;  // the front is inside the block
-    const PressureSnapshot pressure(field, t);
+    const PressureSnapshot pressure(field, t, 0.0);
     auto before = body.grid->deepCopy();
     const LoadResult result = loadLinks(body, m, pressure, 1e-5, s);
     int64_t broken = 0, checked = 0;
@@ -132,7 +132,9 @@ TEST(Fracture, DavisonStevensDamageIsTheIntegralOfItsRate)
     // The rate form dD/dt = B D* (exp(C s) - 1), s = max(p - mean yield, 0) (paper eq. 2.2, 3.2,
     // DESIGN §1), integrated here by Simpson's rule over the pulse at the voxel, with B chosen so
     // that the whole pulse leaves a damage of 0.5 (no link breaks, so the voxel keeps
-    // accumulating). The simulation's steps must reach that damage, more closely as they shrink.
+    // accumulating). The simulation's steps must reach that damage, more closely as they shrink
+    // (each step takes the largest pressure of the step, so the sum converges from above, to
+    // first order in the step).
     BlastSettings bs;
     const Eigen::Vector3d chargeM(0, -3.0, 0);
     const BlastField field({Charge{chargeM, 1.0, 0.0, BurstType::FreeAir}}, bs);
@@ -161,7 +163,7 @@ TEST(Fracture, DavisonStevensDamageIsTheIntegralOfItsRate)
         EXPECT_EQ(loadOver(body, m, field, 0.0, 0.012, steps, s), 0);
         errors.push_back(std::abs(body.damage->tree().getValue(voxel) - 0.5) / 0.5);
     }
-    EXPECT_LT(errors.back(), 0.01) << errors[0] << " " << errors[1] << " " << errors[2];
+    EXPECT_LT(errors.back(), 0.015) << errors[0] << " " << errors[1] << " " << errors[2];
     EXPECT_LT(errors[2], errors[0]) << "the error does not fall as the step shrinks";
 }
 
@@ -250,9 +252,10 @@ TEST(Materials, WallsInTheSimulationBreakAtThePublishedPressures)
 {
     // The presets' published failure ranges (Clancey 1972 for panels; reinforced concrete:
     // NUKEMAP's 20 psi benchmark with brick's relative spread; see Material.cpp), applied to a
-    // wall in the simulation: a side-on peak 3 % below the low end at the wall's nearest link
-    // breaks nothing; 3 % above the high end at its farthest link breaks every link. (The 3 %
-    // covers the pulse's decay within a front-crossing step and the spread of distances.)
+    // wall in the simulation: a side-on peak 0.5 % below the low end at the wall's nearest link
+    // breaks nothing; 0.5 % above the high end at its farthest link breaks every link. (Links
+    // see the largest pressure of each step, so the peak reaches them wherever the steps fall;
+    // the 0.5 % covers the blast table's interpolation.)
     struct Case {
         const char* name;
         double low, high;
@@ -260,10 +263,10 @@ TEST(Materials, WallsInTheSimulationBreakAtThePublishedPressures)
     for (const Case c : {Case{"glass", 3.4e3, 6.9e3}, Case{"wood", 6.9e3, 13.8e3}, Case{"brick-masonry", 48.2e3, 55.1e3},
                          Case{"concrete", 13.8e3, 20.7e3}, Case{"reinforced-concrete", 120.6e3, 137.9e3}}) {
         validateMaterial(findMaterialPreset(c.name));
-        const auto [noneBroken, links] = wallLinksBroken(c.name, 0.97 * c.low, 60.0);
+        const auto [noneBroken, links] = wallLinksBroken(c.name, 0.995 * c.low, 60.0);
         EXPECT_EQ(noneBroken, 0) << c.name << " below its low end";
         const double farthestM = std::sqrt(60.3 * 60.3 + 1.0 * 1.0 + 0.75 * 0.75);
-        const auto [allBroken, total] = wallLinksBroken(c.name, 1.03 * c.high, farthestM);
+        const auto [allBroken, total] = wallLinksBroken(c.name, 1.005 * c.high, farthestM);
         EXPECT_EQ(allBroken, total) << c.name << " above its high end";
     }
     EXPECT_THROW(findMaterialPreset("cheese"), InputError);

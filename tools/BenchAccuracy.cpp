@@ -149,7 +149,7 @@ void midpointStudy(std::vector<Row>& rows)
         for (int k = 0; k < 8; ++k) {
             // The front at 4.0 .. 4.7 m: inside the wall.
             const double t = field.tableParameters(0, 4.0 + 0.1 * k).arrivalTimeS + 1e-5;
-            const PressureSnapshot pressure(field, t);
+            const PressureSnapshot pressure(field, t, 0.0);
             for (int i = 0; i < nx; ++i)
                 for (int j = 0; j < nz; ++j) {
                     const Eigen::Vector3d centre(-2.0 + (i + 0.5) * h, 0.0, (j + 0.5) * h);

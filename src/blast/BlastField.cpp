@@ -174,7 +174,7 @@ double BlastField::shockSpeedMS(int charge, double distanceM) const
 
 namespace spall {
 
-PressureSnapshot::PressureSnapshot(const BlastField& field, double timeS) : mWindows(field.openWindows(timeS))
+PressureSnapshot::PressureSnapshot(const BlastField& field, double timeS, double stepS) : mWindows(field.openWindows(timeS))
 {
     constexpr double kNearestM = 1e-6;  // the fits are clamped there anyway; keeps log(0) out
     mProfiles.resize(mWindows.size());
@@ -184,31 +184,29 @@ PressureSnapshot::PressureSnapshot(const BlastField& field, double timeS) : mWin
         Profile& profile = mProfiles[w];
         profile.centreM = charge.positionM;
         profile.innerM = std::max(window.minDistanceM, kNearestM);
-        const auto arrived = [&](double r) {
-            return charge.detonationTimeS + field.tableParameters(window.charge, r).arrivalTimeS <= timeS;
-        };
-        // The front: the farthest distance the shock has reached (arrival time grows with distance).
-        double front = -1.0;
-        if (arrived(profile.innerM)) {
+        // The fronts: the farthest distance the shock has reached by a time (arrival time
+        // grows with distance), or -1 when it has not reached the inner edge.
+        const auto frontAt = [&](double atS) {
+            const auto arrived = [&](double r) { return charge.detonationTimeS + field.tableParameters(window.charge, r).arrivalTimeS <= atS; };
+            if (!arrived(profile.innerM)) return -1.0;
             double lo = profile.innerM, hi = std::max(window.maxDistanceM, lo);
-            if (arrived(hi)) {
-                lo = hi;
-            } else {
-                for (int i = 0; i < 64 && hi - lo > 1e-12 * hi; ++i) {
-                    const double mid = 0.5 * (lo + hi);
-                    (arrived(mid) ? lo : hi) = mid;
-                }
+            for (int grow = 0; grow < 64 && arrived(hi); ++grow) lo = hi, hi *= 1.5;
+            for (int i = 0; i < 64 && hi - lo > 1e-12 * hi; ++i) {
+                const double mid = 0.5 * (lo + hi);
+                (arrived(mid) ? lo : hi) = mid;
             }
-            front = lo;
-        }
-        profile.frontM = front;
+            return lo;
+        };
+        const double startFront = frontAt(timeS);
+        profile.frontM = frontAt(timeS + stepS);
         profile.overpressurePa.assign(kNodesPerWindow, 0.0);
-        if (front < profile.innerM) continue;  // nothing has arrived inside the window yet
-        const double step = (front - profile.innerM) / (kNodesPerWindow - 1);
+        if (profile.frontM < profile.innerM) continue;  // nothing has arrived inside the window yet
+        const double step = (profile.frontM - profile.innerM) / (kNodesPerWindow - 1);
         profile.nodesPerM = step > 0 ? 1.0 / step : 0.0;
         for (int i = 0; i < kNodesPerWindow; ++i) {
-            const double r = i + 1 == kNodesPerWindow ? front : profile.innerM + i * step;
-            profile.overpressurePa[i] = field.chargeOverpressurePa(window.charge, r, timeS);
+            const double r = i + 1 == kNodesPerWindow ? profile.frontM : profile.innerM + i * step;
+            profile.overpressurePa[i] = r <= startFront ? field.chargeOverpressurePa(window.charge, r, timeS)
+                                                        : field.tableParameters(window.charge, r).peakOverpressurePa;
         }
     }
 }

@@ -272,7 +272,7 @@ std::vector<char> Simulation::fractureBodies(const std::vector<OpenWindow>& wind
         Body& body = mState.bodies[i];
         if (body.linkCount == 0 && !body.anchored) continue;
         if (!bodyInWindows(body, *mField, windows)) continue;
-        if (!pressure) pressure.emplace(*mField, mState.timeS);
+        if (!pressure) pressure.emplace(*mField, mState.timeS, dt);
         const LoadResult r = loadLinks(body, mScene.materials[body.materialIndex], *pressure, dt, mScene.fracture);
         mStats.brokenLinks += r.brokenLinks;
         cracked[i] = r.brokenLinks > 0 || r.brokenAnchors > 0;

@@ -283,10 +283,13 @@ private:
     double mSpeedScale = 1;  ///< sound and shock speeds scale with sqrt(T) (Sachs)
 };
 
-/// The pressure field frozen at one instant, for the many points a step queries at the same
-/// time (every link of every loaded body). Per open window, the charge's overpressure p(r) is
-/// tabulated uniformly in distance from the window's inner edge to the shock front, which is
-/// itself the last node, so the jump at the front is exact and nothing is smeared across it.
+/// The pressure field over one step, for the many points a step queries (every link of every
+/// loaded body): the largest overpressure each point sees during the step, so that a threshold
+/// does not depend on where the step falls on the pulse. Behind the shock front at the step's
+/// start that is the pressure then (the positive phase only falls); between that front and
+/// the front at its end it is the peak the shock brings. Per open window, that overpressure is
+/// tabulated uniformly in distance from the window's inner edge to the front at the step's end,
+/// which is itself the last node, so the jump at the front is exact and nothing is smeared.
 /// A point then costs one square root and one linear interpolation per charge instead of a
 /// log, a table lookup and an exp; tests/test_blast.cpp bounds the difference to the field.
 class PressureSnapshot {
@@ -294,7 +297,8 @@ public:
     /// Nodes per window: the window spans the pulse, a few decay lengths, so this resolves it.
     static constexpr int kNodesPerWindow = 2048;
 
-    PressureSnapshot(const BlastField& field, double timeS);
+    /// The step [timeS, timeS + stepS]; stepS = 0 gives the field at one instant.
+    PressureSnapshot(const BlastField& field, double timeS, double stepS);
 
     const std::vector<OpenWindow>& windows() const { return mWindows; }
     bool empty() const { return mWindows.empty(); }
@@ -333,7 +337,7 @@ private:
     struct Profile {
         Eigen::Vector3d centreM;
         double innerM = 0;    ///< distance of node 0
-        double frontM = 0;    ///< distance of the last node: the shock front
+        double frontM = 0;    ///< distance of the last node: the shock front at the step's end
         double nodesPerM = 0;
         std::vector<double> overpressurePa;
         double at(double r) const
