@@ -354,6 +354,11 @@ TEST(Loads, DiffractedWaveBehindABarrierKeepsWhatTheCfdFinds)
     auto sideOnImpulse = [](const PointPulse& p) {
         return p.peakOverpressurePa * p.positiveDurationS * friedlanderImpulseFraction(p.decayCoefficient);
     };
+    // Over a long thin wall the path is straight up to the near top edge, across, and straight down.
+    const Eigen::Vector3d behindIt(4.0, 0, 0.5);
+    const EdgePath over = shortestPathAround(barrier, Eigen::Vector3d::Zero(), behindIt, walled, 0.01);
+    EXPECT_NEAR(over.lengthM, Eigen::Vector3d(2.0, 0, 1.0).norm() + 0.1 + (behindIt - Eigen::Vector3d(2.1, 0, 1.0)).norm(), 1e-9);
+    EXPECT_NEAR((over.leaveM - Eigen::Vector3d(2.1, 0, 1.0)).norm(), 0.0, 1e-9);
     double lowest = 1, highest = 0;
     for (double behind : {0.3, 0.7, 1.2, 2.0})
         for (double height : {0.1, 0.4, 0.7, 1.0}) {
