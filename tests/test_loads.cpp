@@ -413,3 +413,16 @@ TEST(Loads, ABlockOnTheGroundIsPressedIntoItNotLifted)
     const Wrench total = impulseOnHeldBody(block, field, LoadSettings(), ground, p.positiveDurationS / 200, 0.05);
     EXPECT_LT(total.forceN.z(), 0.0);
 }
+
+TEST(Loads, TheWaveGoesRoundANarrowObstacleAlongTheGround)
+{
+    // A post 0.2 m wide and 3 m high between a surface charge and a point on the ground behind
+    // it: the shortest way is round its side at ground level, not over its top.
+    const LoadGeometry ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
+    const ObstacleBox post{Eigen::Vector3d(2.0, 0, 1.5), Eigen::Vector3d(0.1, 0.1, 1.5), Eigen::Quaterniond::Identity()};
+    const Eigen::Vector3d behind(4.0, 0, 0.05);
+    const EdgePath path = shortestPathAround(post, Eigen::Vector3d::Zero(), behind, ground, 0.01);
+    const double roundTheSide = Eigen::Vector3d(1.9, 0.1, 0).norm() + 0.2 + (behind - Eigen::Vector3d(2.1, 0.1, 0)).norm();
+    EXPECT_NEAR(path.lengthM, roundTheSide, 0.01);
+    EXPECT_LT(path.leaveM.z(), 0.1);
+}

@@ -42,9 +42,13 @@ EdgePath shortestPathAround(const ObstacleBox& box, const Eigen::Vector3d& sourc
                                         box.centreM - halfU + halfV};
     EdgePath best;
     best.lengthM = 1e300;
+    const auto underground = [&](const Eigen::Vector3d& x) {
+        return geometry.ground.enabled && x.dot(geometry.ground.normal) <= geometry.ground.heightM + groundToleranceM;
+    };
     for (int edge = 0; edge < 4; ++edge) {
-        EdgePath path = pathOverSegment(corners[edge], corners[(edge + 1) % 4], sourceM, pointM);
-        if (geometry.ground.enabled && path.enterM.dot(geometry.ground.normal) <= geometry.ground.heightM + groundToleranceM) continue;
+        const Eigen::Vector3d &e0 = corners[edge], &e1 = corners[(edge + 1) % 4];
+        if (underground(e0) && underground(e1)) continue;  // an edge along the ground: no way round there
+        EdgePath path = pathOverSegment(e0, e1, sourceM, pointM);
         path.enterM -= halfThickness;
         path.leaveM += halfThickness;
         path.lengthM = (path.enterM - sourceM).norm() + 2.0 * halfThickness.norm() + (pointM - path.leaveM).norm();

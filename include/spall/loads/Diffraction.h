@@ -24,8 +24,9 @@ struct EdgePath {
 /// (clamped to the edge, the length being convex along it). It then meets the box at that
 /// edge's copy on the face toward the source and leaves it at the copy on the face toward the
 /// point, crossing the box's thickness in between. Exact for a thin obstacle (a wall), and
-/// within the box's thickness of the true path around a thick one. Edges on or under the
-/// ground (within `groundToleranceM`) are not ways round.
+/// within the box's thickness of the true path around a thick one. An edge lying on or under
+/// the ground (both ends within `groundToleranceM` of it) is no way round; the foot of a
+/// vertical edge is.
 EdgePath shortestPathAround(const ObstacleBox& box, const Eigen::Vector3d& sourceM, const Eigen::Vector3d& pointM,
                             const LoadGeometry& geometry, double groundToleranceM);
 
