@@ -86,16 +86,21 @@ Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vect
     return out;
 }
 
+BlastLoads::BlastLoads(const BlastField& field, const std::vector<OpenWindow>& windows, const LoadSettings& settings,
+                       const LoadGeometry& geometry)
+    : mField(field), mWindows(windows), mSettings(settings), mGeometry(geometry), mFromGround(windows.size(), 0)
+{
+    const LoadGround& ground = mGeometry.ground;
+    for (size_t w = 0; w < windows.size(); ++w)
+        mFromGround[w] = ground.enabled && field.charges()[windows[w].charge].positionM.dot(ground.normal) < ground.heightM;
+}
+
 bool BlastLoads::onGround(const Eigen::Vector3d& faceCentreM, const Eigen::Vector3d& normal, double voxelSizeM) const
 {
     const LoadGround& ground = mGeometry.ground;
     return ground.enabled && normal.dot(ground.normal) < -0.5 && faceCentreM.dot(ground.normal) - ground.heightM <= 0.5 * voxelSizeM;
 }
 
-bool BlastLoads::belowGround(const Eigen::Vector3d& xM) const
-{
-    return mGeometry.ground.enabled && xM.dot(mGeometry.ground.normal) < mGeometry.ground.heightM;
-}
 
 const ObstacleBox* BlastLoads::shadowCaster(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure,
                                              size_t excludeGroup) const
@@ -163,7 +168,7 @@ void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouet
             const double cosine = -normal.dot(rHat);
             // The ground's reflection (an image charge) loads only faces that look toward the
             // ground it comes from: it does not wrap round bodies standing on that ground.
-            if (cosine <= 0.0 && belowGround(mField.charges()[window.charge].positionM)) continue;
+            if (cosine <= 0.0 && mFromGround[w]) continue;
             if (mSettings.model == LoadModel::BlastEngineering) {
                 const PointPulse direct = mField.pulseAt(window.charge, r2);
                 if (timeS + dtS <= direct.arrivalTimeS || timeS >= direct.arrivalTimeS + direct.positiveDurationS + direct.negativeDurationS)

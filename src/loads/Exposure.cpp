@@ -24,7 +24,6 @@ uint64_t blockKey(int64_t i, int64_t j, int64_t k) { return cellKey(i >> kBlockS
 /// Cell of a point in cell units: the nearest lattice point.
 uint64_t cellKey(const Eigen::Vector3d& u) { return cellKey(std::llround(u.x()), std::llround(u.y()), std::llround(u.z())); }
 
-
 /// The body's index bounds (voxels as cubes) as an oriented box in the world.
 ObstacleBox worldBounds(const Body& body)
 {
@@ -110,13 +109,7 @@ void Exposure::boundGroups(const std::vector<Body>& bodies, const std::vector<ch
             mGroupBounds[g] = box;
             continue;
         }
-        const Eigen::Matrix3d rot = box.orientation.toRotationMatrix();
-        for (int c = 0; c < 8; ++c) {
-            const Eigen::Vector3d corner =
-                box.centreM + rot * Eigen::Vector3d((c & 1 ? 1 : -1) * box.halfExtentM.x(), (c & 2 ? 1 : -1) * box.halfExtentM.y(),
-                                                    (c & 4 ? 1 : -1) * box.halfExtentM.z());
-            lo[g] = lo[g].cwiseMin(corner), hi[g] = hi[g].cwiseMax(corner);
-        }
+        for (const Eigen::Vector3d& corner : cornersOf(box)) lo[g] = lo[g].cwiseMin(corner), hi[g] = hi[g].cwiseMax(corner);
     }
     for (size_t g = 0; g < bodies.size(); ++g)
         if (members[g] > 1) mGroupBounds[g] = {0.5 * (lo[g] + hi[g]), 0.5 * (hi[g] - lo[g]), Eigen::Quaterniond::Identity()};

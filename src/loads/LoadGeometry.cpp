@@ -5,6 +5,16 @@
 
 namespace spall {
 
+std::array<Eigen::Vector3d, 8> cornersOf(const ObstacleBox& box)
+{
+    const Eigen::Matrix3d rot = box.orientation.toRotationMatrix();
+    std::array<Eigen::Vector3d, 8> corners;
+    for (int c = 0; c < 8; ++c)
+        corners[c] = box.centreM + rot * Eigen::Vector3d((c & 1 ? 1 : -1) * box.halfExtentM.x(), (c & 2 ? 1 : -1) * box.halfExtentM.y(),
+                                                         (c & 4 ? 1 : -1) * box.halfExtentM.z());
+    return corners;
+}
+
 bool segmentMeetsBox(const Eigen::Vector3d& aM, const Eigen::Vector3d& bM, const ObstacleBox& box)
 {
     const Eigen::Matrix3d toBox = box.orientation.toRotationMatrix().transpose();

@@ -50,10 +50,7 @@ Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vect
 /// The blast's loads during one step: the field and the windows open at the step's start.
 class BlastLoads {
 public:
-    BlastLoads(const BlastField& field, const std::vector<OpenWindow>& windows, const LoadSettings& settings, const LoadGeometry& ground)
-        : mField(field), mWindows(windows), mSettings(settings), mGeometry(ground)
-    {
-    }
+    BlastLoads(const BlastField& field, const std::vector<OpenWindow>& windows, const LoadSettings& settings, const LoadGeometry& geometry);
 
     /// Per body: whether the blast can load it this step (anchored bodies: 0, they do not move).
     std::vector<char> loadedBodies(const std::vector<Body>& bodies) const;
@@ -87,9 +84,6 @@ private:
     /// True when a face (centre, outward normal) lies on the ground, facing into it, within
     /// half a voxel: it touches no air.
     bool onGround(const Eigen::Vector3d& faceCentreM, const Eigen::Vector3d& normal, double voxelSizeM) const;
-    /// True for a point under the ground: a charge there is a free-air charge's image, the wave
-    /// the ground reflects (blast/Settings.h, withGroundImages).
-    bool belowGround(const Eigen::Vector3d& xM) const;
     /// The obstacle box, or the bounds of the group of the first body (outside `excludeGroup`),
     /// that the straight path from x to the charge crosses, or null.
     const ObstacleBox* shadowCaster(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure,
@@ -109,6 +103,9 @@ private:
     const std::vector<OpenWindow>& mWindows;
     LoadSettings mSettings;
     LoadGeometry mGeometry;
+    /// Per window: its charge is under the ground, a free-air charge's image, the wave the
+    /// ground reflects (blast/Settings.h, withGroundImages).
+    std::vector<char> mFromGround;
 };
 
 }  // namespace spall

@@ -51,9 +51,9 @@ private:
         uint32_t body;
         float centre[3];  ///< centre of the voxel in cell units from the lattice origin
     };
-    /// A body that `skip(body)` does not skip with a voxel that contains x (world, unit: m), or -1.
     /// mGroupBounds from the groups and the members' oriented boxes.
     void boundGroups(const std::vector<Body>& bodies, const std::vector<char>& considered);
+    /// A body that `skip(body)` does not skip with a voxel that contains x (world, unit: m), or -1.
     template <typename Skip>
     int64_t bodyAt(const Eigen::Vector3d& xM, Skip&& skip) const;
 

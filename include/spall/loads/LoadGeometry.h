@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <array>
 #include <vector>
 
 namespace spall {
@@ -14,6 +15,9 @@ struct ObstacleBox {
     Eigen::Vector3d halfExtentM = Eigen::Vector3d::Ones();
     Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< box to world
 };
+
+/// The box's eight corners in the world.
+std::array<Eigen::Vector3d, 8> cornersOf(const ObstacleBox& box);
 
 /// True when the segment from a to b meets the box (slab test in the box's frame).
 bool segmentMeetsBox(const Eigen::Vector3d& aM, const Eigen::Vector3d& bM, const ObstacleBox& box);
