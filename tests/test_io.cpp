@@ -6,6 +6,9 @@
 #include <spall/core/Error.h>
 #include <spall/io/History.h>
 #include <spall/io/Png.h>
+#include <spall/fracture/Fracture.h>
+#include <spall/io/FragmentSurface.h>
+#include <spall/io/FrameWriter.h>
 #include <spall/io/VdbIo.h>
 #include <spall/render/Render.h>
 
@@ -13,7 +16,10 @@
 #include <hdf5.h>
 #include <png.h>
 
+#include <openvdb/tools/VolumeToMesh.h>
+
 #include <filesystem>
+#include <map>
 #include <fstream>
 
 using namespace spall;
@@ -125,41 +131,177 @@ TEST(History, OtherFormatVersionsAndOtherFilesAreRefusedNamingTheFile)
     EXPECT_THROW(readHistory(dir + "/text.h5"), IoError);
 }
 
-TEST(Frames, EachFragmentIsPlacedByItsTransformAndReadByOpenVdb)
+namespace {
+
+/// The positions of a grid's active voxel centres in the world, sorted.
+std::vector<Eigen::Vector3d> sortedCentres(const std::vector<Eigen::Vector3d>& centres)
+{
+    std::vector<Eigen::Vector3d> out = centres;
+    std::sort(out.begin(), out.end(), [](const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+        return std::lexicographical_compare(p.data(), p.data() + 3, q.data(), q.data() + 3);
+    });
+    return out;
+}
+
+std::vector<Eigen::Vector3d> worldCentres(const openvdb::FloatGrid& grid)
+{
+    std::vector<Eigen::Vector3d> out;
+    for (auto it = grid.cbeginValueOn(); it; ++it) {
+        const openvdb::Vec3d w = grid.transform().indexToWorld(it.getCoord());
+        out.emplace_back(w.x(), w.y(), w.z());
+    }
+    return sortedCentres(out);
+}
+
+std::vector<Eigen::Vector3d> worldCentres(const Body& body)
+{
+    std::vector<Eigen::Vector3d> out;
+    for (auto it = body.grid->cbeginValueOn(); it; ++it) out.push_back(body.voxelWorldM(it.getCoord()));
+    return sortedCentres(out);
+}
+
+/// A mesh of a level set: its volume by the divergence theorem, and whether every edge is shared
+/// by exactly two polygons (a closed surface).
+struct MeshCheck {
+    double volumeM3 = 0.0;
+    bool closed = true;
+    size_t polygons = 0;
+};
+MeshCheck meshOf(const openvdb::FloatGrid& levelSet)
+{
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec3I> triangles;
+    std::vector<openvdb::Vec4I> quads;
+    openvdb::tools::volumeToMesh(levelSet, points, triangles, quads, 0.0, 0.0);
+    MeshCheck check;
+    std::map<std::pair<uint32_t, uint32_t>, int> edges;
+    auto polygon = [&](std::initializer_list<uint32_t> v) {
+        const std::vector<uint32_t> ids(v);
+        // Relative to one vertex of the mesh, so far from the origin no precision is lost.
+        const openvdb::Vec3d o = points.front(), p0 = openvdb::Vec3d(points[ids[0]]) - o;
+        for (size_t i = 1; i + 1 < ids.size(); ++i)
+            check.volumeM3 += p0.dot((openvdb::Vec3d(points[ids[i]]) - o).cross(openvdb::Vec3d(points[ids[i + 1]]) - o)) / 6.0;
+        for (size_t i = 0; i < ids.size(); ++i) {
+            const uint32_t a = ids[i], b = ids[(i + 1) % ids.size()];
+            ++edges[{std::min(a, b), std::max(a, b)}];
+        }
+        ++check.polygons;
+    };
+    for (const auto& t : triangles) polygon({t[0], t[1], t[2]});
+    for (const auto& q : quads) polygon({q[0], q[1], q[2], q[3]});
+    for (const auto& [edge, count] : edges) check.closed = check.closed && count == 2;
+    check.volumeM3 = std::abs(check.volumeM3);
+    return check;
+}
+
+}  // namespace
+
+TEST(Frames, EachFragmentIsASolidPlacedByItsTransformAndReadByOpenVdb)
 {
     initialiseOpenVdb();
-    const std::string dir = scratch("frames");
     Body a = test::boxBody(2, 3, 1, 0.1, 1000.0, Eigen::Vector3d(1, 2, 3),
                            Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized())));
     a.id = 5;
     Body b = test::boxBody(1, 1, 1, 0.1, 1000.0, Eigen::Vector3d(-1, 0, 0.5));
     b.id = 6;
-    FrameWriter writer(dir, true);
-    const std::string path = writer.write({3, 0.125}, {a, b});
-    EXPECT_EQ(path, FrameWriter::framePath(dir, 3));
-    openvdb::io::File file(path);
-    file.open();
-    for (const Body* body : {&a, &b}) {
-        const auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("fragment_" + std::to_string(body->id)));
-        ASSERT_TRUE(grid) << body->id;
-        EXPECT_EQ(static_cast<int64_t>(grid->activeVoxelCount()), body->mass.voxelCount);
-        // Every active voxel's centre in the world, through the file's transform, is the body's.
-        std::vector<Eigen::Vector3d> fromFile, fromBody;
-        for (auto it = grid->cbeginValueOn(); it; ++it) {
-            const openvdb::Vec3d w = grid->transform().indexToWorld(it.getCoord());
-            fromFile.emplace_back(w.x(), w.y(), w.z());
+    // An L: a concave edge as well as convex ones.
+    Body c;
+    c.id = 7;
+    c.voxelSizeM = 0.1;
+    c.grid = test::gridFromVoxels({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, 0.1);
+    refreshDerivedData(c);
+    c.motion.positionM = Eigen::Vector3d(0.3, -0.2, 1.0);
+    for (int subdivisions : {2, 3, 4}) {
+        const std::string dir = scratch("frames" + std::to_string(subdivisions));
+        OutputSettings settings;
+        settings.levelSetSubdivisions = subdivisions;
+        FrameWriter writer(dir, settings);
+        const std::string path = writer.write({3, 0.125}, {a, b, c});
+        EXPECT_EQ(path, FrameWriter::framePath(dir, 3));
+        openvdb::io::File file(path);
+        file.open();
+        for (const Body* body : {&a, &b, &c}) {
+            const auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("fragment_" + std::to_string(body->id)));
+            ASSERT_TRUE(grid) << body->id;
+            EXPECT_EQ(grid->getGridClass(), openvdb::GRID_LEVEL_SET);
+            // The mesh every reader makes (OpenVDB's volume-to-mesh) is closed and, where every
+            // edge is convex, the voxels' surface to rounding; a concave edge is bevelled outward
+            // within a sample of it (docs/file-formats.md).
+            const MeshCheck mesh = meshOf(*grid);
+            const double voxelVolume = body->mass.voxelCount * std::pow(body->voxelSizeM, 3);
+            EXPECT_TRUE(mesh.closed) << body->id;
+            const double bound = body == &c ? (subdivisions >= 3 ? 0.10 : 0.15) : 1e-5;
+            EXPECT_NEAR(mesh.volumeM3, voxelVolume, bound * voxelVolume) << body->id << " at " << subdivisions << " samples per voxel";
+            if (body == &c) std::printf("an L of 4 voxels at %d samples per voxel: mesh volume / voxel volume %.4f\n", subdivisions, mesh.volumeM3 / voxelVolume);
+            // Back to voxels: each one's centre in the world, through the file's transform, is the body's.
+            const auto voxels = voxelsOfLevelSet(*grid, subdivisions);
+            const auto fromFile = worldCentres(*voxels), fromBody = worldCentres(*body);
+            ASSERT_EQ(fromFile.size(), fromBody.size()) << body->id;
+            for (size_t i = 0; i < fromFile.size(); ++i) EXPECT_LT((fromFile[i] - fromBody[i]).norm(), 1e-9) << body->id;
         }
-        for (auto it = body->grid->cbeginValueOn(); it; ++it) fromBody.push_back(body->voxelWorldM(it.getCoord()));
-        ASSERT_EQ(fromFile.size(), fromBody.size());
-        auto order = [](const Eigen::Vector3d& p, const Eigen::Vector3d& q) { return std::lexicographical_compare(p.data(), p.data() + 3, q.data(), q.data() + 3); };
-        std::sort(fromFile.begin(), fromFile.end(), order);
-        std::sort(fromBody.begin(), fromBody.end(), order);
-        for (size_t i = 0; i < fromFile.size(); ++i) EXPECT_LT((fromFile[i] - fromBody[i]).norm(), 1e-9) << body->id;
+        EXPECT_TRUE(file.hasGrid("density"));
+        EXPECT_FALSE(file.hasGrid("v")) << "velocity only on request";
+        EXPECT_FALSE(file.hasGrid("fracture_faces_5")) << "an unbroken body has no fracture surface";
+        file.close();
+        for (const auto& entry : std::filesystem::directory_iterator(dir))
+            EXPECT_EQ(entry.path().string().find("partial"), std::string::npos) << "a temporary was left: " << entry.path();
     }
-    EXPECT_TRUE(file.hasGrid("density"));
-    file.close();
-    for (const auto& entry : std::filesystem::directory_iterator(dir))
-        EXPECT_EQ(entry.path().string().find("partial"), std::string::npos) << "a temporary was left: " << entry.path();
+}
+
+TEST(Frames, FractureFacesAreTheFacesWhoseLinksBroke)
+{
+    initialiseOpenVdb();
+    // A 4 x 1 x 1 bar broken between voxels 1 and 2: each half has one fracture face.
+    Body bar = test::boxBody(4, 1, 1, 0.1, 1000.0);
+    auto acc = bar.grid->getAccessor();
+    ASSERT_TRUE(breakLink(acc, openvdb::Coord(1, 0, 0), kPosX));
+    std::vector<Body> halves = splitBody(bar);
+    ASSERT_EQ(halves.size(), 2u);
+    halves[0].id = 10;
+    halves[1].id = 11;
+    FrameWriter writer(scratch("fracture-faces"), OutputSettings{});
+    openvdb::io::File file(writer.write({0, 0.0}, halves));
+    file.open();
+    for (const Body& half : halves) {
+        const auto faces = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("fracture_faces_" + std::to_string(half.id)));
+        ASSERT_TRUE(faces) << half.id;
+        ASSERT_EQ(faces->activeVoxelCount(), 1u);
+        const auto it = faces->cbeginValueOn();
+        const bool left = half.grid->tree().isValueOn(openvdb::Coord(1, 0, 0));
+        EXPECT_EQ(int(*it), 1 << (left ? kPosX : kNegX)) << half.id;
+        // The marked voxel, through the grid's transform, is the one beside the break.
+        const openvdb::Vec3d w = faces->transform().indexToWorld(it.getCoord());
+        EXPECT_LT((Eigen::Vector3d(w.x(), w.y(), w.z()) - half.voxelWorldM(openvdb::Coord(left ? 1 : 2, 0, 0))).norm(), 1e-9);
+    }
+}
+
+TEST(Frames, VelocityGridHoldsTheRigidVelocityAndFogStaysAvailable)
+{
+    initialiseOpenVdb();
+    Body spinning = test::boxBody(3, 1, 1, 0.1, 1000.0, Eigen::Vector3d(0, 0, 1));
+    spinning.id = 1;
+    spinning.motion.linearVelocityMS = Eigen::Vector3d(1, 2, 3);
+    spinning.motion.angularVelocityRadS = Eigen::Vector3d(0, 0, 10);
+    OutputSettings settings;
+    settings.velocityGrid = true;
+    settings.fragmentGrids = FragmentGrids::Fog;
+    FrameWriter writer(scratch("velocity"), settings);
+    openvdb::io::File file(writer.write({0, 0.0}, {spinning}));
+    file.open();
+    const auto v = openvdb::gridPtrCast<openvdb::Vec3SGrid>(file.readGrid("v"));
+    ASSERT_TRUE(v);
+    EXPECT_EQ(v->activeVoxelCount(), 3u);
+    for (auto it = v->cbeginValueOn(); it; ++it) {
+        const openvdb::Vec3d x = v->transform().indexToWorld(it.getCoord());
+        // v + ω × r by hand: ω = 10 ẑ, r = (x, y, z - 1) from the centre of mass.
+        const Eigen::Vector3d expected(1 - 10 * x.y(), 2 + 10 * x.x(), 3);
+        EXPECT_LT((Eigen::Vector3d((*it)[0], (*it)[1], (*it)[2]) - expected).norm(), 1e-5);
+    }
+    const auto fog = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("fragment_1"));
+    ASSERT_TRUE(fog);
+    EXPECT_EQ(fog->getGridClass(), openvdb::GRID_FOG_VOLUME);
+    EXPECT_EQ(fog->activeVoxelCount(), 3u);
+    EXPECT_EQ(file.getMetadata()->metaValue<std::string>("fragment_grids"), "fog");
 }
 
 TEST(Png, PixelsReadBackThroughLibpngAndAFailedWriteLeavesNothing)

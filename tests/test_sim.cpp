@@ -122,7 +122,8 @@ const char* kEveryKeyScene = R"({
   "loads": {"model": "paper"},
   "collisions": {"method": "buckets", "restitution": 0.3, "friction": 0.5, "solver_iterations": 20,
                  "penetration_tolerance_voxels": 0.5},
-  "output": {"vdb": false, "density_grid": false, "history": false, "checkpoint_every_s": 10}
+  "output": {"vdb": false, "fragment_grids": "fog", "level_set_subdivisions": 4, "level_set_smoothing_steps": 2,
+             "density_grid": false, "velocity_grid": true, "history": false, "checkpoint_every_s": 10}
 })";
 
 /// Key paths of every leaf value, with list indices and material names as "*".

@@ -5,6 +5,7 @@
 
 #include <spall/core/Error.h>
 #include <spall/io/Png.h>
+#include <spall/io/FrameWriter.h>
 #include <spall/io/VdbIo.h>
 #include <spall/render/Render.h>
 

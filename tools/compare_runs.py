@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Compares the content of spall output directories: every history dataset and root attribute,
-every frame's fragment metadata and exact index-to-world map, every density voxel.
+every frame's grid names, fragment metadata and exact index-to-world map, every density voxel.
 
 Usage: /usr/bin/python3 tools/compare_runs.py REFERENCE OTHER [OTHER ...]
 Exits 0 when every OTHER holds exactly REFERENCE's content, else 1 naming the first difference.
@@ -30,12 +30,12 @@ def frame(path):
     corners = ((0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1))
     fragments = sorted((m.name, m.metadata["voxel_count"], tuple(m.metadata["centre_of_mass_m"]),
                         tuple(m.metadata["linear_velocity_m_s"]), tuple(m.metadata["angular_velocity_rad_s"]),
-                        tuple(tuple(m.transform.indexToWorld(p)) for p in corners))
+                        m.metadata.get("mesh_key"), tuple(tuple(m.transform.indexToWorld(p)) for p in corners))
                        for m in metas if m.name.startswith("fragment_"))
     density = []
     if any(m.name == "density" for m in metas):
         density = sorted(tuple(v.min) for v in vdb.read(path, "density").citerOnValues())
-    return fragments, density
+    return sorted(m.name for m in metas), fragments, density
 
 
 def differences(reference, other):
@@ -56,8 +56,10 @@ def differences(reference, other):
     for name in frames_a:
         if name not in frames_b:
             continue
-        fragments_a, density_a = frame(os.path.join(reference, name))
-        fragments_b, density_b = frame(os.path.join(other, name))
+        names_a, fragments_a, density_a = frame(os.path.join(reference, name))
+        names_b, fragments_b, density_b = frame(os.path.join(other, name))
+        if names_a != names_b:
+            yield f"{name}: grid names differ"
         if fragments_a != fragments_b:
             yield f"{name}: fragment metadata or transforms differ"
         if density_a != density_b:

@@ -35,7 +35,11 @@ const std::vector<Field<OutputSettings>>& fieldTable<OutputSettings>()
 {
     static const std::vector<Field<OutputSettings>> table = {
         {"output.vdb", &OutputSettings::vdb},
+        {"output.fragment_grids", choice(&OutputSettings::fragmentGrids)},
+        {"output.level_set_subdivisions", &OutputSettings::levelSetSubdivisions, closed(2, 8)},
+        {"output.level_set_smoothing_steps", &OutputSettings::levelSetSmoothingSteps, closed(0, 100)},
         {"output.density_grid", &OutputSettings::densityGrid},
+        {"output.velocity_grid", &OutputSettings::velocityGrid},
         {"output.history", &OutputSettings::history},
         {"output.checkpoint_every_s", &OutputSettings::checkpointEveryS, closed(0, 1e9)},
     };

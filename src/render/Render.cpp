@@ -1,6 +1,7 @@
 #include <spall/render/Render.h>
 
 #include <spall/core/Error.h>
+#include <spall/io/FragmentSurface.h>
 #include <spall/io/VdbIo.h>
 
 #include <openvdb/io/File.h>
@@ -109,8 +110,13 @@ FrameGrids readFrame(const std::string& path)
         for (auto it = file.beginName(); it != file.endName(); ++it) {
             const std::string name = it.gridName();
             if (name.rfind("fragment_", 0) != 0) continue;
-            auto grid = openvdb::gridConstPtrCast<openvdb::FloatGrid>(file.readGrid(name));
+            openvdb::FloatGrid::ConstPtr grid = openvdb::gridConstPtrCast<openvdb::FloatGrid>(file.readGrid(name));
             if (!grid) continue;
+            if (grid->getGridClass() == openvdb::GRID_LEVEL_SET) {
+                const auto k = grid->getMetadata<openvdb::Int32Metadata>("level_set_subdivisions");
+                if (!k) throw IoError(path + ": " + name + ": a level set without level_set_subdivisions metadata");
+                grid = voxelsOfLevelSet(*grid, k->value());
+            }
             out.fragments.push_back(grid);
             out.ids.push_back(std::stoll(name.substr(9)));
         }

@@ -4,6 +4,7 @@
 
 #include <spall/dynamics/Integrate.h>
 #include <spall/io/History.h>
+#include <spall/io/FrameWriter.h>
 #include <spall/io/VdbIo.h>
 #include <spall/render/Render.h>
 #include <spall/sim/Checkpoint.h>
@@ -122,7 +123,7 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
     const std::filesystem::path checkpointPath = dir / kCheckpointFileName;
     const std::string checkpointScene = sceneToJson(scene).dump();
     std::unique_ptr<FrameWriter> frames;
-    if (scene.output.vdb) frames = std::make_unique<FrameWriter>(dir.string(), scene.output.densityGrid);
+    if (scene.output.vdb) frames = std::make_unique<FrameWriter>(dir.string(), scene.output);
     HistoryRecorder history(std::move(historyWriter), sim);
     PreviewRecorder preview(options, frameCount, scene);
     RunReport report;

@@ -67,8 +67,14 @@ void refuseChargesInside(const Body& body, const std::string& objectName, const 
 std::unique_ptr<BlastField> makeField(const Scene& scene)
 {
     const GroundPlane& ground = scene.world.ground;
-    return std::make_unique<BlastField>(ground.enabled ? withGroundImages(scene.charges, ground.normal, ground.offsetM) : scene.charges,
-                                        scene.blast);
+    std::vector<Charge> charges = ground.enabled ? withGroundImages(scene.charges, ground.normal, ground.offsetM) : scene.charges;
+    // Weakening remembers which charge loaded a link in a few bits of the link's value.
+    const bool weakening = scene.fracture.algorithm == FractureAlgorithm::YieldLimit && scene.fracture.weakening;
+    if (weakening && charges.size() > static_cast<size_t>(kMaxWeakeningCharges))
+        throw InputError(scene.sourceName + ": charges: " + std::to_string(charges.size()) + " charges (ground images included) with "
+                         "fracture.weakening on; it tells at most " + std::to_string(kMaxWeakeningCharges) +
+                         " apart (set fracture.weakening to false, or merge charges)");
+    return std::make_unique<BlastField>(std::move(charges), scene.blast);
 }
 
 }  // namespace

@@ -70,10 +70,10 @@ bool breakLink(LinkGrid::Accessor& acc, const openvdb::Coord& ijk, int face)
 {
     int32_t bits = 0;
     if (!acc.probeValue(ijk, bits) || !(bits & (1 << face))) return false;
-    acc.setValueOn(ijk, bits & ~(1 << face));
+    acc.setValueOn(ijk, withBrokenFace(bits & ~(1 << face), face));
     const openvdb::Coord other = ijk + faceOffset(face);
     const int32_t otherBits = acc.getValue(other);
-    acc.setValueOn(other, otherBits & ~(1 << oppositeFace(face)));
+    acc.setValueOn(other, withBrokenFace(otherBits & ~(1 << oppositeFace(face)), oppositeFace(face)));
     return true;
 }
 

@@ -36,9 +36,28 @@ struct ObjectSpec {
     double shellThicknessM = 0.0;          ///< meshes only: > 0 makes a shell of the surface (unit: m)
 };
 
+/// What each fragment_<id> grid in a frame holds (docs/file-formats.md).
+enum class FragmentGrids {
+    LevelSet,  ///< narrow-band signed distance to the fragment's voxel surface: meshes into a solid
+    Fog,       ///< 1 in each voxel (format 1, for readers that relied on it)
+};
+template <>
+struct EnumNames<FragmentGrids> {
+    static constexpr std::pair<FragmentGrids, const char*> kNames[] = {{FragmentGrids::LevelSet, "level_set"}, {FragmentGrids::Fog, "fog"}};
+};
+
 struct OutputSettings {
     bool vdb = true;           ///< fragments.NNNN.vdb per frame
+    FragmentGrids fragmentGrids = FragmentGrids::LevelSet;
+    /// Level-set samples per voxel edge, one on each voxel face: from 2 up, volume-to-mesh gives
+    /// back the voxel surface exactly (at 1 a concave corner, all of whose samples lie on the
+    /// surface, would fill in); more samples only matter for smoothing (unit: 1).
+    int levelSetSubdivisions = 3;
+    /// Mean-curvature smoothing iterations of each fragment's level set (0: the exact voxel
+    /// surface). Rounds the staircase and shrinks small pieces (docs/file-formats.md) (unit: 1).
+    int levelSetSmoothingSteps = 0;
     bool densityGrid = true;   ///< world-space `density` grid in each frame
+    bool velocityGrid = false; ///< world-space `v` grid (velocity of the material there, m/s) beside `density`
     bool history = true;       ///< history.h5
     /// OUTDIR/checkpoint.spall, for `spall run --resume`: after the first frame that ends this
     /// long (wall-clock) after the last checkpoint or the start, and when a run is stopped on

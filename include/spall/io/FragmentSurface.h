@@ -1,0 +1,33 @@
+// A fragment's surface as a narrow-band level set: the solid a reader meshes (Houdini's Convert
+// VDB, Blender's Volume to Mesh, spall's glTF export all use OpenVDB's volume-to-mesh).
+#pragma once
+
+#include <openvdb/openvdb.h>
+
+#include <vector>
+
+namespace spall {
+
+/// One exposed voxel face, in the shape's own voxel indices.
+struct VoxelFace {
+    openvdb::Coord voxel;
+    int face;  ///< LinkBits.h's Face
+};
+
+/// Signed distance (unit: m) to the boundary of a union of voxel cubes, given by its exposed faces,
+/// in a narrow band of `halfWidthSamples` samples each side. Samples lie `subdivisions` per voxel
+/// edge with one on every voxel face (sample u at voxel index u / subdivisions - 0.5), so the zero
+/// surface passes through the faces' corners and volume-to-mesh rebuilds the voxel surface exactly
+/// (no bevelled edges). `smoothingSteps` of mean-curvature flow then round the staircase (and
+/// shrink the solid; docs/file-formats.md gives by how much).
+openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces, double voxelSizeM, int subdivisions,
+                                             int smoothingSteps, float halfWidthSamples = 3.0f);
+
+/// The level set's index-to-world map, from its voxels' index-to-world map.
+openvdb::math::Transform::Ptr levelSetTransform(const openvdb::math::Transform& voxelIndexToWorld, int subdivisions);
+
+/// The voxels of a level set written by voxelSurfaceLevelSet: those whose centres lie inside, as
+/// fog (1 in each) in the voxels' own index space. Exact for an unsmoothed level set.
+openvdb::FloatGrid::Ptr voxelsOfLevelSet(const openvdb::FloatGrid& levelSet, int subdivisions);
+
+}  // namespace spall

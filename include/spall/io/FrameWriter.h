@@ -1,0 +1,71 @@
+// OUTDIR/fragments.NNNN.vdb: one frame of a run, every fragment where it is (docs/file-formats.md).
+#pragma once
+
+#include <spall/io/Scene.h>
+#include <spall/voxel/Body.h>
+
+#include <openvdb/openvdb.h>
+
+#include <functional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace spall {
+
+/// 1: fragment grids were fog (1 in each voxel); 2: level sets, fracture_faces_<id>, `v`.
+inline constexpr int kFrameFormatVersion = 2;
+/// Level-set narrow band each side of the surface (unit: samples).
+inline constexpr float kLevelSetHalfWidthSamples = 3.0f;
+
+struct FrameInfo {
+    int frame = 0;
+    double timeS = 0;
+};
+
+/// Writes OUTDIR/fragments.NNNN.vdb: per body a FloatGrid `fragment_<id>` (a level set of its voxel
+/// surface, or fog) whose transform places it in the world, with motion metadata; per body with
+/// fracture surface a `fracture_faces_<id>` grid of which faces broke; and on request world-space
+/// `density` and `v` grids. A body's trees are built once (bodies never change shape: a split makes
+/// new bodies) and each tree starts at index (0,0,0) with the offset in its transform, so bodies of
+/// the same shape — debris is full of single voxels — share one tree, which the file stores once
+/// (OpenVDB instancing).
+class FrameWriter {
+public:
+    FrameWriter(std::string outputDirectory, const OutputSettings& settings);
+    /// Returns the path written.
+    std::string write(const FrameInfo& info, const std::vector<Body>& bodies);
+    static std::string framePath(const std::string& directory, int frame);
+
+private:
+    struct FragmentTrees {
+        openvdb::FloatTree::Ptr surface;
+        openvdb::FloatTree::Ptr fractureFaces;  ///< null when the body has no fracture surface
+        openvdb::Coord originIjk;               ///< the trees' (0,0,0) in the body's index space
+        uint64_t meshKey = 0;                   ///< hash of voxels and fracture faces
+    };
+    /// Trees by content: equal content, one tree.
+    struct Interned {
+        openvdb::FloatTree::Ptr content;  ///< what was hashed and compared
+        openvdb::FloatTree::Ptr derived;  ///< what is written (the content itself, or its level set)
+    };
+    const FragmentTrees& treesOf(const Body& body);
+    static openvdb::FloatTree::Ptr intern(std::unordered_multimap<uint64_t, Interned>& pool, const openvdb::FloatTree::Ptr& content,
+                                          uint64_t hash, const std::function<openvdb::FloatTree::Ptr()>& derive);
+    openvdb::GridBase::Ptr fragmentGrid(const FrameInfo& info, const Body& body, const FragmentTrees& trees) const;
+    std::string mDirectory;
+    OutputSettings mSettings;
+    std::unordered_map<int64_t, FragmentTrees> mByBody;
+    std::unordered_multimap<uint64_t, Interned> mShapes, mFractureFaces;
+};
+
+/// World-space grids of voxel size h over all bodies: `density` (1 where a voxel centre of the
+/// world grid falls inside some body voxel) and, if asked, `v` (the velocity of the material there,
+/// v + ω × r; unit: m/s).
+struct WorldGrids {
+    openvdb::FloatGrid::Ptr density;
+    openvdb::Vec3SGrid::Ptr velocity;
+};
+WorldGrids rasteriseBodies(const std::vector<Body>& bodies, double voxelSizeM, bool withVelocity);
+
+}  // namespace spall

@@ -1,0 +1,91 @@
+#include <spall/io/FragmentSurface.h>
+
+#include <spall/voxel/LinkBits.h>
+
+#include <openvdb/tools/LevelSetFilter.h>
+#include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/MeshToVolume.h>
+
+namespace spall {
+
+namespace {
+
+/// The four corners of a voxel face, counter-clockwise seen from outside (unit: voxels, the voxel's
+/// centre at its index).
+std::array<openvdb::Vec3s, 4> faceCorners(const VoxelFace& f)
+{
+    const int axis = faceAxis(f.face), u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const float sign = float(faceSign(f.face));
+    openvdb::Vec3s centre(float(f.voxel.x()), float(f.voxel.y()), float(f.voxel.z()));
+    centre[axis] += 0.5f * sign;
+    std::array<openvdb::Vec3s, 4> corners;
+    const float du[4] = {-0.5f, 0.5f, 0.5f, -0.5f}, dv[4] = {-0.5f, -0.5f, 0.5f, 0.5f};
+    for (int i = 0; i < 4; ++i) {
+        corners[i] = centre;
+        corners[i][u] += du[i];
+        corners[i][v] += sign * dv[i];  // flip the winding on the negative side: outward either way
+    }
+    return corners;
+}
+
+}  // namespace
+
+openvdb::math::Transform::Ptr levelSetTransform(const openvdb::math::Transform& voxelIndexToWorld, int subdivisions)
+{
+    // world = voxelIndexToWorld(u / k - 0.5): the translation acts first, then the scale.
+    auto transform = voxelIndexToWorld.copy();
+    transform->preTranslate(openvdb::Vec3d(-0.5));
+    transform->preScale(1.0 / subdivisions);
+    return transform;
+}
+
+openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces, double voxelSizeM, int subdivisions,
+                                             int smoothingSteps, float halfWidthSamples)
+{
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec4I> quads;
+    points.reserve(4 * faces.size());
+    quads.reserve(faces.size());
+    for (const VoxelFace& f : faces) {
+        const auto base = static_cast<openvdb::Index32>(points.size());
+        for (const openvdb::Vec3s& c : faceCorners(f)) points.push_back(c * float(voxelSizeM));
+        quads.emplace_back(base, base + 1, base + 2, base + 3);
+    }
+    const auto shapeSpace = levelSetTransform(*openvdb::math::Transform::createLinearTransform(voxelSizeM), subdivisions);
+    const std::vector<openvdb::Vec3I> noTriangles;
+    auto levelSet = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*shapeSpace, points, noTriangles, quads, halfWidthSamples);
+    if (smoothingSteps > 0) {
+        openvdb::tools::LevelSetFilter<openvdb::FloatGrid> filter(*levelSet);
+        for (int i = 0; i < smoothingSteps; ++i) filter.meanCurvature();
+    }
+    return levelSet->treePtr();
+}
+
+openvdb::FloatGrid::Ptr voxelsOfLevelSet(const openvdb::FloatGrid& levelSet, int subdivisions)
+{
+    const int k = subdivisions;
+    // Voxel c's centre is sample k (c + 0.5): the translation acts first, then the scale.
+    auto voxelMap = levelSet.transform().copy();
+    voxelMap->preTranslate(openvdb::Vec3d(0.5 * k));
+    voxelMap->preScale(double(k));
+    auto voxels = openvdb::FloatGrid::create(0.0f);
+    voxels->setTransform(voxelMap);
+    voxels->setGridClass(openvdb::GRID_FOG_VOLUME);
+    // A centre inside lies at least half a voxel within the surface (k even), or is the mean of
+    // corners on or within it (k odd, where it is no sample); one outside, at least half a voxel out.
+    const float threshold = 0.25f * float(levelSet.voxelSize()[0] * k);
+    openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler(levelSet.getConstAccessor(),
+                                                                                                      levelSet.transform());
+    auto out = voxels->getAccessor();
+    for (auto it = levelSet.cbeginValueOn(); it; ++it) {
+        if (*it > 0.0f) continue;
+        const openvdb::Vec3d c = it.getCoord().asVec3d() / double(k) - openvdb::Vec3d(0.5);
+        const openvdb::Coord voxel = openvdb::Coord::round(c);
+        if (out.isValueOn(voxel)) continue;
+        if (sampler.isSample(openvdb::Vec3d(k * (voxel.x() + 0.5), k * (voxel.y() + 0.5), k * (voxel.z() + 0.5))) < threshold)
+            out.setValueOn(voxel, 1.0f);
+    }
+    return voxels;
+}
+
+}  // namespace spall

@@ -1,0 +1,228 @@
+#include <spall/io/FrameWriter.h>
+
+#include <spall/io/FragmentSurface.h>
+#include <spall/io/VdbIo.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <unordered_set>
+
+namespace spall {
+
+namespace {
+
+/// splitmix64's finaliser: a strong 64-bit mix, so content hashes of similar shapes differ.
+uint64_t mix(uint64_t x)
+{
+    x += 0x9e3779b97f4a7c15ull;
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+    return x ^ (x >> 31);
+}
+
+/// Hash of a tree's active voxels and values, in the tree's own (canonical) order.
+uint64_t contentHash(const openvdb::FloatTree& tree)
+{
+    uint64_t hash = 0;
+    for (auto it = tree.cbeginValueOn(); it; ++it) {
+        const openvdb::Coord c = it.getCoord();
+        for (int32_t v : {c.x(), c.y(), c.z(), static_cast<int32_t>(*it)}) hash = mix(hash ^ uint32_t(v));
+    }
+    return hash;
+}
+
+bool sameContent(const openvdb::FloatTree& a, const openvdb::FloatTree& b)
+{
+    if (!a.hasSameTopology(b)) return false;
+    openvdb::tree::ValueAccessor<const openvdb::FloatTree> other(b);
+    for (auto it = a.cbeginValueOn(); it; ++it)
+        if (other.getValue(it.getCoord()) != *it) return false;
+    return true;
+}
+
+openvdb::Vec3d toVdb(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+}  // namespace
+
+FrameWriter::FrameWriter(std::string outputDirectory, const OutputSettings& settings)
+    : mDirectory(std::move(outputDirectory)), mSettings(settings)
+{
+}
+
+std::string FrameWriter::framePath(const std::string& directory, int frame)
+{
+    char name[64];
+    std::snprintf(name, sizeof name, "fragments.%04d.vdb", frame);
+    return (std::filesystem::path(directory) / name).string();
+}
+
+openvdb::FloatTree::Ptr FrameWriter::intern(std::unordered_multimap<uint64_t, Interned>& pool, const openvdb::FloatTree::Ptr& content,
+                                            uint64_t hash, const std::function<openvdb::FloatTree::Ptr()>& derive)
+{
+    auto [first, last] = pool.equal_range(hash);
+    for (auto it = first; it != last; ++it)
+        if (sameContent(*it->second.content, *content)) return it->second.derived;
+    return pool.emplace(hash, Interned{content, derive()})->second.derived;
+}
+
+const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
+{
+    auto found = mByBody.find(body.id);
+    if (found != mByBody.end()) return found->second;
+    FragmentTrees trees;
+    trees.originIjk = body.indexBounds.min();
+    auto voxels = std::make_shared<openvdb::FloatTree>(0.0f);
+    auto fractureFaces = std::make_shared<openvdb::FloatTree>(0.0f);
+    std::vector<VoxelFace> faces;
+    faces.reserve(body.exposedFaces.size());
+    {
+        openvdb::tree::ValueAccessor<openvdb::FloatTree> out(*voxels), fractured(*fractureFaces);
+        for (auto it = body.grid->constTree().cbeginValueOn(); it; ++it) out.setValueOn(it.getCoord() - trees.originIjk, 1.0f);
+        auto links = body.grid->getConstAccessor();
+        for (const ExposedFace& f : body.exposedFaces) {
+            const openvdb::Coord shifted = f.voxel - trees.originIjk;
+            faces.push_back({shifted, f.face});
+            if (!(brokenFaceBits(links.getValue(f.voxel)) & (1 << f.face))) continue;
+            fractured.setValueOn(shifted, float(int(fractured.getValue(shifted)) | (1 << f.face)));
+        }
+    }
+    const uint64_t shapeHash = contentHash(*voxels), fractureHash = contentHash(*fractureFaces);
+    const OutputSettings& s = mSettings;
+    trees.surface = intern(mShapes, voxels, shapeHash, [&] {
+        return s.fragmentGrids == FragmentGrids::LevelSet
+                   ? voxelSurfaceLevelSet(faces, body.voxelSizeM, s.levelSetSubdivisions, s.levelSetSmoothingSteps, kLevelSetHalfWidthSamples)
+                   : voxels;
+    });
+    if (!fractureFaces->empty()) trees.fractureFaces = intern(mFractureFaces, fractureFaces, fractureHash, [&] { return fractureFaces; });
+    trees.meshKey = mix(shapeHash ^ mix(fractureHash));
+    return mByBody.emplace(body.id, std::move(trees)).first->second;
+}
+
+openvdb::GridBase::Ptr FrameWriter::fragmentGrid(const FrameInfo& info, const Body& body, const FragmentTrees& trees) const
+{
+    auto grid = openvdb::FloatGrid::create(trees.surface);
+    auto voxelMap = body.indexToWorld();
+    voxelMap->preTranslate(trees.originIjk.asVec3d());
+    if (mSettings.fragmentGrids == FragmentGrids::LevelSet) {
+        grid->setTransform(levelSetTransform(*voxelMap, mSettings.levelSetSubdivisions));
+        grid->setGridClass(openvdb::GRID_LEVEL_SET);
+        grid->insertMeta("level_set_half_width", openvdb::FloatMetadata(kLevelSetHalfWidthSamples));
+        grid->insertMeta("level_set_subdivisions", openvdb::Int32Metadata(mSettings.levelSetSubdivisions));
+    } else {
+        grid->setTransform(voxelMap);
+        grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+    }
+    grid->setName("fragment_" + std::to_string(body.id));
+    grid->insertMeta("frame", openvdb::Int32Metadata(info.frame));
+    grid->insertMeta("time_s", openvdb::DoubleMetadata(info.timeS));
+    grid->insertMeta("body_id", openvdb::Int64Metadata(body.id));
+    grid->insertMeta("parent_id", openvdb::Int64Metadata(body.parentId));
+    grid->insertMeta("mass_kg", openvdb::DoubleMetadata(body.mass.massKg));
+    grid->insertMeta("voxel_count", openvdb::Int64Metadata(body.mass.voxelCount));
+    grid->insertMeta("voxel_size_m", openvdb::DoubleMetadata(body.voxelSizeM));
+    grid->insertMeta("mesh_key", openvdb::Int64Metadata(static_cast<int64_t>(trees.meshKey)));
+    grid->insertMeta("linear_velocity_m_s", openvdb::Vec3DMetadata(toVdb(body.motion.linearVelocityMS)));
+    grid->insertMeta("angular_velocity_rad_s", openvdb::Vec3DMetadata(toVdb(body.motion.angularVelocityRadS)));
+    grid->insertMeta("centre_of_mass_m", openvdb::Vec3DMetadata(toVdb(body.motion.positionM)));
+    const Eigen::Quaterniond& q = body.motion.orientation;
+    grid->insertMeta("orientation_xyzw", openvdb::Vec4DMetadata(openvdb::Vec4d(q.x(), q.y(), q.z(), q.w())));
+    grid->insertMeta("anchored", openvdb::BoolMetadata(body.anchored));
+    return grid;
+}
+
+std::string FrameWriter::write(const FrameInfo& info, const std::vector<Body>& bodies)
+{
+    openvdb::GridPtrVec grids;
+    std::unordered_set<int64_t> alive;
+    for (const Body& body : bodies) {
+        alive.insert(body.id);
+        const FragmentTrees& trees = treesOf(body);
+        grids.push_back(fragmentGrid(info, body, trees));
+        if (!trees.fractureFaces) continue;
+        auto faces = openvdb::FloatGrid::create(trees.fractureFaces);
+        auto voxelMap = body.indexToWorld();
+        voxelMap->preTranslate(trees.originIjk.asVec3d());
+        faces->setTransform(voxelMap);
+        faces->setName("fracture_faces_" + std::to_string(body.id));
+        faces->insertMeta("body_id", openvdb::Int64Metadata(body.id));
+        grids.push_back(faces);
+    }
+    for (auto it = mByBody.begin(); it != mByBody.end();) it = alive.count(it->first) ? std::next(it) : mByBody.erase(it);
+    for (auto* pool : {&mShapes, &mFractureFaces})
+        for (auto it = pool->begin(); it != pool->end();) {
+            const long heldByPool = it->second.derived == it->second.content ? 2 : 1;
+            it = it->second.derived.use_count() > heldByPool ? std::next(it) : pool->erase(it);
+        }
+    if ((mSettings.densityGrid || mSettings.velocityGrid) && !bodies.empty()) {
+        WorldGrids world = rasteriseBodies(bodies, bodies.front().voxelSizeM, mSettings.velocityGrid);
+        for (openvdb::GridBase::Ptr g : {openvdb::GridBase::Ptr(world.density), openvdb::GridBase::Ptr(world.velocity)}) {
+            if (!g || (g == world.density && !mSettings.densityGrid)) continue;
+            g->insertMeta("frame", openvdb::Int32Metadata(info.frame));
+            g->insertMeta("time_s", openvdb::DoubleMetadata(info.timeS));
+            grids.push_back(g);
+        }
+    }
+    openvdb::MetaMap fileMeta;
+    fileMeta.insertMeta("frame", openvdb::Int32Metadata(info.frame));
+    fileMeta.insertMeta("time_s", openvdb::DoubleMetadata(info.timeS));
+    fileMeta.insertMeta("spall_version", openvdb::StringMetadata(SPALL_VERSION));
+    fileMeta.insertMeta("spall_frame_format", openvdb::Int32Metadata(mSettings.fragmentGrids == FragmentGrids::LevelSet ? kFrameFormatVersion : 1));
+    fileMeta.insertMeta("fragment_grids", openvdb::StringMetadata(enumName(mSettings.fragmentGrids)));
+    const std::string path = framePath(mDirectory, info.frame);
+    writeGridsAtomically(path, grids, fileMeta);
+    return path;
+}
+
+WorldGrids rasteriseBodies(const std::vector<Body>& bodies, double h, bool withVelocity)
+{
+    WorldGrids out;
+    out.density = openvdb::FloatGrid::create(0.0f);
+    out.density->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    out.density->setName("density");
+    out.density->setGridClass(openvdb::GRID_FOG_VOLUME);
+    auto density = out.density->getAccessor();
+    std::optional<openvdb::Vec3SGrid::Accessor> velocity;
+    if (withVelocity) {
+        out.velocity = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+        out.velocity->setTransform(out.density->transform().copy());
+        out.velocity->setName("v");
+        out.velocity->setVectorType(openvdb::VEC_INVARIANT);
+        velocity.emplace(out.velocity->getAccessor());
+    }
+    for (const Body& body : bodies) {
+        // Visit world voxels in the body's bounding box and look each one up in the body's own
+        // index space: no holes, whatever the rotation.
+        const Eigen::Matrix3d toLocal = body.motion.orientation.toRotationMatrix().transpose();
+        // World box around the body's index box (its eight corners, voxel cubes included).
+        const openvdb::CoordBBox& box = body.indexBounds;
+        Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+        for (int c = 0; c < 8; ++c) {
+            const Eigen::Vector3d corner((c & 1 ? box.max().x() + 0.5 : box.min().x() - 0.5),
+                                         (c & 2 ? box.max().y() + 0.5 : box.min().y() - 0.5),
+                                         (c & 4 ? box.max().z() + 0.5 : box.min().z() - 0.5));
+            const Eigen::Vector3d world = body.motion.positionM + body.motion.orientation * (corner * h - body.mass.centreOfMassLocalM);
+            lo = lo.cwiseMin(world / h);
+            hi = hi.cwiseMax(world / h);
+        }
+        auto in = body.grid->getConstAccessor();
+        for (int i = int(std::floor(lo.x())); i <= int(std::ceil(hi.x())); ++i)
+            for (int j = int(std::floor(lo.y())); j <= int(std::ceil(hi.y())); ++j)
+                for (int k = int(std::floor(lo.z())); k <= int(std::ceil(hi.z())); ++k) {
+                    const Eigen::Vector3d world(i * h, j * h, k * h);
+                    const Eigen::Vector3d index = (toLocal * (world - body.motion.positionM) + body.mass.centreOfMassLocalM) / h;
+                    const openvdb::Coord ijk(int(std::lround(index.x())), int(std::lround(index.y())), int(std::lround(index.z())));
+                    if (!in.isValueOn(ijk)) continue;
+                    density.setValueOn(openvdb::Coord(i, j, k), 1.0f);
+                    if (!velocity) continue;
+                    // Rigid motion: v + ω × (x − centre of mass).
+                    const Eigen::Vector3d v =
+                        body.motion.linearVelocityMS + body.motion.angularVelocityRadS.cross(world - body.motion.positionM);
+                    velocity->setValueOn(openvdb::Coord(i, j, k), openvdb::Vec3s(float(v.x()), float(v.y()), float(v.z())));
+                }
+    }
+    return out;
+}
+
+}  // namespace spall
