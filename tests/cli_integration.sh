@@ -169,6 +169,24 @@ assert len(fragments) > 1, "the wall should have broken"
 p = h["frames/linear_momentum_kg_m_s"][:]
 assert np.all(np.isfinite(p))
 PY
+# glTF: the run's debris as meshes, checked by the Khronos validator (tools/js, installed by setup)
+"$spall" export gltf "$dir/out" --quiet > "$dir/gltf.txt" || fail "export gltf failed"
+grep -q "debris.glb" "$dir/gltf.txt" || fail "export gltf printed no summary"
+node "$(dirname "$0")/../tools/js/validate_gltf.mjs" "$dir/out/debris.glb" > "$dir/validator.txt" || fail "glTF validator: $(cat "$dir/validator.txt")"
+# ... and refuses what it cannot mesh, naming it, leaving nothing behind
+if "$spall" export gltf "$dir/nowhere" 2> "$dir/err.txt"; then fail "export of a missing directory accepted"; fi
+grep -q "nowhere" "$dir/err.txt" || fail "error does not name the directory: $(cat "$dir/err.txt")"
+$py - "$dir/scene.json" "$dir/fog.json" <<'PY'
+import json, sys
+scene = json.load(open(sys.argv[1]))
+scene["output"] = {"fragment_grids": "fog"}
+json.dump(scene, open(sys.argv[2], "w"))
+PY
+"$spall" run "$dir/fog.json" -o "$dir/fog" --frames 1 --quiet --no-preview > /dev/null
+if "$spall" export gltf "$dir/fog" 2> "$dir/err.txt"; then fail "export of fog frames accepted"; fi
+grep -q "fragments.0000.vdb: fragments are not level sets" "$dir/err.txt" || fail "fog export error unclear: $(cat "$dir/err.txt")"
+[[ ! -e "$dir/fog/debris.glb" ]] || fail "a refused export left a file"
+
 # an output directory that cannot be created: a clear error naming it
 if "$spall" run "$dir/scene.json" -o "$dir/cube.obj/out" --quiet > /dev/null 2> "$dir/err.txt"; then fail "unwritable output accepted"; fi
 grep -q "cube.obj/out" "$dir/err.txt" || fail "error does not name the output directory: $(cat "$dir/err.txt")"

@@ -57,7 +57,7 @@ void printRunSummary(const spall::RunReport& report, const std::string& outDir)
 }
 
 int runRun(const std::string& scenePath, const std::string& outDir, bool resume, int threads, int64_t seed, int frames, bool quiet,
-           bool preview)
+           bool preview, bool gltf)
 {
     std::unique_ptr<tbb::global_control> threadLimit;
     if (threads > 0) threadLimit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
@@ -97,7 +97,7 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
     printRunSummary(report, outDir);
     if (!report.complete) return 130;
     if (preview) std::printf("preview: %s\n", options.previewPath.c_str());
-    return 0;
+    return gltf ? exportGltfCommand(outDir, "", quiet) : 0;
 }
 
 }  // namespace
@@ -108,7 +108,7 @@ void addRunCommand(CLI::App& app, CommandAction& action)
         std::string scene, output = "out", resume;
         int threads = 0, frames = -1;
         int64_t seed = -1;
-        bool quiet = false, noPreview = false;
+        bool quiet = false, noPreview = false, gltf = false;
     };
     auto o = std::make_shared<Options>();
     auto* sub = app.add_subcommand("run", "Simulate a scene (default: the built-in wall demo) and write frames and history");
@@ -119,6 +119,7 @@ void addRunCommand(CLI::App& app, CommandAction& action)
     sub->add_option("--frames", o->frames, "Stop after this many frames")->check(CLI::NonNegativeNumber);
     sub->add_flag("--quiet", o->quiet, "No progress bar");
     sub->add_flag("--no-preview", o->noPreview, "Do not render OUTDIR/preview.png");
+    sub->add_flag("--gltf", o->gltf, "When the run completes, write OUTDIR/debris.glb (as spall export gltf OUTDIR)");
     sub->add_option("--resume", o->resume, "Continue the interrupted run in this output directory from its checkpoint")
         ->excludes(sub->get_option("scene"))
         ->excludes("--seed")
@@ -127,7 +128,7 @@ void addRunCommand(CLI::App& app, CommandAction& action)
     sub->callback([o, &action] {
         action = [o] {
             const bool resume = !o->resume.empty();
-            return runRun(o->scene, resume ? o->resume : o->output, resume, o->threads, o->seed, o->frames, o->quiet, !o->noPreview);
+            return runRun(o->scene, resume ? o->resume : o->output, resume, o->threads, o->seed, o->frames, o->quiet, !o->noPreview, o->gltf);
         };
     });
 }

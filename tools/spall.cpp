@@ -60,6 +60,7 @@ int main(int argc, char** argv)
     addRenderCommand(app, action);
     addInspectCommand(app, action);
     addBenchCommands(app, action);
+    addExportCommand(app, action);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

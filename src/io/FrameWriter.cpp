@@ -3,6 +3,9 @@
 #include <spall/io/FragmentSurface.h>
 #include <spall/io/VdbIo.h>
 
+#include <spall/core/Error.h>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -173,6 +176,25 @@ std::string FrameWriter::write(const FrameInfo& info, const std::vector<Body>& b
     const std::string path = framePath(mDirectory, info.frame);
     writeGridsAtomically(path, grids, fileMeta);
     return path;
+}
+
+std::vector<std::string> listFramePaths(const std::string& outputDirectory)
+{
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (!fs::is_directory(outputDirectory, ec)) throw InputError(outputDirectory + ": no such output directory");
+    std::vector<std::string> paths;
+    for (const auto& entry : fs::directory_iterator(outputDirectory, ec)) {
+        const std::string name = entry.path().filename().string();
+        // fragments.<digits>.vdb, nothing else (temporaries end in .partial.<pid>).
+        if (name.size() < 16 || name.rfind("fragments.", 0) != 0 || name.compare(name.size() - 4, 4, ".vdb") != 0) continue;
+        const std::string digits = name.substr(10, name.size() - 14);
+        if (!digits.empty() && std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
+            paths.push_back(entry.path().string());
+    }
+    std::sort(paths.begin(), paths.end());
+    if (paths.empty()) throw InputError(outputDirectory + ": holds no fragments.NNNN.vdb frames (is it a spall run's output?)");
+    return paths;
 }
 
 WorldGrids rasteriseBodies(const std::vector<Body>& bodies, double h, bool withVelocity)

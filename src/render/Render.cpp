@@ -281,25 +281,6 @@ Image contactSheet(const std::vector<Image>& frames, const std::vector<double>& 
 }
 
 
-std::vector<std::string> listFramePaths(const std::string& outputDirectory)
-{
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    if (!fs::is_directory(outputDirectory, ec)) throw InputError(outputDirectory + ": no such output directory");
-    std::vector<std::string> paths;
-    for (const auto& entry : fs::directory_iterator(outputDirectory, ec)) {
-        const std::string name = entry.path().filename().string();
-        // fragments.<digits>.vdb, nothing else (temporaries end in .partial.<pid>).
-        if (name.size() < 16 || name.rfind("fragments.", 0) != 0 || name.compare(name.size() - 4, 4, ".vdb") != 0) continue;
-        const std::string digits = name.substr(10, name.size() - 14);
-        if (!digits.empty() && std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
-            paths.push_back(entry.path().string());
-    }
-    std::sort(paths.begin(), paths.end());
-    if (paths.empty()) throw InputError(outputDirectory + ": holds no fragments.NNNN.vdb frames (is it a spall run's output?)");
-    return paths;
-}
-
 int writeContactSheet(const std::string& outputDirectory, const std::string& pngPath, int count, const RenderSettings& settings)
 {
     const std::vector<std::string> paths = listFramePaths(outputDirectory);

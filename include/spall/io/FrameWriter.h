@@ -59,6 +59,10 @@ private:
     std::unordered_multimap<uint64_t, Interned> mShapes, mFractureFaces;
 };
 
+/// Sorted paths of OUTDIR/fragments.NNNN.vdb. Throws InputError when the directory is missing or
+/// holds no frames.
+std::vector<std::string> listFramePaths(const std::string& outputDirectory);
+
 /// World-space grids of voxel size h over all bodies: `density` (1 where a voxel centre of the
 /// world grid falls inside some body voxel) and, if asked, `v` (the velocity of the material there,
 /// v + ω × r; unit: m/s).

@@ -2,6 +2,7 @@
 // one colour per fragment, over a chequered ground, from a camera that frames the scene.
 #pragma once
 
+#include <spall/io/FrameWriter.h>
 #include <spall/io/Png.h>
 #include <spall/voxel/Body.h>
 
@@ -58,9 +59,6 @@ Image renderFragments(const std::vector<FragmentRef>& fragments, const Camera& c
 Image contactSheet(const std::vector<Image>& frames, const std::vector<double>& timesS, int columns);
 
 
-/// Sorted paths of OUTDIR/fragments.NNNN.vdb. Throws InputError when the directory is missing or
-/// holds no frames.
-std::vector<std::string> listFramePaths(const std::string& outputDirectory);
 
 /// Renders a contact sheet of up to `count` frames spread evenly over the run into `pngPath`,
 /// framing the first and last frames. Returns the number of frames on the sheet.

@@ -1,0 +1,32 @@
+// A run's debris as one glTF 2.0 binary (.glb): each fragment meshed once, animated by its pose.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+
+namespace spall {
+
+struct GltfExportReport {
+    int frames = 0;
+    int nodes = 0;           ///< one per fragment that ever existed
+    int meshes = 0;          ///< distinct pieces (fragments of equal mesh_key share one)
+    int64_t triangles = 0;   ///< over the distinct meshes
+    int64_t keyframes = 0;   ///< pose samples kept (a resting body's repeats are dropped)
+    size_t bytes = 0;        ///< of the .glb
+};
+
+/// Reads OUTDIR's level-set frames and writes `glbPath` (under a temporary name, then renamed):
+/// - per distinct mesh_key, the fragment's level set meshed by OpenVDB's volume-to-mesh
+///   (adaptivity 0), in the body's frame with the pivot at its centre of mass, as up to two
+///   primitives: material `outer` (the object's own surface) and `fracture` (faces whose links
+///   broke, from fracture_faces_<id>); no normals, so readers shade it flat;
+/// - per fragment, a node `fragment_<id>` whose translation and rotation are sampled at every frame
+///   it lives (LINEAR), with scale 1 while it lives and 0 before and after (STEP);
+/// - metres, converted from spall's Z-up to glTF's Y-up: (x, y, z) -> (x, z, -y).
+/// Throws InputError (no frames, fog frames) or IoError. `onFrame(done, total)` reports progress.
+GltfExportReport exportGltf(const std::string& outputDirectory, const std::string& glbPath,
+                            const std::function<void(int, int)>& onFrame = {});
+
+}  // namespace spall

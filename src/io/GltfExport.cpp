@@ -1,0 +1,341 @@
+#include <spall/io/GltfExport.h>
+
+#include <spall/core/AtomicFile.h>
+#include <spall/core/Error.h>
+#include <spall/io/FrameWriter.h>
+#include <spall/io/VdbIo.h>
+#include <spall/voxel/LinkBits.h>
+
+#include <openvdb/io/File.h>
+#include <openvdb/tools/VolumeToMesh.h>
+#include <tiny_gltf.h>
+
+#include <Eigen/Geometry>
+
+#include <array>
+#include <filesystem>
+#include <map>
+#include <unordered_map>
+
+namespace spall {
+
+namespace {
+
+// glTF is Y-up, spall Z-up: a rotation of -90° about x, (x, y, z) -> (x, z, -y); a rotation's
+// axis turns the same way (C q C⁻¹).
+Eigen::Vector3f toYUp(const Eigen::Vector3d& v) { return Eigen::Vector3f(float(v.x()), float(v.z()), float(-v.y())); }
+Eigen::Quaternionf toYUp(const Eigen::Quaterniond& q)
+{
+    return Eigen::Quaternionf(float(q.w()), float(q.x()), float(q.z()), float(-q.y())).normalized();
+}
+
+struct PieceMesh {
+    std::vector<Eigen::Vector3f> positions;  ///< body frame, pivot at the centre of mass, Y-up (unit: m)
+    std::vector<uint32_t> outer, fracture;   ///< triangles, counter-clockwise seen from outside
+};
+
+struct Pose {
+    float timeS;
+    Eigen::Vector3f position;
+    Eigen::Quaternionf rotation;
+    bool operator==(const Pose& o) const { return position == o.position && rotation.coeffs() == o.rotation.coeffs(); }
+};
+
+struct Track {
+    int mesh = -1;
+    int firstFrame = -1, lastFrame = -1;
+    std::vector<Pose> poses;
+};
+
+/// What a fragment grid's metadata says of its body's pose.
+struct FragmentPose {
+    int64_t id;
+    uint64_t meshKey;
+    Eigen::Vector3d centreOfMassM;
+    Eigen::Quaterniond orientation;
+    double voxelSizeM;
+};
+
+FragmentPose poseOf(const openvdb::GridBase& grid, const std::string& path)
+{
+    try {
+        const openvdb::Vec3d c = grid.metaValue<openvdb::Vec3d>("centre_of_mass_m");
+        const openvdb::Vec4d q = grid.metaValue<openvdb::Vec4d>("orientation_xyzw");
+        return {grid.metaValue<int64_t>("body_id"), static_cast<uint64_t>(grid.metaValue<int64_t>("mesh_key")), {c.x(), c.y(), c.z()},
+                Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized(), grid.metaValue<double>("voxel_size_m")};
+    } catch (const std::exception& e) {
+        throw InputError(path + ": " + grid.getName() + ": metadata of a spall frame missing (" + e.what() + ")");
+    }
+}
+
+/// The face of a voxel a mesh triangle lies on: the voxel just inside its centroid, and the face
+/// of its normal's largest component in the body's axes.
+bool onFractureFace(const openvdb::FloatGrid& fractureFaces, const Eigen::Vector3d& centroidWorld, const Eigen::Vector3d& normalWorld,
+                    const Eigen::Matrix3d& worldToBody, double voxelSizeM)
+{
+    const Eigen::Vector3d inside = centroidWorld - 0.25 * voxelSizeM * normalWorld;
+    const openvdb::Coord voxel = fractureFaces.transform().worldToIndexNodeCentered(openvdb::Vec3d(inside.x(), inside.y(), inside.z()));
+    const Eigen::Vector3d n = worldToBody * normalWorld;
+    int axis = 0;
+    n.cwiseAbs().maxCoeff(&axis);
+    const int face = 2 * axis + (n[axis] > 0 ? 1 : 0);
+    return (int(fractureFaces.tree().getValue(voxel)) >> face) & 1;
+}
+
+/// The fragment's level set meshed (adaptivity 0) in its body frame, triangles split by material.
+PieceMesh meshPiece(const openvdb::FloatGrid& levelSet, const openvdb::FloatGrid* fractureFaces, const FragmentPose& pose)
+{
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec3I> triangles;
+    std::vector<openvdb::Vec4I> quads;
+    openvdb::tools::volumeToMesh(levelSet, points, triangles, quads, 0.0, 0.0);
+    std::vector<std::array<uint32_t, 3>> all;
+    for (const auto& t : triangles) all.push_back({t[0], t[1], t[2]});
+    for (const auto& q : quads) {
+        all.push_back({q[0], q[1], q[2]});
+        all.push_back({q[0], q[2], q[3]});
+    }
+    std::vector<Eigen::Vector3d> world(points.size());
+    for (size_t i = 0; i < points.size(); ++i) world[i] = Eigen::Vector3d(points[i].x(), points[i].y(), points[i].z());
+    // Outward winding: the mesh's signed volume about its centre of mass is positive.
+    double signedVolume = 0.0;
+    for (const auto& t : all)
+        signedVolume += (world[t[0]] - pose.centreOfMassM).dot((world[t[1]] - pose.centreOfMassM).cross(world[t[2]] - pose.centreOfMassM));
+    const bool flip = signedVolume < 0.0;
+    const Eigen::Matrix3d worldToBody = pose.orientation.toRotationMatrix().transpose();
+    PieceMesh mesh;
+    mesh.positions.reserve(points.size());
+    for (const Eigen::Vector3d& p : world) mesh.positions.push_back(toYUp(worldToBody * (p - pose.centreOfMassM)));
+    for (auto t : all) {
+        if (flip) std::swap(t[1], t[2]);
+        const Eigen::Vector3d normal = (world[t[1]] - world[t[0]]).cross(world[t[2]] - world[t[0]]);
+        if (normal.norm() < 1e-12 * pose.voxelSizeM * pose.voxelSizeM) continue;  // degenerate
+        const Eigen::Vector3d centroid = (world[t[0]] + world[t[1]] + world[t[2]]) / 3.0;
+        const bool fracture = fractureFaces && onFractureFace(*fractureFaces, centroid, normal.normalized(), worldToBody, pose.voxelSizeM);
+        (fracture ? mesh.fracture : mesh.outer).insert((fracture ? mesh.fracture : mesh.outer).end(), t.begin(), t.end());
+    }
+    return mesh;
+}
+
+/// Appends typed arrays to the model's one buffer, a view and an accessor each.
+class BufferPacker {
+public:
+    explicit BufferPacker(tinygltf::Model& model) : mModel(model) { mModel.buffers.resize(1); }
+
+    template <typename T>
+    int add(const std::vector<T>& values, int componentType, int type, size_t count, int target = 0,
+            std::vector<double> minValues = {}, std::vector<double> maxValues = {})
+    {
+        auto& bytes = mModel.buffers[0].data;
+        bytes.resize((bytes.size() + 3) / 4 * 4, 0);  // every view 4-byte aligned
+        tinygltf::BufferView view;
+        view.buffer = 0;
+        view.byteOffset = bytes.size();
+        view.byteLength = values.size() * sizeof(T);
+        view.target = target;
+        const auto* data = reinterpret_cast<const unsigned char*>(values.data());
+        bytes.insert(bytes.end(), data, data + view.byteLength);
+        mModel.bufferViews.push_back(view);
+        tinygltf::Accessor accessor;
+        accessor.bufferView = int(mModel.bufferViews.size()) - 1;
+        accessor.componentType = componentType;
+        accessor.type = type;
+        accessor.count = count;
+        accessor.minValues = std::move(minValues);
+        accessor.maxValues = std::move(maxValues);
+        mModel.accessors.push_back(accessor);
+        return int(mModel.accessors.size()) - 1;
+    }
+
+    int vec3(const std::vector<Eigen::Vector3f>& v, int target = 0)
+    {
+        Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
+        std::vector<float> flat;
+        flat.reserve(3 * v.size());
+        for (const auto& p : v) {
+            lo = lo.cwiseMin(p);
+            hi = hi.cwiseMax(p);
+            flat.insert(flat.end(), {p.x(), p.y(), p.z()});
+        }
+        return add(flat, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, v.size(), target, {lo.x(), lo.y(), lo.z()}, {hi.x(), hi.y(), hi.z()});
+    }
+
+    int times(const std::vector<float>& t)
+    {
+        return add(t, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, t.size(), 0, {double(t.front())}, {double(t.back())});
+    }
+
+private:
+    tinygltf::Model& mModel;
+};
+
+int addMaterial(tinygltf::Model& model, const std::string& name, std::vector<double> colour, double roughness)
+{
+    tinygltf::Material m;
+    m.name = name;
+    m.pbrMetallicRoughness.baseColorFactor = std::move(colour);
+    m.pbrMetallicRoughness.metallicFactor = 0.0;
+    m.pbrMetallicRoughness.roughnessFactor = roughness;
+    model.materials.push_back(m);
+    return int(model.materials.size()) - 1;
+}
+
+void addMeshes(tinygltf::Model& model, BufferPacker& packer, const std::vector<PieceMesh>& pieces, GltfExportReport& report)
+{
+    const int outer = addMaterial(model, "outer", {0.62, 0.36, 0.28, 1.0}, 0.85);
+    const int fracture = addMaterial(model, "fracture", {0.80, 0.70, 0.60, 1.0}, 1.0);
+    for (size_t i = 0; i < pieces.size(); ++i) {
+        const PieceMesh& piece = pieces[i];
+        tinygltf::Mesh mesh;
+        mesh.name = "piece_" + std::to_string(i);
+        const int positions = packer.vec3(piece.positions, TINYGLTF_TARGET_ARRAY_BUFFER);
+        for (const auto& [indices, material] : {std::pair{&piece.outer, outer}, std::pair{&piece.fracture, fracture}}) {
+            if (indices->empty()) continue;
+            tinygltf::Primitive primitive;
+            primitive.attributes["POSITION"] = positions;
+            primitive.indices = packer.add(*indices, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, indices->size(),
+                                           TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+            primitive.material = material;
+            primitive.mode = TINYGLTF_MODE_TRIANGLES;
+            mesh.primitives.push_back(primitive);
+            report.triangles += int64_t(indices->size() / 3);
+        }
+        model.meshes.push_back(mesh);
+    }
+}
+
+/// One animation channel with its own sampler.
+void addChannel(tinygltf::Animation& animation, int node, const char* path, int input, int output, const char* interpolation)
+{
+    tinygltf::AnimationSampler sampler;
+    sampler.input = input;
+    sampler.output = output;
+    sampler.interpolation = interpolation;
+    animation.samplers.push_back(sampler);
+    tinygltf::AnimationChannel channel;
+    channel.sampler = int(animation.samplers.size()) - 1;
+    channel.target_node = node;
+    channel.target_path = path;
+    animation.channels.push_back(channel);
+}
+
+/// A node per fragment and its pose samples; a sample equal to both neighbours is dropped (exact
+/// under linear interpolation), so resting bodies cost two samples.
+void addNodes(tinygltf::Model& model, BufferPacker& packer, const std::map<int64_t, Track>& tracks, const std::vector<float>& frameTimes,
+              GltfExportReport& report)
+{
+    tinygltf::Animation animation;
+    animation.name = "spall";
+    tinygltf::Scene scene;
+    const int lastFrame = int(frameTimes.size()) - 1;
+    for (const auto& [id, track] : tracks) {
+        const int node = int(model.nodes.size());
+        tinygltf::Node n;
+        n.name = "fragment_" + std::to_string(id);
+        if (track.mesh >= 0) n.mesh = track.mesh;
+        const Pose& first = track.poses.front();
+        n.translation = {first.position.x(), first.position.y(), first.position.z()};
+        n.rotation = {first.rotation.x(), first.rotation.y(), first.rotation.z(), first.rotation.w()};
+        if (track.firstFrame > 0) n.scale = {0.0, 0.0, 0.0};
+        model.nodes.push_back(n);
+        scene.nodes.push_back(node);
+
+        std::vector<float> times, rotations;
+        std::vector<Eigen::Vector3f> positions;
+        const auto& p = track.poses;
+        for (size_t i = 0; i < p.size(); ++i) {
+            if (i > 0 && i + 1 < p.size() && p[i] == p[i - 1] && p[i] == p[i + 1]) continue;
+            times.push_back(p[i].timeS);
+            positions.push_back(p[i].position);
+            rotations.insert(rotations.end(), {p[i].rotation.x(), p[i].rotation.y(), p[i].rotation.z(), p[i].rotation.w()});
+        }
+        report.keyframes += int64_t(times.size());
+        const int input = packer.times(times);
+        addChannel(animation, node, "translation", input, packer.vec3(positions), "LINEAR");
+        addChannel(animation, node, "rotation", input,
+                   packer.add(rotations, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, times.size()), "LINEAR");
+        // Visible (scale 1) from its first frame to its last, hidden (0) before and after.
+        std::vector<float> scaleTimes;
+        std::vector<Eigen::Vector3f> scales;
+        auto key = [&](float t, float s) {
+            scaleTimes.push_back(t);
+            scales.push_back(Eigen::Vector3f::Constant(s));
+        };
+        if (track.firstFrame > 0) key(0.0f, 0.0f);
+        key(frameTimes[track.firstFrame], 1.0f);
+        if (track.lastFrame < lastFrame) key(frameTimes[track.lastFrame + 1], 0.0f);
+        if (scaleTimes.size() > 1) addChannel(animation, node, "scale", packer.times(scaleTimes), packer.vec3(scales), "STEP");
+    }
+    model.animations.push_back(animation);
+    model.scenes.push_back(scene);
+    model.defaultScene = 0;
+    report.nodes = int(tracks.size());
+}
+
+}  // namespace
+
+GltfExportReport exportGltf(const std::string& outputDirectory, const std::string& glbPath, const std::function<void(int, int)>& onFrame)
+{
+    initialiseOpenVdb();
+    const std::vector<std::string> paths = listFramePaths(outputDirectory);
+    std::vector<float> frameTimes;
+    std::map<int64_t, Track> tracks;
+    std::unordered_map<uint64_t, int> meshByKey;
+    std::vector<PieceMesh> pieces;
+    for (size_t f = 0; f < paths.size(); ++f) {
+        const std::string& path = paths[f];
+        openvdb::io::File file(path);
+        try {
+            file.open();
+        } catch (const std::exception& e) {
+            throw IoError(path + ": cannot read as .vdb: " + e.what());
+        }
+        const auto fileMeta = file.getMetadata();
+        const auto kind = fileMeta->getMetadata<openvdb::StringMetadata>("fragment_grids");
+        if (!kind || kind->value() != "level_set")
+            throw InputError(path + ": fragments are not level sets (output.fragment_grids); the glTF export meshes level sets: "
+                                    "run the scene again with \"fragment_grids\": \"level_set\"");
+        frameTimes.push_back(float(fileMeta->metaValue<double>("time_s")));
+        const openvdb::GridPtrVecPtr grids = file.readAllGridMetadata();
+        for (const auto& grid : *grids) {
+            if (grid->getName().rfind("fragment_", 0) != 0) continue;
+            const FragmentPose pose = poseOf(*grid, path);
+            Track& track = tracks[pose.id];
+            if (track.firstFrame < 0) {
+                track.firstFrame = int(f);
+                auto [found, isNew] = meshByKey.emplace(pose.meshKey, int(pieces.size()));
+                if (isNew) {
+                    const auto levelSet = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(grid->getName()));
+                    const std::string facesName = "fracture_faces_" + std::to_string(pose.id);
+                    const auto faces = file.hasGrid(facesName) ? openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(facesName)) : nullptr;
+                    if (!levelSet) throw InputError(path + ": " + grid->getName() + " is not a float grid");
+                    pieces.push_back(meshPiece(*levelSet, faces.get(), pose));
+                }
+                track.mesh = found->second;
+            }
+            track.lastFrame = int(f);
+            track.poses.push_back({frameTimes.back(), toYUp(pose.centreOfMassM), toYUp(pose.orientation)});
+        }
+        file.close();
+        if (onFrame) onFrame(int(f) + 1, int(paths.size()));
+    }
+    if (tracks.empty()) throw InputError(outputDirectory + ": the frames hold no fragments");
+
+    GltfExportReport report;
+    report.frames = int(paths.size());
+    report.meshes = int(pieces.size());
+    tinygltf::Model model;
+    model.asset.version = "2.0";
+    model.asset.generator = std::string("spall ") + SPALL_VERSION;
+    BufferPacker packer(model);
+    addMeshes(model, packer, pieces, report);
+    addNodes(model, packer, tracks, frameTimes, report);
+    writeFileAtomically(glbPath, [&](std::ostream& out) {
+        tinygltf::TinyGLTF writer;
+        if (!writer.WriteGltfSceneToStream(&model, out, false, true)) throw IoError(glbPath + ": tinygltf could not write the model");
+    });
+    report.bytes = std::filesystem::file_size(glbPath);
+    return report;
+}
+
+}  // namespace spall

@@ -1,0 +1,129 @@
+// The glTF export read back by tinygltf and checked against the run's history.h5 (written from
+// the bodies in memory, not from the frames the export reads).
+#include <spall/io/GltfExport.h>
+#include <spall/io/History.h>
+#include <spall/io/Scene.h>
+#include <spall/sim/Run.h>
+
+#include <gtest/gtest.h>
+#include <tiny_gltf.h>
+
+#include <filesystem>
+#include <unistd.h>
+#include <map>
+
+using namespace spall;
+
+namespace {
+
+std::vector<float> floatsOf(const tinygltf::Model& model, int accessorIndex)
+{
+    const tinygltf::Accessor& a = model.accessors.at(accessorIndex);
+    const tinygltf::BufferView& view = model.bufferViews.at(a.bufferView);
+    const size_t components = tinygltf::GetNumComponentsInType(a.type);
+    const auto* data = reinterpret_cast<const float*>(model.buffers.at(view.buffer).data.data() + view.byteOffset + a.byteOffset);
+    return std::vector<float>(data, data + a.count * components);
+}
+
+std::vector<uint32_t> indicesOf(const tinygltf::Model& model, int accessorIndex)
+{
+    const tinygltf::Accessor& a = model.accessors.at(accessorIndex);
+    const tinygltf::BufferView& view = model.bufferViews.at(a.bufferView);
+    const auto* data = reinterpret_cast<const uint32_t*>(model.buffers.at(view.buffer).data.data() + view.byteOffset + a.byteOffset);
+    return std::vector<uint32_t>(data, data + a.count);
+}
+
+/// A node's animated value at time t (LINEAR or STEP, clamped at the ends), as glTF 2.0 §3.11 defines.
+std::vector<float> sampleAt(const tinygltf::Model& model, int node, const std::string& path, float t)
+{
+    for (const auto& animation : model.animations)
+        for (const auto& channel : animation.channels) {
+            if (channel.target_node != node || channel.target_path != path) continue;
+            const auto& sampler = animation.samplers.at(channel.sampler);
+            const std::vector<float> times = floatsOf(model, sampler.input), values = floatsOf(model, sampler.output);
+            const size_t n = values.size() / times.size();
+            size_t i = 0;
+            while (i + 1 < times.size() && times[i + 1] <= t) ++i;
+            float s = 0.0f;  // the fraction of the way to the next key (STEP and the ends: none)
+            if (sampler.interpolation == "LINEAR" && i + 1 < times.size() && t > times[i]) s = (t - times[i]) / (times[i + 1] - times[i]);
+            std::vector<float> out(n);
+            for (size_t c = 0; c < n; ++c) out[c] = values[i * n + c] + (s > 0 ? s * (values[(i + 1) * n + c] - values[i * n + c]) : 0.0f);
+            return out;
+        }
+    return {};
+}
+
+double meshVolume(const tinygltf::Model& model, const tinygltf::Mesh& mesh)
+{
+    double volume = 0.0;
+    for (const auto& primitive : mesh.primitives) {
+        const std::vector<float> p = floatsOf(model, primitive.attributes.at("POSITION"));
+        const std::vector<uint32_t> idx = indicesOf(model, primitive.indices);
+        for (size_t t = 0; t + 2 < idx.size(); t += 3) {
+            const Eigen::Vector3d a(p[3 * idx[t]], p[3 * idx[t] + 1], p[3 * idx[t] + 2]), b(p[3 * idx[t + 1]], p[3 * idx[t + 1] + 1], p[3 * idx[t + 1] + 2]),
+                c(p[3 * idx[t + 2]], p[3 * idx[t + 2] + 1], p[3 * idx[t + 2] + 2]);
+            volume += a.dot(b.cross(c)) / 6.0;
+        }
+    }
+    return volume;
+}
+
+}  // namespace
+
+TEST(Gltf, EachFragmentIsANodeThatFollowsTheHistoryWithAMeshOfItsVolume)
+{
+    const std::string dir = (std::filesystem::temp_directory_path() / "spall_test_gltf").string();
+    std::filesystem::remove_all(dir);
+    const Scene scene = parseScene(R"({
+      "voxel_size_m": 0.1, "duration_s": 0.25, "frame_rate_hz": 24, "seed": 3,
+      "objects": [{"name": "wall", "primitive": {"shape": "box", "size_m": [2.0, 0.3, 1.5]},
+                   "position_m": [0, 0, 0.75], "material": "brick-masonry", "anchor": "ground"}],
+      "charges": [{"position_m": [0.2, -2.0, 0.0], "tnt_kg": 3.0, "burst": "surface"}]})", "gltf-scene", ".");
+    RunOptions options;
+    options.outputDirectory = dir;
+    ASSERT_TRUE(runScene(scene, options, {}).complete);
+    const GltfExportReport report = exportGltf(dir, dir + "/debris.glb");
+    EXPECT_FALSE(std::filesystem::exists(dir + "/debris.glb.partial." + std::to_string(getpid())));
+
+    tinygltf::Model model;
+    tinygltf::TinyGLTF loader;
+    std::string error, warning;
+    ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, dir + "/debris.glb")) << error;
+    EXPECT_EQ(int(model.nodes.size()), report.nodes);
+    ASSERT_EQ(model.materials.size(), 2u);
+    std::map<std::string, int> nodeByName;
+    for (size_t i = 0; i < model.nodes.size(); ++i) nodeByName[model.nodes[i].name] = int(i);
+
+    const History h = readHistory(dir + "/history.h5");
+    const int frames = int(h.timeS.size());
+    ASSERT_EQ(frames, report.frames);
+    std::map<int64_t, int> firstFrame;
+    int fractured = 0;
+    for (int f = 0; f < frames; ++f)
+        for (int64_t row = h.bodyOffset[f]; row < h.bodyOffset[f + 1]; ++row) {
+            const int64_t id = h.bodyId[row];
+            firstFrame.emplace(id, f);
+            ASSERT_TRUE(nodeByName.count("fragment_" + std::to_string(id))) << id;
+            const int node = nodeByName["fragment_" + std::to_string(id)];
+            // Where the history puts the centre of mass, in glTF's Y-up axes: (x, z, -y).
+            const Eigen::Vector3d& p = h.bodyPositionM[row];
+            const std::vector<float> t = sampleAt(model, node, "translation", float(h.timeS[f]));
+            ASSERT_EQ(t.size(), 3u);
+            EXPECT_LT((Eigen::Vector3d(t[0], t[1], t[2]) - Eigen::Vector3d(p.x(), p.z(), -p.y())).norm(), 1e-3) << id << " at frame " << f;
+            const std::vector<float> scale = sampleAt(model, node, "scale", float(h.timeS[f]));
+            EXPECT_TRUE(scale.empty() || scale[0] == 1.0f) << id << " is hidden at frame " << f << " while it lives";
+            if (firstFrame[id] != f) continue;
+            // Once per fragment: hidden before its first frame, and its mesh has its voxels' volume.
+            if (f > 0) {
+                EXPECT_EQ(sampleAt(model, node, "scale", float(h.timeS[f - 1])).at(0), 0.0f) << id;
+            }
+            const tinygltf::Mesh& mesh = model.meshes.at(model.nodes[node].mesh);
+            const double voxels = h.bodyVoxelCount[row] * std::pow(scene.voxelSizeM, 3);
+            EXPECT_NEAR(meshVolume(model, mesh), voxels, 0.1 * voxels) << id;
+            for (const auto& primitive : mesh.primitives) fractured += model.materials.at(primitive.material).name == "fracture";
+        }
+    EXPECT_GT(firstFrame.size(), 10u) << "the wall should have broken";
+    EXPECT_GT(fractured, 0) << "no piece shows fracture surface";
+    std::printf("%d nodes, %d meshes, %lld triangles, %.2f MB\n", report.nodes, report.meshes, static_cast<long long>(report.triangles),
+                report.bytes / 1e6);
+}
