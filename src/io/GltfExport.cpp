@@ -2,6 +2,7 @@
 
 #include <spall/core/AtomicFile.h>
 #include <spall/core/Error.h>
+#include <spall/core/Parallel.h>
 #include <spall/io/FrameWriter.h>
 #include <spall/io/VdbIo.h>
 #include <spall/voxel/LinkBits.h>
@@ -15,6 +16,7 @@
 #include <array>
 #include <filesystem>
 #include <map>
+#include <mutex>
 #include <unordered_map>
 
 namespace spall {
@@ -274,52 +276,88 @@ void addNodes(tinygltf::Model& model, BufferPacker& packer, const std::map<int64
 
 }  // namespace
 
+namespace {
+
+openvdb::io::File openFrame(const std::string& path)
+{
+    openvdb::io::File file(path);
+    try {
+        file.open();
+    } catch (const std::exception& e) {
+        throw IoError(path + ": cannot read as .vdb: " + e.what());
+    }
+    return file;
+}
+
+/// A frame's time and the pose of every fragment in it, from the grids' metadata alone.
+struct FramePoses {
+    float timeS = 0.0f;
+    std::vector<FragmentPose> fragments;
+};
+
+FramePoses readFramePoses(const std::string& path)
+{
+    openvdb::io::File file = openFrame(path);
+    const auto fileMeta = file.getMetadata();
+    const auto kind = fileMeta->getMetadata<openvdb::StringMetadata>("fragment_grids");
+    if (!kind || kind->value() != "level_set")
+        throw InputError(path + ": fragments are not level sets (output.fragment_grids); the glTF export meshes level sets: "
+                                "run the scene again with \"fragment_grids\": \"level_set\"");
+    FramePoses frame;
+    frame.timeS = float(fileMeta->metaValue<double>("time_s"));
+    const openvdb::GridPtrVecPtr grids = file.readAllGridMetadata();
+    for (const auto& grid : *grids)
+        if (grid->getName().rfind("fragment_", 0) == 0) frame.fragments.push_back(poseOf(*grid, path));
+    return frame;
+}
+
+/// The piece of fragment `pose.id` as frame `path` holds it.
+PieceMesh readPiece(const std::string& path, const FragmentPose& pose)
+{
+    openvdb::io::File file = openFrame(path);
+    const std::string name = "fragment_" + std::to_string(pose.id), facesName = "fracture_faces_" + std::to_string(pose.id);
+    const auto levelSet = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(name));
+    if (!levelSet) throw InputError(path + ": " + name + " is not a float grid");
+    const auto faces = file.hasGrid(facesName) ? openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(facesName)) : nullptr;
+    return meshPiece(*levelSet, faces.get(), pose);
+}
+
+}  // namespace
+
 GltfExportReport exportGltf(const std::string& outputDirectory, const std::string& glbPath, const std::function<void(int, int)>& onFrame)
 {
     initialiseOpenVdb();
     const std::vector<std::string> paths = listFramePaths(outputDirectory);
+    // Reading thousands of grids' metadata per frame is most of the cost: frames in parallel.
+    std::vector<FramePoses> frames(paths.size());
+    std::mutex progress;
+    int done = 0;
+    forEachIndex(paths.size(), [&](size_t f) {
+        frames[f] = readFramePoses(paths[f]);
+        const std::lock_guard<std::mutex> lock(progress);
+        if (onFrame) onFrame(++done, int(paths.size()));
+    });
     std::vector<float> frameTimes;
     std::map<int64_t, Track> tracks;
     std::unordered_map<uint64_t, int> meshByKey;
-    std::vector<PieceMesh> pieces;
-    for (size_t f = 0; f < paths.size(); ++f) {
-        const std::string& path = paths[f];
-        openvdb::io::File file(path);
-        try {
-            file.open();
-        } catch (const std::exception& e) {
-            throw IoError(path + ": cannot read as .vdb: " + e.what());
-        }
-        const auto fileMeta = file.getMetadata();
-        const auto kind = fileMeta->getMetadata<openvdb::StringMetadata>("fragment_grids");
-        if (!kind || kind->value() != "level_set")
-            throw InputError(path + ": fragments are not level sets (output.fragment_grids); the glTF export meshes level sets: "
-                                    "run the scene again with \"fragment_grids\": \"level_set\"");
-        frameTimes.push_back(float(fileMeta->metaValue<double>("time_s")));
-        const openvdb::GridPtrVecPtr grids = file.readAllGridMetadata();
-        for (const auto& grid : *grids) {
-            if (grid->getName().rfind("fragment_", 0) != 0) continue;
-            const FragmentPose pose = poseOf(*grid, path);
+    std::vector<std::pair<size_t, FragmentPose>> firstOfEachMesh;  // (frame, fragment)
+    for (size_t f = 0; f < frames.size(); ++f) {
+        frameTimes.push_back(frames[f].timeS);
+        for (const FragmentPose& pose : frames[f].fragments) {
             Track& track = tracks[pose.id];
             if (track.firstFrame < 0) {
                 track.firstFrame = int(f);
-                auto [found, isNew] = meshByKey.emplace(pose.meshKey, int(pieces.size()));
-                if (isNew) {
-                    const auto levelSet = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(grid->getName()));
-                    const std::string facesName = "fracture_faces_" + std::to_string(pose.id);
-                    const auto faces = file.hasGrid(facesName) ? openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(facesName)) : nullptr;
-                    if (!levelSet) throw InputError(path + ": " + grid->getName() + " is not a float grid");
-                    pieces.push_back(meshPiece(*levelSet, faces.get(), pose));
-                }
+                auto [found, isNew] = meshByKey.emplace(pose.meshKey, int(firstOfEachMesh.size()));
+                if (isNew) firstOfEachMesh.push_back({f, pose});
                 track.mesh = found->second;
             }
             track.lastFrame = int(f);
-            track.poses.push_back({frameTimes.back(), toYUp(pose.centreOfMassM), toYUp(pose.orientation)});
+            track.poses.push_back({frames[f].timeS, toYUp(pose.centreOfMassM), toYUp(pose.orientation)});
         }
-        file.close();
-        if (onFrame) onFrame(int(f) + 1, int(paths.size()));
     }
     if (tracks.empty()) throw InputError(outputDirectory + ": the frames hold no fragments");
+    std::vector<PieceMesh> pieces(firstOfEachMesh.size());
+    forEachIndex(pieces.size(), [&](size_t i) { pieces[i] = readPiece(paths[firstOfEachMesh[i].first], firstOfEachMesh[i].second); });
 
     GltfExportReport report;
     report.frames = int(paths.size());
