@@ -325,6 +325,30 @@ TEST(Png, PixelsReadBackThroughLibpngAndAFailedWriteLeavesNothing)
     EXPECT_FALSE(std::filesystem::exists(dir + "/missing"));
 }
 
+TEST(Render, TheCameraFramesTheDebrisNotTheEmptyGround)
+{
+    initialiseOpenVdb();
+    // A 2 x 0.3 x 1.5 m wall, then the same with one voxel thrown 50 m away: the wall fills the
+    // picture either way (a fifth of its pixels or more), the far voxel is left out of frame.
+    const RenderSettings settings{320, 180, 0.0};
+    Body wall = test::boxBody(20, 3, 15, 0.1, 1000.0, Eigen::Vector3d(0, 0, 0.75));
+    Body stray = test::boxBody(1, 1, 1, 0.1, 1000.0, Eigen::Vector3d(50, 20, 0.05));
+    stray.id = 1;
+    for (const std::vector<Body>& bodies : {std::vector<Body>{wall}, std::vector<Body>{wall, stray}}) {
+        const auto fragments = fragmentsOf(bodies);
+        const Camera camera = frameCamera({fragments}, settings);
+        const Image picture = renderFragments(fragments, camera, settings), ground = renderFragments({}, camera, settings);
+        int covered = 0;
+        for (int y = 0; y < settings.height; ++y)
+            for (int x = 0; x < settings.width; ++x) {
+                const Rgb a = picture.get(x, y), b = ground.get(x, y);
+                covered += a.r != b.r || a.g != b.g || a.b != b.b;
+            }
+        const double fraction = double(covered) / (settings.width * settings.height);
+        EXPECT_GT(fraction, 0.2) << bodies.size() << " bodies: the wall covers " << fraction << " of the picture";
+    }
+}
+
 TEST(Render, ABodyInFrontOfTheCameraCoversTheMiddleOfThePicture)
 {
     initialiseOpenVdb();

@@ -6,9 +6,16 @@
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/MeshToVolume.h>
 
+#include <stdexcept>
+
 namespace spall {
 
 namespace {
+
+/// Samples are numbered from this many before the shape's least voxel face, so a shape whose
+/// voxels start at index 0 has a band of non-negative indices: one top-level node of the tree,
+/// not eight (a 32^3 node each, read and written per grid).
+constexpr int kSampleIndexOffset = 8;
 
 /// The four corners of a voxel face, counter-clockwise seen from outside (unit: voxels, the voxel's
 /// centre at its index).
@@ -32,11 +39,21 @@ std::array<openvdb::Vec3s, 4> faceCorners(const VoxelFace& f)
 
 openvdb::math::Transform::Ptr levelSetTransform(const openvdb::math::Transform& voxelIndexToWorld, int subdivisions)
 {
-    // world = voxelIndexToWorld(u / k - 0.5): the translation acts first, then the scale.
+    // world = voxelIndexToWorld((u - offset) / k - 0.5): pre-operations act in reverse order.
     auto transform = voxelIndexToWorld.copy();
     transform->preTranslate(openvdb::Vec3d(-0.5));
     transform->preScale(1.0 / subdivisions);
+    transform->preTranslate(openvdb::Vec3d(-kSampleIndexOffset));
     return transform;
+}
+
+openvdb::math::Transform::Ptr voxelTransformOf(const openvdb::math::Transform& levelSetTransform, int subdivisions)
+{
+    // Voxel c's centre is sample k (c + 0.5) + offset: pre-operations act in reverse order.
+    auto voxelMap = levelSetTransform.copy();
+    voxelMap->preTranslate(openvdb::Vec3d(0.5 * subdivisions + kSampleIndexOffset));
+    voxelMap->preScale(double(subdivisions));
+    return voxelMap;
 }
 
 openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces, double voxelSizeM, int subdivisions,
@@ -53,6 +70,7 @@ openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces
     }
     const auto shapeSpace = levelSetTransform(*openvdb::math::Transform::createLinearTransform(voxelSizeM), subdivisions);
     const std::vector<openvdb::Vec3I> noTriangles;
+    if (halfWidthSamples > kSampleIndexOffset) throw std::invalid_argument("voxelSurfaceLevelSet: band wider than the index offset");
     auto levelSet = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*shapeSpace, points, noTriangles, quads, halfWidthSamples);
     if (smoothingSteps > 0) {
         openvdb::tools::LevelSetFilter<openvdb::FloatGrid> filter(*levelSet);
@@ -64,12 +82,8 @@ openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces
 openvdb::FloatGrid::Ptr voxelsOfLevelSet(const openvdb::FloatGrid& levelSet, int subdivisions)
 {
     const int k = subdivisions;
-    // Voxel c's centre is sample k (c + 0.5): the translation acts first, then the scale.
-    auto voxelMap = levelSet.transform().copy();
-    voxelMap->preTranslate(openvdb::Vec3d(0.5 * k));
-    voxelMap->preScale(double(k));
     auto voxels = openvdb::FloatGrid::create(0.0f);
-    voxels->setTransform(voxelMap);
+    voxels->setTransform(voxelTransformOf(levelSet.transform(), subdivisions));
     voxels->setGridClass(openvdb::GRID_FOG_VOLUME);
     // A centre inside lies at least half a voxel within the surface (k even), or is the mean of
     // corners on or within it (k odd, where it is no sample); one outside, at least half a voxel out.
@@ -79,10 +93,12 @@ openvdb::FloatGrid::Ptr voxelsOfLevelSet(const openvdb::FloatGrid& levelSet, int
     auto out = voxels->getAccessor();
     for (auto it = levelSet.cbeginValueOn(); it; ++it) {
         if (*it > 0.0f) continue;
-        const openvdb::Vec3d c = it.getCoord().asVec3d() / double(k) - openvdb::Vec3d(0.5);
+        const openvdb::Vec3d c = (it.getCoord().asVec3d() - openvdb::Vec3d(kSampleIndexOffset)) / double(k) - openvdb::Vec3d(0.5);
         const openvdb::Coord voxel = openvdb::Coord::round(c);
         if (out.isValueOn(voxel)) continue;
-        if (sampler.isSample(openvdb::Vec3d(k * (voxel.x() + 0.5), k * (voxel.y() + 0.5), k * (voxel.z() + 0.5))) < threshold)
+        const openvdb::Vec3d centre = openvdb::Vec3d(k * (voxel.x() + 0.5), k * (voxel.y() + 0.5), k * (voxel.z() + 0.5)) +
+                                      openvdb::Vec3d(kSampleIndexOffset);
+        if (sampler.isSample(centre) < threshold)
             out.setValueOn(voxel, 1.0f);
     }
     return voxels;

@@ -7,9 +7,11 @@
 #include <openvdb/io/File.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <unordered_map>
 #include <filesystem>
 
 namespace spall {
@@ -107,6 +109,7 @@ FrameGrids readFrame(const std::string& path)
         auto meta = file.getMetadata();
         if (auto f = meta->getMetadata<openvdb::Int32Metadata>("frame")) out.frame = f->value();
         if (auto t = meta->getMetadata<openvdb::DoubleMetadata>("time_s")) out.timeS = t->value();
+        std::unordered_map<const openvdb::FloatTree*, openvdb::FloatTree::Ptr> voxelsByTree;
         for (auto it = file.beginName(); it != file.endName(); ++it) {
             const std::string name = it.gridName();
             if (name.rfind("fragment_", 0) != 0) continue;
@@ -115,7 +118,12 @@ FrameGrids readFrame(const std::string& path)
             if (grid->getGridClass() == openvdb::GRID_LEVEL_SET) {
                 const auto k = grid->getMetadata<openvdb::Int32Metadata>("level_set_subdivisions");
                 if (!k) throw IoError(path + ": " + name + ": a level set without level_set_subdivisions metadata");
-                grid = voxelsOfLevelSet(*grid, k->value());
+                // Fragments of one shape share a tree in the file: convert it once.
+                auto& voxels = voxelsByTree[&grid->constTree()];
+                if (!voxels) voxels = voxelsOfLevelSet(*grid, k->value())->treePtr();
+                auto placed = openvdb::FloatGrid::create(voxels);
+                placed->setTransform(voxelTransformOf(grid->transform(), k->value()));
+                grid = placed;
             }
             out.fragments.push_back(grid);
             out.ids.push_back(std::stoll(name.substr(9)));
@@ -156,31 +164,78 @@ void withGrid(const openvdb::GridBase* grid, F&& f)
 
 }  // namespace
 
+namespace {
+
+/// The value below which a fraction q of the total weight lies.
+double weightedQuantile(std::vector<std::pair<double, double>> valueAndWeight, double q)
+{
+    std::sort(valueAndWeight.begin(), valueAndWeight.end());
+    double total = 0.0;
+    for (const auto& [v, w] : valueAndWeight) total += w;
+    double sum = 0.0;
+    for (const auto& [v, w] : valueAndWeight)
+        if ((sum += w) >= q * total) return v;
+    return valueAndWeight.back().first;
+}
+
+/// Whether every corner of the box projects inside `margin` of the picture's half-size.
+bool boxFits(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Camera& camera, const RenderSettings& settings, double margin)
+{
+    const View view = makeView(camera, settings);
+    for (int c = 0; c < 8; ++c) {
+        const Eigen::Vector3d corner(c & 1 ? hi.x() : lo.x(), c & 2 ? hi.y() : lo.y(), c & 4 ? hi.z() : lo.z());
+        const Eigen::Vector3d p = view.project(corner);
+        if (p.z() <= 0 || std::abs(p.x() - view.cx) > margin * view.cx || std::abs(p.y() - view.cy) > margin * view.cy) return false;
+    }
+    return true;
+}
+
+}  // namespace
+
 Camera frameCamera(const std::vector<std::vector<FragmentRef>>& sets, const RenderSettings& settings)
 {
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+    // Per axis, the box that holds all but the outermost 1 % of the voxels on either side, so a
+    // few far-flung pieces do not shrink the rest to a speck.
+    std::array<std::vector<std::pair<double, double>>, 3> lows, highs;
     for (const auto& set : sets)
         for (const FragmentRef& f : set) {
             openvdb::CoordBBox box;
-            withGrid(f.grid, [&](const auto& g) { box = g.evalActiveVoxelBoundingBox(); });
+            double voxels = 0.0;
+            withGrid(f.grid, [&](const auto& g) {
+                box = g.evalActiveVoxelBoundingBox();
+                voxels = double(g.activeVoxelCount());
+            });
+            Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
             for (int c = 0; c < 8; ++c) {
-                const openvdb::Vec3d corner((c & 1 ? box.max().x() : box.min().x()), (c & 2 ? box.max().y() : box.min().y()),
-                                            (c & 4 ? box.max().z() : box.min().z()));
+                const openvdb::Vec3d corner((c & 1 ? box.max().x() + 0.5 : box.min().x() - 0.5), (c & 2 ? box.max().y() + 0.5 : box.min().y() - 0.5),
+                                            (c & 4 ? box.max().z() + 0.5 : box.min().z() - 0.5));
                 const Eigen::Vector3d w = toEigen(f.transform->indexToWorld(corner));
                 lo = lo.cwiseMin(w);
                 hi = hi.cwiseMax(w);
             }
+            for (int a = 0; a < 3; ++a) {
+                lows[a].push_back({lo[a], voxels});
+                highs[a].push_back({hi[a], voxels});
+            }
         }
     Camera cam;
-    if (lo.x() > hi.x()) return cam;
-    lo.z() = std::min(lo.z(), settings.groundHeightM);
+    if (lows[0].empty()) return cam;
+    Eigen::Vector3d lo, hi;
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = weightedQuantile(lows[a], 0.01);
+        hi[a] = weightedQuantile(highs[a], 0.99);
+    }
     const Eigen::Vector3d centre = 0.5 * (lo + hi);
-    const double radius = std::max(0.5 * (hi - lo).norm(), 0.5);
     const Eigen::Vector3d direction = Eigen::Vector3d(-0.55, -1.0, 0.5).normalized();
-    // Close enough that the bounding sphere just fills the height of the picture.
-    const double distance = radius / std::tan(0.5 * cam.verticalFovDeg * M_PI / 180.0) * 0.9;
     cam.targetM = centre;
-    cam.eyeM = centre + distance * direction;
+    // The nearest eye from which the box fills 90 % of the picture's width or height (bisection).
+    double near = 1e-3, far = std::max(1.0, 100.0 * (hi - lo).norm());
+    for (int i = 0; i < 60; ++i) {
+        const double mid = std::sqrt(near * far);
+        cam.eyeM = centre + mid * direction;
+        (boxFits(lo, hi, cam, settings, 0.9) ? far : near) = mid;
+    }
+    cam.eyeM = centre + far * direction;
     return cam;
 }
 

@@ -26,6 +26,9 @@ openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces
 /// The level set's index-to-world map, from its voxels' index-to-world map.
 openvdb::math::Transform::Ptr levelSetTransform(const openvdb::math::Transform& voxelIndexToWorld, int subdivisions);
 
+/// The voxels' index-to-world map, from the level set's (the inverse of levelSetTransform).
+openvdb::math::Transform::Ptr voxelTransformOf(const openvdb::math::Transform& levelSetTransform, int subdivisions);
+
 /// The voxels of a level set written by voxelSurfaceLevelSet: those whose centres lie inside, as
 /// fog (1 in each) in the voxels' own index space. Exact for an unsmoothed level set.
 openvdb::FloatGrid::Ptr voxelsOfLevelSet(const openvdb::FloatGrid& levelSet, int subdivisions);
