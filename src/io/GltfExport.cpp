@@ -221,15 +221,50 @@ void addChannel(tinygltf::Animation& animation, int node, const char* path, int 
     animation.channels.push_back(channel);
 }
 
-/// A node per fragment and its pose samples; a sample equal to both neighbours is dropped (exact
-/// under linear interpolation), so resting bodies cost two samples.
+/// A fragment's pose channels: a sample equal to both neighbours is dropped (exact under linear
+/// interpolation), so resting bodies cost two samples. Returns the samples kept.
+int64_t addPoseChannels(tinygltf::Animation& animation, BufferPacker& packer, int node, const std::vector<Pose>& poses)
+{
+    std::vector<float> times, rotations;
+    std::vector<Eigen::Vector3f> positions;
+    for (size_t i = 0; i < poses.size(); ++i) {
+        if (i > 0 && i + 1 < poses.size() && poses[i] == poses[i - 1] && poses[i] == poses[i + 1]) continue;
+        const Pose& p = poses[i];
+        times.push_back(p.timeS);
+        positions.push_back(p.position);
+        rotations.insert(rotations.end(), {p.rotation.x(), p.rotation.y(), p.rotation.z(), p.rotation.w()});
+    }
+    const int input = packer.times(times);
+    addChannel(animation, node, "translation", input, packer.vec3(positions), "LINEAR");
+    addChannel(animation, node, "rotation", input, packer.add(rotations, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, times.size()),
+               "LINEAR");
+    return int64_t(times.size());
+}
+
+/// Scale 1 from a fragment's first frame to its last, 0 before and after (none if it lives
+/// through the run).
+void addVisibilityChannel(tinygltf::Animation& animation, BufferPacker& packer, int node, const Track& track,
+                          const std::vector<float>& frameTimes)
+{
+    std::vector<float> times;
+    std::vector<Eigen::Vector3f> scales;
+    auto key = [&](float t, float s) {
+        times.push_back(t);
+        scales.push_back(Eigen::Vector3f::Constant(s));
+    };
+    if (track.firstFrame > 0) key(0.0f, 0.0f);
+    key(frameTimes[track.firstFrame], 1.0f);
+    if (track.lastFrame + 1 < int(frameTimes.size())) key(frameTimes[track.lastFrame + 1], 0.0f);
+    if (times.size() > 1) addChannel(animation, node, "scale", packer.times(times), packer.vec3(scales), "STEP");
+}
+
+/// A node per fragment, placed at its first pose (hidden if it is born later), and the animation.
 void addNodes(tinygltf::Model& model, BufferPacker& packer, const std::map<int64_t, Track>& tracks, const std::vector<float>& frameTimes,
               GltfExportReport& report)
 {
     tinygltf::Animation animation;
     animation.name = "spall";
     tinygltf::Scene scene;
-    const int lastFrame = int(frameTimes.size()) - 1;
     for (const auto& [id, track] : tracks) {
         const int node = int(model.nodes.size());
         tinygltf::Node n;
@@ -241,42 +276,14 @@ void addNodes(tinygltf::Model& model, BufferPacker& packer, const std::map<int64
         if (track.firstFrame > 0) n.scale = {0.0, 0.0, 0.0};
         model.nodes.push_back(n);
         scene.nodes.push_back(node);
-
-        std::vector<float> times, rotations;
-        std::vector<Eigen::Vector3f> positions;
-        const auto& p = track.poses;
-        for (size_t i = 0; i < p.size(); ++i) {
-            if (i > 0 && i + 1 < p.size() && p[i] == p[i - 1] && p[i] == p[i + 1]) continue;
-            times.push_back(p[i].timeS);
-            positions.push_back(p[i].position);
-            rotations.insert(rotations.end(), {p[i].rotation.x(), p[i].rotation.y(), p[i].rotation.z(), p[i].rotation.w()});
-        }
-        report.keyframes += int64_t(times.size());
-        const int input = packer.times(times);
-        addChannel(animation, node, "translation", input, packer.vec3(positions), "LINEAR");
-        addChannel(animation, node, "rotation", input,
-                   packer.add(rotations, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, times.size()), "LINEAR");
-        // Visible (scale 1) from its first frame to its last, hidden (0) before and after.
-        std::vector<float> scaleTimes;
-        std::vector<Eigen::Vector3f> scales;
-        auto key = [&](float t, float s) {
-            scaleTimes.push_back(t);
-            scales.push_back(Eigen::Vector3f::Constant(s));
-        };
-        if (track.firstFrame > 0) key(0.0f, 0.0f);
-        key(frameTimes[track.firstFrame], 1.0f);
-        if (track.lastFrame < lastFrame) key(frameTimes[track.lastFrame + 1], 0.0f);
-        if (scaleTimes.size() > 1) addChannel(animation, node, "scale", packer.times(scaleTimes), packer.vec3(scales), "STEP");
+        report.keyframes += addPoseChannels(animation, packer, node, track.poses);
+        addVisibilityChannel(animation, packer, node, track, frameTimes);
     }
     model.animations.push_back(animation);
     model.scenes.push_back(scene);
     model.defaultScene = 0;
     report.nodes = int(tracks.size());
 }
-
-}  // namespace
-
-namespace {
 
 openvdb::io::File openFrame(const std::string& path)
 {
