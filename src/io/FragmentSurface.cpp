@@ -7,9 +7,10 @@
 #include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
+#include <Eigen/Geometry>
+
 #include <cmath>
 #include <stdexcept>
-#include <utility>
 
 namespace spall {
 
@@ -48,29 +49,41 @@ double enclosedVolume(const std::vector<VoxelFace>& faces)
     return sum / 3.0;
 }
 
-/// The volume and area of the level set's volume-to-mesh surface (unit: m^3, m^2).
-std::pair<double, double> meshVolumeAndArea(const openvdb::FloatGrid& levelSet)
+}  // namespace
+
+SurfaceMesh meshLevelSet(const openvdb::FloatGrid& levelSet)
 {
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> triangles;
     std::vector<openvdb::Vec4I> quads;
     openvdb::tools::volumeToMesh(levelSet, points, triangles, quads, 0.0, 0.0);
-    double volume = 0.0, area = 0.0;
-    auto triangle = [&](uint32_t a, uint32_t b, uint32_t c) {
-        const openvdb::Vec3d o(points.empty() ? openvdb::Vec3s(0.0f) : points.front());
-        const openvdb::Vec3d p = openvdb::Vec3d(points[a]) - o, q = openvdb::Vec3d(points[b]) - o, r = openvdb::Vec3d(points[c]) - o;
-        volume += p.dot(q.cross(r)) / 6.0;
-        area += 0.5 * (q - p).cross(r - p).length();
-    };
-    for (const auto& t : triangles) triangle(t[0], t[1], t[2]);
+    SurfaceMesh mesh;
+    mesh.pointsM.reserve(points.size());
+    for (const openvdb::Vec3s& p : points) mesh.pointsM.emplace_back(p.x(), p.y(), p.z());
+    mesh.triangles.reserve(triangles.size() + 2 * quads.size());
+    for (const auto& t : triangles) mesh.triangles.push_back({t[0], t[1], t[2]});
     for (const auto& q : quads) {
-        triangle(q[0], q[1], q[2]);
-        triangle(q[0], q[2], q[3]);
+        mesh.triangles.push_back({q[0], q[1], q[2]});
+        mesh.triangles.push_back({q[0], q[2], q[3]});
     }
-    return {std::abs(volume), area};
+    return mesh;
 }
 
-}  // namespace
+double SurfaceMesh::signedVolumeM3() const
+{
+    if (pointsM.empty()) return 0.0;
+    const Eigen::Vector3d& o = pointsM.front();  // about a point of the mesh: no precision lost far from the origin
+    double sixVolumes = 0.0;
+    for (const auto& t : triangles) sixVolumes += (pointsM[t[0]] - o).dot((pointsM[t[1]] - o).cross(pointsM[t[2]] - o));
+    return sixVolumes / 6.0;
+}
+
+double SurfaceMesh::areaM2() const
+{
+    double twiceArea = 0.0;
+    for (const auto& t : triangles) twiceArea += (pointsM[t[1]] - pointsM[t[0]]).cross(pointsM[t[2]] - pointsM[t[0]]).norm();
+    return 0.5 * twiceArea;
+}
 
 openvdb::math::Transform::Ptr levelSetTransform(const openvdb::math::Transform& voxelIndexToWorld, int subdivisions)
 {
@@ -116,7 +129,8 @@ openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces
         // times, as the area changes with it.
         const double voxelVolume = enclosedVolume(faces) * std::pow(voxelSizeM, 3);
         for (int i = 0; i < 3; ++i) {
-            const auto [volume, area] = meshVolumeAndArea(*levelSet);
+            const SurfaceMesh mesh = meshLevelSet(*levelSet);
+            const double volume = std::abs(mesh.signedVolumeM3()), area = mesh.areaM2();
             if (!(area > 0.0)) break;
             filter.offset(float(-(voxelVolume - volume) / area));  // a negative offset grows the solid
         }

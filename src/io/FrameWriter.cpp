@@ -103,11 +103,10 @@ const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
     return mByBody.emplace(body.id, std::move(trees)).first->second;
 }
 
-openvdb::GridBase::Ptr FrameWriter::fragmentGrid(const FrameInfo& info, const Body& body, const FragmentTrees& trees) const
+openvdb::GridBase::Ptr FrameWriter::fragmentGrid(const FrameInfo& info, const Body& body, const FragmentTrees& trees,
+                                                 const openvdb::math::Transform::Ptr& voxelMap) const
 {
     auto grid = openvdb::FloatGrid::create(trees.surface);
-    auto voxelMap = body.indexToWorld();
-    voxelMap->preTranslate(trees.originIjk.asVec3d());
     if (mSettings.fragmentGrids == FragmentGrids::LevelSet) {
         grid->setTransform(levelSetTransform(*voxelMap, mSettings.levelSetSubdivisions));
         grid->setGridClass(openvdb::GRID_LEVEL_SET);
@@ -142,11 +141,12 @@ std::string FrameWriter::write(const FrameInfo& info, const std::vector<Body>& b
     for (const Body& body : bodies) {
         alive.insert(body.id);
         const FragmentTrees& trees = treesOf(body);
-        grids.push_back(fragmentGrid(info, body, trees));
-        if (!trees.fractureFaces) continue;
-        auto faces = openvdb::FloatGrid::create(trees.fractureFaces);
+        // The trees' voxel (0,0,0) is the body's voxel originIjk.
         auto voxelMap = body.indexToWorld();
         voxelMap->preTranslate(trees.originIjk.asVec3d());
+        grids.push_back(fragmentGrid(info, body, trees, voxelMap));
+        if (!trees.fractureFaces) continue;
+        auto faces = openvdb::FloatGrid::create(trees.fractureFaces);
         faces->setTransform(voxelMap);
         faces->setName("fracture_faces_" + std::to_string(body.id));
         faces->insertMeta("body_id", openvdb::Int64Metadata(body.id));
@@ -159,13 +159,14 @@ std::string FrameWriter::write(const FrameInfo& info, const std::vector<Body>& b
             it = it->second.derived.use_count() > heldByPool ? std::next(it) : pool->erase(it);
         }
     if ((mSettings.densityGrid || mSettings.velocityGrid) && !bodies.empty()) {
-        WorldGrids world = rasteriseBodies(bodies, bodies.front().voxelSizeM, mSettings.velocityGrid);
-        for (openvdb::GridBase::Ptr g : {openvdb::GridBase::Ptr(world.density), openvdb::GridBase::Ptr(world.velocity)}) {
-            if (!g || (g == world.density && !mSettings.densityGrid)) continue;
-            g->insertMeta("frame", openvdb::Int32Metadata(info.frame));
-            g->insertMeta("time_s", openvdb::DoubleMetadata(info.timeS));
-            grids.push_back(g);
-        }
+        const WorldGrids world = rasteriseBodies(bodies, bodies.front().voxelSizeM, mSettings.velocityGrid);
+        const auto add = [&](const openvdb::GridBase::Ptr& grid) {
+            grid->insertMeta("frame", openvdb::Int32Metadata(info.frame));
+            grid->insertMeta("time_s", openvdb::DoubleMetadata(info.timeS));
+            grids.push_back(grid);
+        };
+        if (mSettings.densityGrid) add(world.density);
+        if (world.velocity) add(world.velocity);
     }
     openvdb::MetaMap fileMeta;
     fileMeta.insertMeta("frame", openvdb::Int32Metadata(info.frame));

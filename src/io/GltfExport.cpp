@@ -3,12 +3,12 @@
 #include <spall/core/AtomicFile.h>
 #include <spall/core/Error.h>
 #include <spall/core/Parallel.h>
+#include <spall/io/FragmentSurface.h>
 #include <spall/io/FrameWriter.h>
 #include <spall/io/VdbIo.h>
 #include <spall/voxel/LinkBits.h>
 
 #include <openvdb/io/File.h>
-#include <openvdb/tools/VolumeToMesh.h>
 #include <tiny_gltf.h>
 
 #include <Eigen/Geometry>
@@ -87,34 +87,21 @@ bool onFractureFace(const openvdb::FloatGrid& fractureFaces, const Eigen::Vector
 /// The fragment's level set meshed (adaptivity 0) in its body frame, triangles split by material.
 PieceMesh meshPiece(const openvdb::FloatGrid& levelSet, const openvdb::FloatGrid* fractureFaces, const FragmentPose& pose)
 {
-    std::vector<openvdb::Vec3s> points;
-    std::vector<openvdb::Vec3I> triangles;
-    std::vector<openvdb::Vec4I> quads;
-    openvdb::tools::volumeToMesh(levelSet, points, triangles, quads, 0.0, 0.0);
-    std::vector<std::array<uint32_t, 3>> all;
-    for (const auto& t : triangles) all.push_back({t[0], t[1], t[2]});
-    for (const auto& q : quads) {
-        all.push_back({q[0], q[1], q[2]});
-        all.push_back({q[0], q[2], q[3]});
-    }
-    std::vector<Eigen::Vector3d> world(points.size());
-    for (size_t i = 0; i < points.size(); ++i) world[i] = Eigen::Vector3d(points[i].x(), points[i].y(), points[i].z());
-    // Outward winding: the mesh's signed volume about its centre of mass is positive.
-    double signedVolume = 0.0;
-    for (const auto& t : all)
-        signedVolume += (world[t[0]] - pose.centreOfMassM).dot((world[t[1]] - pose.centreOfMassM).cross(world[t[2]] - pose.centreOfMassM));
-    const bool flip = signedVolume < 0.0;
+    const SurfaceMesh surface = meshLevelSet(levelSet);
+    const std::vector<Eigen::Vector3d>& world = surface.pointsM;
+    const bool flip = surface.signedVolumeM3() < 0.0;  // glTF wants triangles wound outward
     const Eigen::Matrix3d worldToBody = pose.orientation.toRotationMatrix().transpose();
     PieceMesh mesh;
-    mesh.positions.reserve(points.size());
+    mesh.positions.reserve(world.size());
     for (const Eigen::Vector3d& p : world) mesh.positions.push_back(toYUp(worldToBody * (p - pose.centreOfMassM)));
-    for (auto t : all) {
+    for (auto t : surface.triangles) {
         if (flip) std::swap(t[1], t[2]);
         const Eigen::Vector3d normal = (world[t[1]] - world[t[0]]).cross(world[t[2]] - world[t[0]]);
         if (normal.norm() < 1e-12 * pose.voxelSizeM * pose.voxelSizeM) continue;  // degenerate
         const Eigen::Vector3d centroid = (world[t[0]] + world[t[1]] + world[t[2]]) / 3.0;
         const bool fracture = fractureFaces && onFractureFace(*fractureFaces, centroid, normal.normalized(), worldToBody, pose.voxelSizeM);
-        (fracture ? mesh.fracture : mesh.outer).insert((fracture ? mesh.fracture : mesh.outer).end(), t.begin(), t.end());
+        std::vector<uint32_t>& indices = fracture ? mesh.fracture : mesh.outer;
+        indices.insert(indices.end(), t.begin(), t.end());
     }
     return mesh;
 }

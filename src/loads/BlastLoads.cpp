@@ -101,7 +101,6 @@ bool BlastLoads::onGround(const Eigen::Vector3d& faceCentreM, const Eigen::Vecto
     return ground.enabled && normal.dot(ground.normal) < -0.5 && faceCentreM.dot(ground.normal) - ground.heightM <= 0.5 * voxelSizeM;
 }
 
-
 const ObstacleBox* BlastLoads::shadowCaster(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure,
                                              size_t excludeGroup) const
 {

@@ -109,7 +109,7 @@ FrameGrids readFrame(const std::string& path)
         auto meta = file.getMetadata();
         if (auto f = meta->getMetadata<openvdb::Int32Metadata>("frame")) out.frame = f->value();
         if (auto t = meta->getMetadata<openvdb::DoubleMetadata>("time_s")) out.timeS = t->value();
-        std::unordered_map<const openvdb::FloatTree*, openvdb::FloatTree::Ptr> voxelsByTree;
+        std::unordered_map<int64_t, openvdb::FloatTree::Ptr> voxelsByMeshKey;
         for (auto it = file.beginName(); it != file.endName(); ++it) {
             const std::string name = it.gridName();
             if (name.rfind("fragment_", 0) != 0) continue;
@@ -118,8 +118,8 @@ FrameGrids readFrame(const std::string& path)
             if (grid->getGridClass() == openvdb::GRID_LEVEL_SET) {
                 const auto k = grid->getMetadata<openvdb::Int32Metadata>("level_set_subdivisions");
                 if (!k) throw IoError(path + ": " + name + ": a level set without level_set_subdivisions metadata");
-                // Fragments of one shape share a tree in the file: convert it once.
-                auto& voxels = voxelsByTree[&grid->constTree()];
+                // Fragments of one shape (one mesh_key) convert to the same voxels: convert once.
+                auto& voxels = voxelsByMeshKey[grid->metaValue<int64_t>("mesh_key")];
                 if (!voxels) voxels = voxelsOfLevelSet(*grid, k->value())->treePtr();
                 auto placed = openvdb::FloatGrid::create(voxels);
                 placed->setTransform(voxelTransformOf(grid->transform(), k->value()));
@@ -161,10 +161,6 @@ void withGrid(const openvdb::GridBase* grid, F&& f)
     else if (auto l = dynamic_cast<const LinkGrid*>(grid))
         f(*l);
 }
-
-}  // namespace
-
-namespace {
 
 /// The value below which a fraction q of the total weight lies.
 double weightedQuantile(std::vector<std::pair<double, double>> valueAndWeight, double q)

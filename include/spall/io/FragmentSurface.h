@@ -4,6 +4,10 @@
 
 #include <openvdb/openvdb.h>
 
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
 #include <vector>
 
 namespace spall {
@@ -25,6 +29,17 @@ openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces
 
 /// The level set's index-to-world map, from its voxels' index-to-world map.
 openvdb::math::Transform::Ptr levelSetTransform(const openvdb::math::Transform& voxelIndexToWorld, int subdivisions);
+
+/// A level set's zero surface as OpenVDB's volume-to-mesh makes it (adaptivity 0), in the world,
+/// its quads split in two.
+struct SurfaceMesh {
+    std::vector<Eigen::Vector3d> pointsM;
+    std::vector<std::array<uint32_t, 3>> triangles;
+    /// By the divergence theorem: positive when the triangles wind outward (unit: m^3).
+    double signedVolumeM3() const;
+    double areaM2() const;
+};
+SurfaceMesh meshLevelSet(const openvdb::FloatGrid& levelSet);
 
 /// The voxels' index-to-world map, from the level set's (the inverse of levelSetTransform).
 openvdb::math::Transform::Ptr voxelTransformOf(const openvdb::math::Transform& levelSetTransform, int subdivisions);

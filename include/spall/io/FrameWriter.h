@@ -52,7 +52,8 @@ private:
     const FragmentTrees& treesOf(const Body& body);
     static openvdb::FloatTree::Ptr intern(std::unordered_multimap<uint64_t, Interned>& pool, const openvdb::FloatTree::Ptr& content,
                                           uint64_t hash, const std::function<openvdb::FloatTree::Ptr()>& derive);
-    openvdb::GridBase::Ptr fragmentGrid(const FrameInfo& info, const Body& body, const FragmentTrees& trees) const;
+    openvdb::GridBase::Ptr fragmentGrid(const FrameInfo& info, const Body& body, const FragmentTrees& trees,
+                                        const openvdb::math::Transform::Ptr& voxelMap) const;
     std::string mDirectory;
     OutputSettings mSettings;
     std::unordered_map<int64_t, FragmentTrees> mByBody;
