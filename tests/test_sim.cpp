@@ -66,6 +66,19 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"checkpoint_every_s": -1}})").find("output.checkpoint_every_s"),
               std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"fragment_grids": "mesh"}})").find("output.fragment_grids"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"level_set_subdivisions": 1}})").find("output.level_set_subdivisions"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"level_set_smoothing_steps": -1}})").find("output.level_set_smoothing_steps"),
+              std::string::npos);
+    {
+        // 32 free-air charges above the ground are 64 with their images: more than weakening can tell apart.
+        std::string charges;
+        for (int i = 0; i < 32; ++i) charges += std::string(i ? "," : "") + R"({"position_m": [)" + std::to_string(3 + i) + R"(, 0, 2], "burst": "free-air"})";
+        EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "charges": [)" + charges + "]}").find("charges: 64 charges (ground images included)"),
+                  std::string::npos);
+    }
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "solver": {"integrator": "leapfrog"}})").find("solver.integrator"),
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "fracture": {"small_fragments": "burn"}})").find("fracture.small_fragments"),
