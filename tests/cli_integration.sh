@@ -173,6 +173,31 @@ PY
 "$spall" export gltf "$dir/out" --quiet > "$dir/gltf.txt" || fail "export gltf failed"
 grep -q "debris.glb" "$dir/gltf.txt" || fail "export gltf printed no summary"
 node "$(dirname "$0")/../tools/js/validate_gltf.mjs" "$dir/out/debris.glb" > "$dir/validator.txt" || fail "glTF validator: $(cat "$dir/validator.txt")"
+# spall view: the self-contained page in headless Chromium (software WebGL) for a crate blown
+# apart in the open; its first and last moments both show debris (brick-coloured pixels), and differ
+cat > "$dir/crate.json" <<'JSON'
+{"voxel_size_m": 0.1, "duration_s": 0.5, "frame_rate_hz": 24, "seed": 5,
+ "objects": [{"name": "crate", "primitive": {"shape": "box", "size_m": [0.6, 0.6, 0.6]},
+              "position_m": [0, 0, 0.3], "material": "brick-masonry"}],
+ "charges": [{"position_m": [1.5, 0, 0.3], "tnt_kg": 2.0}]}
+JSON
+"$spall" run "$dir/crate.json" -o "$dir/crate" --quiet --no-preview > /dev/null
+"$spall" view "$dir/crate" --quiet > "$dir/view.txt" || fail "spall view failed"
+grep -q "view.html" "$dir/view.txt" || fail "spall view printed no summary"
+node "$(dirname "$0")/../tools/js/screenshot_view.mjs" "$dir/crate/view.html" "$dir/view_" 0 1e9 > "$dir/view.log" 2>&1 \
+  || fail "viewer in Chromium: $(cat "$dir/view.log")"
+$py - "$dir/view_0.png" "$dir/view_1e9.png" <<'PY'
+import sys, numpy as np
+from PIL import Image
+# The 3D stage without the status line and the control bar.
+first, last = (np.asarray(Image.open(p).convert("RGB"), dtype=float)[30:-50] for p in sys.argv[1:])
+def debris(image):  # the background and the grid are nearly grey; the brick is not
+    return (image.max(axis=2) - image.min(axis=2)) > 30
+for name, image in (("first", first), ("last", last)):
+    assert debris(image).sum() > 500, (name, debris(image).sum())
+changed = (debris(first) != debris(last)).mean()
+assert changed > 0.02, f"the debris did not move between the first and last moments ({changed:.4f} of pixels changed)"
+PY
 # ... and refuses what it cannot mesh, naming it, leaving nothing behind
 if "$spall" export gltf "$dir/nowhere" 2> "$dir/err.txt"; then fail "export of a missing directory accepted"; fi
 grep -q "nowhere" "$dir/err.txt" || fail "error does not name the directory: $(cat "$dir/err.txt")"
@@ -186,6 +211,9 @@ PY
 if "$spall" export gltf "$dir/fog" 2> "$dir/err.txt"; then fail "export of fog frames accepted"; fi
 grep -q "fragments.0000.vdb: fragments are not level sets" "$dir/err.txt" || fail "fog export error unclear: $(cat "$dir/err.txt")"
 [[ ! -e "$dir/fog/debris.glb" ]] || fail "a refused export left a file"
+if "$spall" view "$dir/fog" 2> "$dir/err.txt"; then fail "view of fog frames accepted"; fi
+grep -q "fragments are not level sets" "$dir/err.txt" || fail "fog view error unclear: $(cat "$dir/err.txt")"
+[[ ! -e "$dir/fog/view.html" ]] || fail "a refused view left a page"
 
 # an output directory that cannot be created: a clear error naming it
 if "$spall" run "$dir/scene.json" -o "$dir/cube.obj/out" --quiet > /dev/null 2> "$dir/err.txt"; then fail "unwritable output accepted"; fi

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs what spall needs, only what is missing: Debian packages (one dpkg query when all are
-# present), Node.js when there is none, and the JS readers the tests use (tools/js, from its lock file).
+# present), Node.js when there is none, and tools/js from its lock file (the viewer's three.js and
+# esbuild, which the build needs; the glTF validator and playwright-core, which the tests use).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 packages=(
@@ -9,7 +10,7 @@ packages=(
   libeigen3-dev libhdf5-dev libgtest-dev libgmock-dev libbenchmark-dev
   libassimp-dev libcli11-dev nlohmann-json3-dev libpng-dev libtinygltf-dev
   python3-openvdb python3-h5py python3-numpy python3-matplotlib python3-pil libopenvdb-tools hdf5-tools
-  blender
+  blender chromium
 )
 missing=()
 for p in "${packages[@]}"; do
@@ -29,7 +30,10 @@ if ((${#missing[@]} > 0)); then
   apt-get update -qq
   apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
 fi
-if [[ ! -d tools/js/node_modules/gltf-validator ]]; then
-  echo "spall setup: installing the JS readers in tools/js (npm ci)" >&2
+# npm ci again whenever the lock file differs from the one last installed.
+installed_lock=tools/js/node_modules/.spall-installed-lock.json
+if ! cmp -s tools/js/package-lock.json "$installed_lock"; then
+  echo "spall setup: installing tools/js (npm ci)" >&2
   npm ci --prefix tools/js --no-audit --no-fund >&2
+  cp tools/js/package-lock.json "$installed_lock"
 fi

@@ -61,6 +61,7 @@ int main(int argc, char** argv)
     addInspectCommand(app, action);
     addBenchCommands(app, action);
     addExportCommand(app, action);
+    addViewCommand(app, action);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
