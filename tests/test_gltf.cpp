@@ -1,5 +1,9 @@
 // The glTF export read back by tinygltf and checked against the run's history.h5 (written from
 // the bodies in memory, not from the frames the export reads).
+#include "TestUtil.h"
+
+#include <spall/fracture/Fracture.h>
+#include <spall/io/FrameWriter.h>
 #include <spall/io/GltfExport.h>
 #include <spall/io/History.h>
 #include <spall/io/Scene.h>
@@ -52,6 +56,24 @@ std::vector<float> sampleAt(const tinygltf::Model& model, int node, const std::s
             return out;
         }
     return {};
+}
+
+double triangleArea(const std::vector<float>& p, const std::vector<uint32_t>& idx, size_t t)
+{
+    auto at = [&](uint32_t i) { return Eigen::Vector3d(p[3 * i], p[3 * i + 1], p[3 * i + 2]); };
+    return 0.5 * (at(idx[t + 1]) - at(idx[t])).cross(at(idx[t + 2]) - at(idx[t])).norm();
+}
+
+/// Area of a mesh's triangles by material name.
+std::map<std::string, double> areaByMaterial(const tinygltf::Model& model, const tinygltf::Mesh& mesh)
+{
+    std::map<std::string, double> area;
+    for (const auto& primitive : mesh.primitives) {
+        const std::vector<float> p = floatsOf(model, primitive.attributes.at("POSITION"));
+        const std::vector<uint32_t> idx = indicesOf(model, primitive.indices);
+        for (size_t t = 0; t + 2 < idx.size(); t += 3) area[model.materials.at(primitive.material).name] += triangleArea(p, idx, t);
+    }
+    return area;
 }
 
 double meshVolume(const tinygltf::Model& model, const tinygltf::Mesh& mesh)
@@ -132,4 +154,40 @@ TEST(Gltf, EachFragmentIsANodeThatFollowsTheHistoryWithAMeshOfItsVolume)
     EXPECT_GT(fractured, 0) << "no piece shows fracture surface";
     std::printf("%d nodes, %d meshes, %lld triangles, %.2f MB\n", report.nodes, report.meshes, static_cast<long long>(report.triangles),
                 report.bytes / 1e6);
+}
+
+TEST(Gltf, FractureMaterialCoversExactlyTheFacesThatBroke)
+{
+    initialiseOpenVdb();
+    // A 4 x 1 x 1 bar broken between voxels 1 and 2, turned about a skew axis: each half has
+    // 10 faces of 0.01 m^2, one of them fracture surface, with and without fracture roughness.
+    for (const double roughness : {0.0, 0.2}) {
+        Body bar = test::boxBody(4, 1, 1, 0.1, 1000.0, Eigen::Vector3d(0.3, -0.2, 0.5),
+                                 Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())));
+        auto acc = bar.grid->getAccessor();
+        ASSERT_TRUE(breakLink(acc, openvdb::Coord(1, 0, 0), kPosX));
+        std::vector<Body> halves = splitBody(bar);
+        ASSERT_EQ(halves.size(), 2u);
+        halves[0].id = 1;
+        halves[1].id = 2;
+        const std::string dir = (std::filesystem::temp_directory_path() / "spall_test_gltf_fracture").string();
+        std::filesystem::remove_all(dir);
+        std::filesystem::create_directories(dir);
+        OutputSettings settings;
+        settings.fractureRoughnessVoxels = roughness;
+        FrameWriter(dir, settings).write({0, 0.0}, halves);
+        exportGltf(dir, dir + "/debris.glb");
+        tinygltf::Model model;
+        tinygltf::TinyGLTF loader;
+        std::string error, warning;
+        ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, dir + "/debris.glb")) << error;
+        ASSERT_EQ(model.meshes.size(), 2u);
+        for (const tinygltf::Mesh& mesh : model.meshes) {
+            std::map<std::string, double> area = areaByMaterial(model, mesh);
+            std::printf("roughness %.1f: outer %.5f m^2, fracture %.5f m^2\n", roughness, area["outer"], area["fracture"]);
+            // Roughness wrinkles the broken face, adding a little area to it.
+            EXPECT_NEAR(area["fracture"], 0.01, roughness > 0 ? 0.003 : 1e-6) << mesh.name;
+            EXPECT_NEAR(area["outer"], 0.09, 1e-6) << mesh.name;
+        }
+    }
 }

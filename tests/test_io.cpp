@@ -273,6 +273,63 @@ TEST(Frames, SmoothingRoundsTheStaircaseButKeepsTheVolume)
     }
 }
 
+TEST(Frames, FractureRoughnessMovesBrokenFacesOnlyAndKeepsTheSolid)
+{
+    initialiseOpenVdb();
+    // A 6 x 6 x 4 block split between its layers z = 1 and z = 2: the lower half's top is fracture
+    // surface (36 faces), its bottom and sides are the object's own surface.
+    Body block = test::boxBody(6, 6, 4, 0.1, 1000.0);
+    auto acc = block.grid->getAccessor();
+    for (int x = 0; x < 6; ++x)
+        for (int y = 0; y < 6; ++y) ASSERT_TRUE(breakLink(acc, openvdb::Coord(x, y, 1), kPosZ));
+    std::vector<Body> halves = splitBody(block);
+    ASSERT_EQ(halves.size(), 2u);
+    Body& lower = halves[0].grid->tree().isValueOn(openvdb::Coord(0, 0, 0)) ? halves[0] : halves[1];
+    lower.id = 1;
+    constexpr double roughness = 0.2;
+    constexpr int k = 4;
+    OutputSettings settings;
+    settings.levelSetSubdivisions = k;
+    settings.fractureRoughnessVoxels = roughness;
+    FrameWriter writer(scratch("roughness"), settings);
+    openvdb::io::File file(writer.write({0, 0.0}, {lower}));
+    file.open();
+    const auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("fragment_1"));
+    const MeshCheck check = meshOf(*grid);
+    const double voxelVolume = lower.mass.voxelCount * std::pow(lower.voxelSizeM, 3);
+    EXPECT_TRUE(check.closed);
+    EXPECT_NEAR(check.volumeM3, voxelVolume, 0.03 * voxelVolume) << "the noise moves faces in and out about equally";
+
+    // Mesh vertices in the body's voxel units (voxel centres at integers; the fracture plane z = 1.5).
+    const auto voxelMap = voxelTransformOf(grid->transform(), k);
+    double topSquares = 0.0, topMax = 0.0, ownMax = 0.0;
+    int topCount = 0, ownCount = 0;
+    for (const Eigen::Vector3d& w : meshLevelSet(*grid).pointsM) {
+        const openvdb::Vec3d v = voxelMap->worldToIndex(openvdb::Vec3d(w.x(), w.y(), w.z()));
+        const bool inner = v.x() > 0.5 && v.x() < 4.5 && v.y() > 0.5 && v.y() < 4.5;  // a voxel in from the sides
+        if (inner && v.z() > 1.0) {
+            topSquares += std::pow(v.z() - 1.5, 2);
+            topMax = std::max(topMax, std::abs(v.z() - 1.5));
+            ++topCount;
+        } else if (v.z() < 0.9) {  // the bottom and the sides' lower parts, half a voxel from any break
+            const double toOwnFace = std::min({std::abs(v.z() + 0.5), std::abs(v.x() + 0.5), std::abs(v.x() - 5.5), std::abs(v.y() + 0.5),
+                                               std::abs(v.y() - 5.5)});
+            ownMax = std::max(ownMax, toOwnFace);
+            ++ownCount;
+        }
+    }
+    ASSERT_GT(topCount, 100);
+    ASSERT_GT(ownCount, 100);
+    const double topRms = std::sqrt(topSquares / topCount);
+    std::printf("fracture roughness %.2f voxels: fracture faces move by %.3f rms, %.3f at most; own faces by %.4f at most (voxels)\n",
+                roughness, topRms, topMax, ownMax);
+    EXPECT_GT(topRms, 0.2 * roughness) << "the broken face is not rough";
+    EXPECT_LT(topMax, 1.1 * roughness) << "the noise exceeds its amplitude";
+    EXPECT_LT(ownMax, 0.01) << "the object's own surface moved";
+    // Every voxel's centre stays on its side: the preview sees the same voxels.
+    EXPECT_EQ(voxelsOfLevelSet(*grid, k)->activeVoxelCount(), openvdb::Index64(lower.mass.voxelCount));
+}
+
 TEST(Frames, FractureFacesAreTheFacesWhoseLinksBroke)
 {
     initialiseOpenVdb();

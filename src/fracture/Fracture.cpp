@@ -1,5 +1,6 @@
 #include <spall/fracture/Fracture.h>
 
+#include <spall/core/Hash.h>
 #include <spall/voxel/Components.h>
 
 #include <openvdb/tree/LeafManager.h>
@@ -12,15 +13,11 @@ namespace spall {
 
 double linkRandom(uint64_t seed, const openvdb::Coord& ijk, int axis)
 {
-    // splitmix64 finaliser over a combination of the inputs.
-    uint64_t z = seed * 0x9E3779B97F4A7C15ull ^ (uint64_t(uint32_t(ijk.x())) * 0xBF58476D1CE4E5B9ull) ^
-                 (uint64_t(uint32_t(ijk.y())) * 0x94D049BB133111EBull) ^ (uint64_t(uint32_t(ijk.z())) << 21) ^
-                 (uint64_t(axis) << 58);
-    z += 0x9E3779B97F4A7C15ull;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    z ^= z >> 31;
-    return double(z >> 11) * (1.0 / 9007199254740992.0);
+    // splitmix64 over a combination of the inputs.
+    const uint64_t z = seed * 0x9E3779B97F4A7C15ull ^ (uint64_t(uint32_t(ijk.x())) * 0xBF58476D1CE4E5B9ull) ^
+                       (uint64_t(uint32_t(ijk.y())) * 0x94D049BB133111EBull) ^ (uint64_t(uint32_t(ijk.z())) << 21) ^
+                       (uint64_t(axis) << 58);
+    return unitInterval(splitmix64(z));
 }
 
 namespace {

@@ -2,14 +2,21 @@
 
 #include <spall/voxel/LinkBits.h>
 
+#include <spall/core/Hash.h>
+
 #include <openvdb/tools/LevelSetFilter.h>
+#include <openvdb/tools/LevelSetTracker.h>
+#include <openvdb/tree/LeafManager.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
+#include <optional>
 #include <stdexcept>
 
 namespace spall {
@@ -47,6 +54,79 @@ double enclosedVolume(const std::vector<VoxelFace>& faces)
     // centre · normal = (voxel[axis] + sign / 2) * sign.
     for (const VoxelFace& f : faces) sum += faceSign(f.face) * f.voxel[faceAxis(f.face)] + 0.5;
     return sum / 3.0;
+}
+
+/// Smooth value noise in [-1, 1] of a position in lattice units: random values at the integer
+/// points blended with smoothstep weights (value noise, Perlin 1985). A function of position
+/// alone, so equal shapes get equal surfaces and faces that meet agree where they meet.
+double valueNoise(const openvdb::Vec3d& x)
+{
+    const openvdb::Coord cell = openvdb::Coord::floor(x);
+    const openvdb::Vec3d f = x - cell.asVec3d();
+    const openvdb::Vec3d w(f.x() * f.x() * (3 - 2 * f.x()), f.y() * f.y() * (3 - 2 * f.y()), f.z() * f.z() * (3 - 2 * f.z()));
+    double sum = 0.0;
+    for (int corner = 0; corner < 8; ++corner) {
+        const openvdb::Coord c = cell.offsetBy(corner & 1, (corner >> 1) & 1, corner >> 2);
+        double weight = 1.0;
+        for (int axis = 0; axis < 3; ++axis) weight *= (corner >> axis & 1) ? w[axis] : 1.0 - w[axis];
+        const uint64_t key = uint64_t(uint32_t(c.x())) ^ uint64_t(uint32_t(c.y())) << 21 ^ uint64_t(uint32_t(c.z())) << 42;
+        sum += weight * (2.0 * unitInterval(splitmix64(key)) - 1.0);
+    }
+    return sum;
+}
+
+/// The quads of voxel faces (unit: m in the shape's frame) that `keep` selects.
+void faceQuads(const std::vector<VoxelFace>& faces, double voxelSizeM, const std::function<bool(const VoxelFace&)>& keep,
+               std::vector<openvdb::Vec3s>& points, std::vector<openvdb::Vec4I>& quads)
+{
+    for (const VoxelFace& f : faces) {
+        if (!keep(f)) continue;
+        const auto base = static_cast<openvdb::Index32>(points.size());
+        for (const openvdb::Vec3s& c : faceCorners(f)) points.push_back(c * float(voxelSizeM));
+        quads.emplace_back(base, base + 1, base + 2, base + 3);
+    }
+}
+
+/// Lattice spacing of the fracture noise (unit: voxel edges): bumps about a voxel across, which
+/// the default 3 samples per voxel resolve roughly and 4 or more well.
+constexpr double kNoiseLatticeVoxels = 0.5;
+/// Within this distance of the object's own surface the noise fades out (unit: voxel edges).
+constexpr double kNoiseFadeVoxels = 0.5;
+
+/// Moves the zero surface outward by roughness * voxelSizeM * noise * fade, where fade rises from
+/// 0 on the object's own faces to 1 half a voxel away (smoothstep of the distance to them), then
+/// restores the distance property. No own faces: the noise applies everywhere.
+void roughenFractureFaces(openvdb::FloatGrid& levelSet, const std::vector<VoxelFace>& faces, double voxelSizeM, double roughness,
+                          int subdivisions)
+{
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec4I> quads;
+    faceQuads(faces, voxelSizeM, [](const VoxelFace& f) { return !f.fracture; }, points, quads);
+    openvdb::FloatGrid::Ptr ownDistance;
+    const float fadeSamples = float(kNoiseFadeVoxels * subdivisions);
+    const std::vector<openvdb::Vec3I> noTriangles;
+    if (!quads.empty())
+        ownDistance = openvdb::tools::meshToUnsignedDistanceField<openvdb::FloatGrid>(levelSet.transform(), points, noTriangles, quads,
+                                                                                       fadeSamples + 1);
+    const double amplitudeM = roughness * voxelSizeM;
+    const double fadeM = kNoiseFadeVoxels * voxelSizeM;
+    openvdb::tree::LeafManager<openvdb::FloatTree> leaves(levelSet.tree());
+    leaves.foreach([&](openvdb::FloatTree::LeafNodeType& leaf, size_t) {
+        auto own = ownDistance ? std::optional(ownDistance->getConstAccessor()) : std::nullopt;
+        for (auto it = leaf.beginValueOn(); it; ++it) {
+            double fade = 1.0;
+            if (own) {
+                const double t = std::min(1.0, double(own->getValue(it.getCoord())) / fadeM);
+                fade = t * t * (3 - 2 * t);
+            }
+            if (fade == 0.0) continue;
+            // The sample's place in voxel units, then in noise-lattice units.
+            const openvdb::Vec3d voxel = (it.getCoord().asVec3d() - openvdb::Vec3d(kSampleIndexOffset)) / double(subdivisions);
+            it.setValue(float(*it - amplitudeM * fade * valueNoise(voxel / kNoiseLatticeVoxels)));
+        }
+    });
+    openvdb::tools::LevelSetTracker<openvdb::FloatGrid> tracker(levelSet);
+    tracker.normalize();
 }
 
 }  // namespace
@@ -104,25 +184,20 @@ openvdb::math::Transform::Ptr voxelTransformOf(const openvdb::math::Transform& l
     return voxelMap;
 }
 
-openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces, double voxelSizeM, int subdivisions,
-                                             int smoothingSteps, float halfWidthSamples)
+openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces, double voxelSizeM, const SurfaceStyle& style)
 {
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec4I> quads;
     points.reserve(4 * faces.size());
     quads.reserve(faces.size());
-    for (const VoxelFace& f : faces) {
-        const auto base = static_cast<openvdb::Index32>(points.size());
-        for (const openvdb::Vec3s& c : faceCorners(f)) points.push_back(c * float(voxelSizeM));
-        quads.emplace_back(base, base + 1, base + 2, base + 3);
-    }
-    const auto shapeSpace = levelSetTransform(*openvdb::math::Transform::createLinearTransform(voxelSizeM), subdivisions);
+    faceQuads(faces, voxelSizeM, [](const VoxelFace&) { return true; }, points, quads);
+    const auto shapeSpace = levelSetTransform(*openvdb::math::Transform::createLinearTransform(voxelSizeM), style.subdivisions);
     const std::vector<openvdb::Vec3I> noTriangles;
-    if (halfWidthSamples > kSampleIndexOffset) throw std::invalid_argument("voxelSurfaceLevelSet: band wider than the index offset");
-    auto levelSet = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*shapeSpace, points, noTriangles, quads, halfWidthSamples);
-    if (smoothingSteps > 0) {
+    if (style.halfWidthSamples > kSampleIndexOffset) throw std::invalid_argument("voxelSurfaceLevelSet: band wider than the index offset");
+    auto levelSet = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*shapeSpace, points, noTriangles, quads, style.halfWidthSamples);
+    if (style.smoothingSteps > 0) {
         openvdb::tools::LevelSetFilter<openvdb::FloatGrid> filter(*levelSet);
-        for (int i = 0; i < smoothingSteps; ++i) filter.meanCurvature();
+        for (int i = 0; i < style.smoothingSteps; ++i) filter.meanCurvature();
         // Mean-curvature flow shrinks the solid: grow it back to the voxels' volume, moving the
         // surface by the missing volume over its area, measured on the mesh readers will make
         // (OpenVDB's levelSetVolume, from a smeared delta, is 25 % off on a single voxel); three
@@ -135,6 +210,8 @@ openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces
             filter.offset(float(-(voxelVolume - volume) / area));  // a negative offset grows the solid
         }
     }
+    if (style.fractureRoughness > 0.0 && std::any_of(faces.begin(), faces.end(), [](const VoxelFace& f) { return f.fracture; }))
+        roughenFractureFaces(*levelSet, faces, voxelSizeM, style.fractureRoughness, style.subdivisions);
     return levelSet->treePtr();
 }
 
@@ -147,8 +224,9 @@ openvdb::FloatGrid::Ptr voxelsOfLevelSet(const openvdb::FloatGrid& levelSet, int
     // A centre inside lies at least half a voxel within the surface (k even), or is the mean of
     // corners on or within it (k odd, where it is no sample); one outside, at least half a voxel out.
     const float threshold = 0.25f * float(levelSet.voxelSize()[0] * k);
-    openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler(levelSet.getConstAccessor(),
-                                                                                                      levelSet.transform());
+    // The sampler keeps a pointer to the accessor: it must outlive the sampler.
+    const openvdb::FloatGrid::ConstAccessor levelSetAccess = levelSet.getConstAccessor();
+    openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler(levelSetAccess, levelSet.transform());
     auto out = voxels->getAccessor();
     for (auto it = levelSet.cbeginValueOn(); it; ++it) {
         if (*it > 0.0f) continue;

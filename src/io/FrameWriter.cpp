@@ -4,6 +4,7 @@
 #include <spall/io/VdbIo.h>
 
 #include <spall/core/Error.h>
+#include <spall/core/Hash.h>
 
 #include <algorithm>
 #include <cmath>
@@ -16,22 +17,13 @@ namespace spall {
 
 namespace {
 
-/// splitmix64's finaliser: a strong 64-bit mix, so content hashes of similar shapes differ.
-uint64_t mix(uint64_t x)
-{
-    x += 0x9e3779b97f4a7c15ull;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-    return x ^ (x >> 31);
-}
-
 /// Hash of a tree's active voxels and values, in the tree's own (canonical) order.
 uint64_t contentHash(const openvdb::FloatTree& tree)
 {
     uint64_t hash = 0;
     for (auto it = tree.cbeginValueOn(); it; ++it) {
         const openvdb::Coord c = it.getCoord();
-        for (int32_t v : {c.x(), c.y(), c.z(), static_cast<int32_t>(*it)}) hash = mix(hash ^ uint32_t(v));
+        for (int32_t v : {c.x(), c.y(), c.z(), static_cast<int32_t>(*it)}) hash = splitmix64(hash ^ uint32_t(v));
     }
     return hash;
 }
@@ -86,20 +78,27 @@ const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
         auto links = body.grid->getConstAccessor();
         for (const ExposedFace& f : body.exposedFaces) {
             const openvdb::Coord shifted = f.voxel - trees.originIjk;
-            faces.push_back({shifted, f.face});
-            if (!(brokenFaceBits(links.getValue(f.voxel)) & (1 << f.face))) continue;
-            fractured.setValueOn(shifted, float(int(fractured.getValue(shifted)) | (1 << f.face)));
+            const bool broken = brokenFaceBits(links.getValue(f.voxel)) & (1 << f.face);
+            faces.push_back({shifted, f.face, broken});
+            if (broken) fractured.setValueOn(shifted, float(int(fractured.getValue(shifted)) | (1 << f.face)));
         }
     }
     const uint64_t shapeHash = contentHash(*voxels), fractureHash = contentHash(*fractureFaces);
     const OutputSettings& s = mSettings;
-    trees.surface = intern(mShapes, voxels, shapeHash, [&] {
-        return s.fragmentGrids == FragmentGrids::LevelSet
-                   ? voxelSurfaceLevelSet(faces, body.voxelSizeM, s.levelSetSubdivisions, s.levelSetSmoothingSteps, kLevelSetHalfWidthSamples)
-                   : voxels;
-    });
+    const bool levelSet = s.fragmentGrids == FragmentGrids::LevelSet;
+    const SurfaceStyle style{s.levelSetSubdivisions, s.levelSetSmoothingSteps, s.fractureRoughnessVoxels, kLevelSetHalfWidthSamples};
+    // A rough surface depends on which faces broke too: its key is the voxels with their masks.
+    const bool rough = levelSet && style.fractureRoughness > 0.0 && !fractureFaces->empty();
+    openvdb::FloatTree::Ptr surfaceKey = voxels;
+    if (rough) {
+        surfaceKey = std::make_shared<openvdb::FloatTree>(*voxels);
+        openvdb::tree::ValueAccessor<openvdb::FloatTree> key(*surfaceKey);
+        for (auto it = fractureFaces->cbeginValueOn(); it; ++it) key.setValueOn(it.getCoord(), 1.0f + *it);
+    }
+    trees.surface = intern(mShapes, surfaceKey, rough ? contentHash(*surfaceKey) : shapeHash,
+                           [&] { return levelSet ? voxelSurfaceLevelSet(faces, body.voxelSizeM, style) : voxels; });
     if (!fractureFaces->empty()) trees.fractureFaces = intern(mFractureFaces, fractureFaces, fractureHash, [&] { return fractureFaces; });
-    trees.meshKey = mix(shapeHash ^ mix(fractureHash));
+    trees.meshKey = splitmix64(shapeHash ^ splitmix64(fractureHash));
     return mByBody.emplace(body.id, std::move(trees)).first->second;
 }
 

@@ -70,18 +70,20 @@ FragmentPose poseOf(const openvdb::GridBase& grid, const std::string& path)
     }
 }
 
-/// The face of a voxel a mesh triangle lies on: the voxel just inside its centroid, and the face
-/// of its normal's largest component in the body's axes.
+/// Whether a mesh triangle lies on a fracture face: the face is that of its normal's largest
+/// component in the body's axes, the voxel the one 0.45 voxel inward from its centroid along that
+/// axis (stepping along the axis, not the tilted normal, keeps a rough face's rim in its voxel).
 bool onFractureFace(const openvdb::FloatGrid& fractureFaces, const Eigen::Vector3d& centroidWorld, const Eigen::Vector3d& normalWorld,
-                    const Eigen::Matrix3d& worldToBody, double voxelSizeM)
+                    const Eigen::Matrix3d& worldToBody)
 {
-    const Eigen::Vector3d inside = centroidWorld - 0.25 * voxelSizeM * normalWorld;
-    const openvdb::Coord voxel = fractureFaces.transform().worldToIndexNodeCentered(openvdb::Vec3d(inside.x(), inside.y(), inside.z()));
     const Eigen::Vector3d n = worldToBody * normalWorld;
     int axis = 0;
     n.cwiseAbs().maxCoeff(&axis);
     const int face = 2 * axis + (n[axis] > 0 ? 1 : 0);
-    return (int(fractureFaces.tree().getValue(voxel)) >> face) & 1;
+    openvdb::Vec3d inside = fractureFaces.transform().worldToIndex(openvdb::Vec3d(centroidWorld.x(), centroidWorld.y(), centroidWorld.z()));
+    inside[axis] -= 0.45 * faceSign(face);
+    // Voxel centres lie at integer indices: round (OpenVDB's "node-centred" floors).
+    return (int(fractureFaces.tree().getValue(openvdb::Coord::round(inside))) >> face) & 1;
 }
 
 /// The fragment's level set meshed (adaptivity 0) in its body frame, triangles split by material.
@@ -99,7 +101,7 @@ PieceMesh meshPiece(const openvdb::FloatGrid& levelSet, const openvdb::FloatGrid
         const Eigen::Vector3d normal = (world[t[1]] - world[t[0]]).cross(world[t[2]] - world[t[0]]);
         if (normal.norm() < 1e-12 * pose.voxelSizeM * pose.voxelSizeM) continue;  // degenerate
         const Eigen::Vector3d centroid = (world[t[0]] + world[t[1]] + world[t[2]]) / 3.0;
-        const bool fracture = fractureFaces && onFractureFace(*fractureFaces, centroid, normal.normalized(), worldToBody, pose.voxelSizeM);
+        const bool fracture = fractureFaces && onFractureFace(*fractureFaces, centroid, normal.normalized(), worldToBody);
         std::vector<uint32_t>& indices = fracture ? mesh.fracture : mesh.outer;
         indices.insert(indices.end(), t.begin(), t.end());
     }

@@ -15,17 +15,30 @@ namespace spall {
 /// One exposed voxel face, in the shape's own voxel indices.
 struct VoxelFace {
     openvdb::Coord voxel;
-    int face;  ///< LinkBits.h's Face
+    int face;               ///< LinkBits.h's Face
+    bool fracture = false;  ///< a link broke here (not the object's own surface)
+};
+
+/// How a fragment's level set is drawn from its voxels.
+struct SurfaceStyle {
+    /// Samples per voxel edge, one on every voxel face (from 2 up).
+    int subdivisions = 3;
+    /// Mean-curvature flow steps, the volume restored after (0: the exact voxel surface).
+    int smoothingSteps = 0;
+    /// Largest displacement of fracture faces by smooth value noise, as a fraction of the voxel
+    /// edge (0: flat; below 0.25 each voxel's centre stays on its side, which voxelsOfLevelSet needs).
+    double fractureRoughness = 0.0;
+    float halfWidthSamples = 3.0f;
 };
 
 /// Signed distance (unit: m) to the boundary of a union of voxel cubes, given by its exposed faces,
 /// in a narrow band of `halfWidthSamples` samples each side. Samples lie `subdivisions` per voxel
 /// edge with one on every voxel face (sample u at voxel index u / subdivisions - 0.5), so the zero
 /// surface passes through the faces' corners and volume-to-mesh rebuilds the voxel surface exactly
-/// (no bevelled edges). `smoothingSteps` of mean-curvature flow then round the staircase (and
-/// shrink the solid; docs/file-formats.md gives by how much).
-openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces, double voxelSizeM, int subdivisions,
-                                             int smoothingSteps, float halfWidthSamples = 3.0f);
+/// (no bevelled edges). Smoothing steps then round the staircase, keeping the volume; fracture
+/// roughness then moves fracture faces in and out by value noise that fades to nothing within
+/// half a voxel of the object's own surface, which stays as it was (docs/file-formats.md).
+openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces, double voxelSizeM, const SurfaceStyle& style);
 
 /// The level set's index-to-world map, from its voxels' index-to-world map.
 openvdb::math::Transform::Ptr levelSetTransform(const openvdb::math::Transform& voxelIndexToWorld, int subdivisions);

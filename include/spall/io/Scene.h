@@ -56,6 +56,10 @@ struct OutputSettings {
     /// Mean-curvature smoothing iterations of each fragment's level set (0: the exact voxel
     /// surface). Rounds the staircase and shrinks small pieces (docs/file-formats.md) (unit: 1).
     int levelSetSmoothingSteps = 0;
+    /// Fracture faces moved in and out by smooth noise, at most this fraction of a voxel edge, so
+    /// breaks look rough while the object's own surface stays as modelled (0: flat; at most 0.2,
+    /// so every voxel's centre stays on its side of the surface) (unit: voxel edges).
+    double fractureRoughnessVoxels = 0.0;
     bool densityGrid = true;   ///< world-space `density` grid in each frame
     bool velocityGrid = false; ///< world-space `v` grid (velocity of the material there, m/s) beside `density`
     bool history = true;       ///< history.h5

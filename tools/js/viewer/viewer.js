@@ -82,12 +82,9 @@ function start(gltf, stage) {
   const clip = gltf.animations[0];
   const mixer = new THREE.AnimationMixer(gltf.scene);
   const duration = clip ? clip.duration : 0;
-  if (clip) {
-    // Once through, holding the last pose: the default loop would wrap the end time back to 0.
-    const action = mixer.clipAction(clip).setLoop(THREE.LoopOnce, 1);
-    action.clampWhenFinished = true;
-    action.play();
-  }
+  // The viewer keeps the time itself and poses the clip there: the mixer's own clock would wrap
+  // at the end or stop the action, and a stopped action ignores a new time.
+  const action = clip ? mixer.clipAction(clip).play() : null;
   frameBox(stage, clip ? debrisBox(clip) : new THREE.Box3().setFromObject(gltf.scene));
 
   const slider = document.getElementById("time");
@@ -100,7 +97,10 @@ function start(gltf, stage) {
 
   const show = (t) => {
     time = Math.min(Math.max(t, 0), duration);
-    mixer.setTime(time);
+    if (action) {
+      action.time = time;
+      mixer.update(0);
+    }
     slider.value = String(time);
     label.textContent = `t = ${time.toFixed(4)} s / ${duration.toFixed(3)} s`;
   };
