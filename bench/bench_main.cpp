@@ -5,6 +5,8 @@
 #include <spall/blast/Blast.h>
 #include <spall/fracture/Fracture.h>
 #include <spall/io/VdbIo.h>
+#include <spall/lattice/Lattice.h>
+#include <spall/core/Parallel.h>
 #include <spall/loads/BlastLoads.h>
 #include <spall/voxel/Components.h>
 #include <spall/render/Render.h>
@@ -20,6 +22,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <random>
 #include <string>
 
 using namespace spall;
@@ -276,6 +279,40 @@ void BM_Render_OpenVdbRayTracer(benchmark::State& state)
 }
 BENCHMARK(BM_Render_OpenVdbRayTracer)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+/// The deformable phase's lattice: a 60^3 block (216 000 particles, the size DESIGN.md's speed
+/// anchor uses for ESyS-Particle and Yade), set vibrating; the baseline is a pass that moves every
+/// particle by its velocity over the same arrays.
+Lattice vibratingBlock()
+{
+    Body body = makeBody(block(60), 0.01, 2400.0);
+    Lattice lattice = Lattice::fromBody(body, ElasticConstants{2400.0, 30e9, 0.2});
+    std::mt19937 random(3);
+    std::normal_distribution<double> normal(0.0, 0.01);
+    for (Eigen::Vector3d& v : lattice.velocityMS) v = Eigen::Vector3d(normal(random), normal(random), normal(random));
+    return lattice;
+}
+
+void BM_Lattice_TrivialPass(benchmark::State& state)
+{
+    Lattice lattice = vibratingBlock();
+    const double dt = lattice.stableTimeStepS();
+    for (auto _ : state) {
+        forEachIndex(lattice.particleCount(), [&](size_t p) { lattice.positionM[p] += dt * lattice.velocityMS[p]; }, kCheapGrain);
+        benchmark::DoNotOptimize(lattice.positionM.data());
+    }
+    state.counters["particle_steps_per_s"] = benchmark::Counter(double(lattice.particleCount()), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Lattice_TrivialPass)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Lattice_Step(benchmark::State& state)
+{
+    Lattice lattice = vibratingBlock();
+    const double dt = lattice.stableTimeStepS();
+    for (auto _ : state) lattice.step(dt);
+    state.counters["particle_steps_per_s"] = benchmark::Counter(double(lattice.particleCount()), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Lattice_Step)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 /// Console output plus, at the end, each benchmark's time relative to its baseline.
 class RatioReporter : public benchmark::ConsoleReporter {
 public:
@@ -307,6 +344,7 @@ public:
             {"BM_Loads_BlastEngineering", "BM_Loads_PaperReflected"},
             {"BM_Loads_BlastEngineeringBehindABarrier", "BM_Loads_PaperReflected"},
             {"BM_Voxelise_TorusWindingNumber", "BM_Voxelise_TorusLevelSet"},
+            {"BM_Lattice_Step", "BM_Lattice_TrivialPass"},
         };
         std::printf("\nRatios to the baseline in this run (time / baseline time):\n");
         for (auto [name, base] : pairs) {

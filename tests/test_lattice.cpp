@@ -1,0 +1,147 @@
+// The deformable phase's elastic lattice against closed forms: the bar wave speed √(E/ρ), the
+// first bending frequency of a cantilever (Euler–Bernoulli), and conservation of momentum and
+// energy.
+#include "TestUtil.h"
+
+#include <spall/lattice/Lattice.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace spall;
+
+namespace {
+
+const ElasticConstants kConcrete{2400.0, 30e9, 0.2};  // fib Model Code 2010 order of magnitude: C30 has E ≈ 33.6 GPa
+constexpr double kH = 0.01;
+
+Lattice latticeOfBox(int nx, int ny, int nz, const ElasticConstants& material = kConcrete)
+{
+    Body body = test::boxBody(nx, ny, nz, kH, material.densityKgM3);
+    return Lattice::fromBody(body, material);
+}
+
+double barWaveSpeed(const ElasticConstants& m) { return std::sqrt(m.youngsModulusPa / m.densityKgM3); }
+
+}  // namespace
+
+TEST(Lattice, CalibrationGivesTheContinuumModuli)
+{
+    // Energy per voxel under a uniform strain equals the continuum's: C11 = kn/h + λ, C44 = ks/(2h).
+    const LatticeStiffness k = calibrateLattice(kConcrete, kH);
+    const double e = kConcrete.youngsModulusPa, nu = kConcrete.poissonRatio;
+    const double lambda = e * nu / ((1 + nu) * (1 - 2 * nu)), mu = e / (2 * (1 + nu));
+    EXPECT_NEAR(k.normalNPerM / kH + k.lameLambdaPa, lambda + 2 * mu, 1e-6 * e);
+    EXPECT_NEAR(k.shearNPerM / (2 * kH), mu, 1e-6 * e);
+}
+
+TEST(Lattice, RigidPlacementStrainsNothing)
+{
+    Body body = test::boxBody(5, 4, 3, kH, kConcrete.densityKgM3, Eigen::Vector3d(1, -2, 0.5),
+                              Eigen::Quaterniond(Eigen::AngleAxisd(1.1, Eigen::Vector3d(0.3, -0.4, 0.8).normalized())));
+    const Lattice lattice = Lattice::fromBody(body, kConcrete);
+    EXPECT_EQ(lattice.particleCount(), 60u);
+    EXPECT_EQ(lattice.bondCount(), size_t(4 * 4 * 3 + 5 * 3 * 3 + 5 * 4 * 2));
+    EXPECT_LT(lattice.strainEnergyJ(), 1e-20);
+}
+
+TEST(Lattice, MomentumIsConservedExactly)
+{
+    // Random velocities and spins in a free block: bond forces and moments come in equal and
+    // opposite pairs about a common point, so linear and angular momentum stay put.
+    Lattice lattice = latticeOfBox(6, 5, 4);
+    std::mt19937 random(7);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    for (size_t p = 0; p < lattice.particleCount(); ++p) {
+        lattice.velocityMS[p] = Eigen::Vector3d(normal(random), normal(random), normal(random));
+        lattice.angularVelocityRadS[p] = 100.0 * Eigen::Vector3d(normal(random), normal(random), normal(random));
+    }
+    const Eigen::Vector3d p0 = lattice.linearMomentum(), l0 = lattice.angularMomentumAboutOrigin();
+    const double dt = lattice.stableTimeStepS();
+    for (int i = 0; i < 2000; ++i) lattice.step(dt);
+    const double scale = lattice.particleMassKg * std::sqrt(double(lattice.particleCount()));
+    EXPECT_LT((lattice.linearMomentum() - p0).norm(), 1e-12 * scale);
+    EXPECT_LT((lattice.angularMomentumAboutOrigin() - l0).norm(), 1e-12 * scale * 0.1);
+}
+
+TEST(Lattice, LongitudinalPulseTravelsAtTheBarSpeed)
+{
+    // A half-sine force pulse on one end of a 160 × 4 × 4 bar, 30 voxels long (far above the
+    // thickness, so the bar speed √(E/ρ) applies: Pochhammer's correction is below 0.5 %). The
+    // speed is the distance between two stations over the time between the pulse's peaks there.
+    const int length = 160;
+    Lattice lattice = latticeOfBox(length, 4, 4);
+    const double c = barWaveSpeed(kConcrete), dt = lattice.stableTimeStepS();
+    const double pulseS = 30.0 * kH / c;
+    const int stationA = 40, stationB = 120;
+    double peakA = 0.0, peakB = 0.0, timeA = 0.0, timeB = 0.0;
+    auto meanVelocityX = [&](int x) {
+        double sum = 0.0;
+        int count = 0;
+        for (size_t p = 0; p < lattice.particleCount(); ++p)
+            if (lattice.voxel[p].x() == x) sum += lattice.velocityMS[p].x(), ++count;
+        return sum / count;
+    };
+    const int steps = int((stationB + 40) * kH / c / dt);
+    for (int i = 0; i < steps; ++i) {
+        const double t = i * dt;
+        const double force = t < pulseS ? 1e3 * std::sin(M_PI * t / pulseS) : 0.0;
+        for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = Eigen::Vector3d(lattice.voxel[p].x() == 0 ? force : 0.0, 0, 0);
+        lattice.step(dt);
+        const double va = meanVelocityX(stationA), vb = meanVelocityX(stationB);
+        if (va > peakA) peakA = va, timeA = t + dt;
+        if (vb > peakB) peakB = vb, timeB = t + dt;
+    }
+    const double speed = (stationB - stationA) * kH / (timeB - timeA);
+    std::printf("bar wave: %.1f m/s measured, %.1f m/s = sqrt(E/rho) (%+.2f %%), dt = %.3g s\n", speed, c, 100 * (speed / c - 1), dt);
+    EXPECT_NEAR(speed, c, 0.03 * c);
+}
+
+TEST(Lattice, CantileverBendsAtTheEulerBernoulliFrequency)
+{
+    // A cantilever 8 voxels thick, 2 wide and 80 long beyond its held layer, set moving in the
+    // shape of its first mode. Euler–Bernoulli: f1 = 1.8751² / (2π L²) √(EI/(ρA)), I/A = t²/12,
+    // L from the held layer's centre to the free end. Energy with no damping must not drift.
+    const int free = 80, thick = 8;
+    Body body = test::boxBody(free + 1, thick, 2, kH, kConcrete.densityKgM3);
+    auto acc = body.grid->getAccessor();
+    for (int y = 0; y < thick; ++y)
+        for (int z = 0; z < 2; ++z) acc.setValue(openvdb::Coord(0, y, z), acc.getValue(openvdb::Coord(0, y, z)) | kAnchorBit);
+    Lattice lattice = Lattice::fromBody(body, kConcrete);
+    const double lengthM = (free + 0.5) * kH, t = thick * kH;
+    const double expected = 1.8751 * 1.8751 / (2 * M_PI * lengthM * lengthM) * std::sqrt(kConcrete.youngsModulusPa * t * t / 12 / kConcrete.densityKgM3);
+    // The first mode's shape (Euler–Bernoulli, clamped–free), as velocities in y.
+    const double beta = 1.8751 / lengthM, sigma = 0.7341;
+    const double x0 = lattice.positionM[0].x();
+    for (size_t p = 0; p < lattice.particleCount(); ++p) {
+        if (lattice.held[p]) continue;
+        const double x = beta * (lattice.positionM[p].x() - x0);
+        const double shape = std::cosh(x) - std::cos(x) - sigma * (std::sinh(x) - std::sin(x));
+        lattice.velocityMS[p] = Eigen::Vector3d(0, 0.01 * shape / 2.0, 0);
+    }
+    const double dt = lattice.stableTimeStepS();
+    const int steps = int(2.2 / expected / dt);
+    size_t tip = 0;
+    for (size_t p = 0; p < lattice.particleCount(); ++p)
+        if (lattice.voxel[p] == openvdb::Coord(free, thick / 2, 0)) tip = p;
+    const double tipRestY = lattice.positionM[tip].y();
+    std::vector<double> upCrossings;  // times the tip's displacement turns from negative to positive
+    double previous = 0.0, energyStart = 0.0, energyEnd = 0.0;
+    const int window = 500;
+    for (int i = 0; i < steps; ++i) {
+        lattice.step(dt);
+        const double y = lattice.positionM[tip].y() - tipRestY;
+        if (previous < 0.0 && y >= 0.0) upCrossings.push_back((i + previous / (previous - y)) * dt);
+        previous = y;
+        if (i < window) energyStart += (lattice.kineticEnergyJ() + lattice.strainEnergyJ()) / window;
+        if (i >= steps - window) energyEnd += (lattice.kineticEnergyJ() + lattice.strainEnergyJ()) / window;
+    }
+    ASSERT_GE(upCrossings.size(), 2u);
+    const double frequency = 1.0 / (upCrossings[1] - upCrossings[0]);
+    std::printf("cantilever: f1 = %.2f Hz measured, %.2f Hz Euler-Bernoulli (%+.2f %%); energy drift %.2e over %d steps\n", frequency,
+                expected, 100 * (frequency / expected - 1), (energyEnd - energyStart) / energyStart, steps);
+    EXPECT_NEAR(frequency, expected, 0.05 * expected);
+    EXPECT_LT(std::abs(energyEnd - energyStart), 1e-6 * energyStart);
+}
