@@ -5,8 +5,8 @@
 // 41:1329): a normal, a shear, a bending and a twisting stiffness, acting at the face between two
 // voxels in a frame that turns with them (half-way between their orientations), so rigid motion
 // strains nothing. A nearest-neighbour cubic lattice alone has Poisson's ratio 0; each particle
-// therefore also carries the volumetric energy ½ λ h³ (tr ε)², tr ε from its bonds' normal strains,
-// which makes the lattice's linear elasticity exactly isotropic in the bulk (C11 = λ + 2μ,
+// therefore also carries the volumetric energy ½ λ h³ (tr ε)², tr ε from its bonds' stretches (a
+// central force along each bond, so energy and momentum stay exact), which makes the lattice's linear elasticity exactly isotropic in the bulk (C11 = λ + 2μ,
 // C12 = λ, C44 = μ; docs/accuracy.md measures it where surfaces break the bulk).
 #pragma once
 
@@ -51,7 +51,7 @@ struct LatticeBond {
 
 /// A bond's deformation, in its frame (half-way between its particles' orientations).
 struct BondStrain {
-    Eigen::Quaterniond frame = Eigen::Quaterniond::Identity();
+    Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();  ///< bond frame to world
     Eigen::Vector3d displacementM = Eigen::Vector3d::Zero();  ///< of high relative to low, less the rest length
     Eigen::Vector3d rotationRad = Eigen::Vector3d::Zero();    ///< of high relative to low
 };
@@ -93,21 +93,31 @@ public:
     LatticeStiffness stiffness;
 
 private:
-    /// Per particle, the bond across each face (LinkBits.h's Face order) or -1.
-    std::vector<std::array<int32_t, 6>> mBondAcross;
+    /// Per particle, the particle across each face (LinkBits.h's Face order) or -1.
+    std::vector<std::array<int32_t, 6>> mNeighbour;
     /// Per particle, λ for the axes it has bonds along (stress-free missing axes condensed out).
     std::vector<double> mLambdaPa;
-    // Scratch of computeForces, kept to avoid allocating every step.
-    std::vector<BondStrain> mStrain;
+    /// Bonds in six batches, by axis and by the parity of the low particle's index along it: no
+    /// two bonds of a batch share a particle, so a batch adds its forces in parallel without
+    /// races, and each particle's sum has the same order whatever the thread count.
+    std::array<std::vector<uint32_t>, 6> mBatches;
+    /// Per particle and axis, 1 / (its bonds along the axis), or 0 without any.
+    std::vector<Eigen::Vector3d> mInverseBondCount;
+    // Per particle: tr ε, λ tr ε / (bonds along each axis), and the bonds' force and moment on it
+    // (external forces apart).
     std::vector<double> mVolumetricStrain;
-    /// Per bond: force on `high`, moment of the force pair about either centre, bending and
-    /// twisting moment on `high`; per particle: the bonds' force and moment on it.
-    std::vector<Eigen::Vector3d> mBondForceN, mBondMomentNm, mBondBendingNm, mForceN, mMomentNm;
+    std::vector<Eigen::Vector3d> mVolumetricStressShare;
+    std::vector<Eigen::Vector3d> mForceN, mMomentNm;
 
-    void computeStrains();
-    /// The bonds' forces and moments on each particle (external forces apart).
+    /// Each particle's tr ε: per axis, the mean stretch (length change / h) of its bonds along it.
+    void computeVolumetricStrain();
     void computeForces();
+    /// f(i) for i < count: in parallel for large lattices, in order for small ones.
+    template <typename F>
+    void forEach(size_t count, const F& f) const;
+    void addBondForces(const LatticeBond& bond);
     BondStrain strainOf(const LatticeBond& bond) const;
+
 };
 
 }  // namespace spall
