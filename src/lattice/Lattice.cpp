@@ -47,7 +47,7 @@ Eigen::Quaterniond rotationOf(const Eigen::Vector3d& turn)
 
 }  // namespace
 
-LatticeStiffness calibrateLattice(const ElasticConstants& m, double h)
+LatticeStiffness calibrateLattice(const LatticeMaterial& m, double h)
 {
     if (!(m.youngsModulusPa > 0.0) || !(m.poissonRatio > -1.0 && m.poissonRatio < 0.5) || !(m.densityKgM3 > 0.0) || !(h > 0.0))
         throw std::invalid_argument("calibrateLattice: E, density and h must be positive and -1 < nu < 0.5");
@@ -59,10 +59,17 @@ LatticeStiffness calibrateLattice(const ElasticConstants& m, double h)
     k.shearNPerM = 2.0 * k.shearModulusPa * h;
     k.bendingNmPerRad = e * h * h * h / 12.0;
     k.twistingNmPerRad = kSquareTorsionConstant * k.shearModulusPa * h * h * h;
+    if (!(m.tensileStrengthPa > 0.0) || !(m.fractureEnergyJPerM2 > 0.0))
+        throw std::invalid_argument("calibrateLattice: tensile strength and fracture energy must be positive");
+    k.peakStretchM = m.tensileStrengthPa * h / e;
+    k.zeroTractionStretchM = 2.0 * m.fractureEnergyJPerM2 / m.tensileStrengthPa;
+    if (!(k.zeroTractionStretchM > k.peakStretchM))
+        throw std::invalid_argument("calibrateLattice: voxels too large for the material's fracture energy (snap-back): h must be below " +
+                                    std::to_string(2.0 * e * m.fractureEnergyJPerM2 / (m.tensileStrengthPa * m.tensileStrengthPa)) + " m");
     return k;
 }
 
-Lattice Lattice::fromBody(const Body& body, const ElasticConstants& material)
+Lattice Lattice::fromBody(const Body& body, const LatticeMaterial& material)
 {
     Lattice lattice;
     const double h = body.voxelSizeM;
@@ -85,7 +92,7 @@ Lattice Lattice::fromBody(const Body& body, const ElasticConstants& material)
     }
     const size_t n = lattice.voxel.size();
     lattice.externalForceN.assign(n, Eigen::Vector3d::Zero());
-    lattice.mNeighbour.assign(n, {-1, -1, -1, -1, -1, -1});
+    lattice.mBondAcross.assign(n, {-1, -1, -1, -1, -1, -1});
     auto links = body.grid->getConstAccessor();
     openvdb::tree::ValueAccessor<const LinkTree> indices(index);
     for (uint32_t p = 0; p < n; ++p) {
@@ -93,13 +100,14 @@ Lattice Lattice::fromBody(const Body& body, const ElasticConstants& material)
         for (const int face : {kPosX, kPosY, kPosZ}) {
             if (!(bits & (1 << face))) continue;
             const int32_t q = indices.getValue(lattice.voxel[p] + faceOffset(face));
-            lattice.mNeighbour[p][face] = q;
-            lattice.mNeighbour[q][oppositeFace(face)] = int32_t(p);
+            lattice.mBondAcross[p][face] = lattice.mBondAcross[q][oppositeFace(face)] = int32_t(lattice.bonds.size());
             const int axis = faceAxis(face);
             lattice.mBatches[2 * axis + (lattice.voxel[p][axis] & 1)].push_back(uint32_t(lattice.bonds.size()));
             lattice.bonds.push_back({p, uint32_t(q), axis});
         }
     }
+    lattice.bondStrengthScale.assign(lattice.bonds.size(), 1.0);
+    lattice.bondMaxStretchM.assign(lattice.bonds.size(), 0.0);
     // λ condensed over the axes a particle has no bond along (σ = 0 there): λ for three axes,
     // 2μλ / (λ + 2μ) for two (plane stress), λμ / (λ + μ) for one (a bar: E = 2μ + that).
     const double lambda = lattice.stiffness.lameLambdaPa, mu = lattice.stiffness.shearModulusPa;
@@ -109,7 +117,7 @@ Lattice Lattice::fromBody(const Body& body, const ElasticConstants& material)
     for (size_t p = 0; p < n; ++p) {
         int axes = 0;
         for (int axis = 0; axis < 3; ++axis) {
-            const int count = int(lattice.mNeighbour[p][2 * axis] >= 0) + int(lattice.mNeighbour[p][2 * axis + 1] >= 0);
+            const int count = int(lattice.mBondAcross[p][2 * axis] >= 0) + int(lattice.mBondAcross[p][2 * axis + 1] >= 0);
             lattice.mInverseBondCount[p][axis] = count > 0 ? 1.0 / count : 0.0;
             axes += count > 0;
         }
@@ -164,8 +172,8 @@ void Lattice::computeVolumetricStrain()
             for (int axis = 0; axis < 3; ++axis) {
                 double sum = 0.0;
                 for (const int face : {2 * axis, 2 * axis + 1}) {
-                    const int32_t q = mNeighbour[p][face];
-                    if (q >= 0) sum += (positionM[q] - positionM[p]).norm() * inverseH - 1.0;
+                    const int32_t b = mBondAcross[p][face];
+                    if (b >= 0) sum += effectiveStretchM(size_t(b)) * inverseH;
                 }
                 trace += sum * mInverseBondCount[p][axis];
             }
@@ -175,22 +183,45 @@ void Lattice::computeVolumetricStrain()
         });
 }
 
-void Lattice::addBondForces(const LatticeBond& bond)
+double Lattice::bondDamage(size_t b) const
 {
+    const double scale = bondStrengthScale[b];
+    const double u0 = scale * stiffness.peakStretchM, uf = stiffness.zeroTractionStretchM / scale;
+    const double kappa = bondMaxStretchM[b];
+    if (kappa <= u0) return 0.0;
+    if (kappa >= uf) return 1.0;
+    // Secant stiffness on the softening line: (1 - D) κ / u0 = (uf - κ) / (uf - u0).
+    return 1.0 - (u0 / kappa) * (uf - kappa) / (uf - u0);
+}
+
+double Lattice::effectiveStretchM(size_t b) const
+{
+    const LatticeBond& bond = bonds[b];
+    const double stretch = (positionM[bond.high] - positionM[bond.low]).norm() - voxelSizeM;
+    return stretch > 0.0 ? std::sqrt(1.0 - bondDamage(b)) * stretch : stretch;
+}
+
+void Lattice::addBondForces(size_t b)
+{
+    const LatticeBond& bond = bonds[b];
     const LatticeStiffness& k = stiffness;
     const BondStrain s = strainOf(bond);
     const int a = bond.axis;
-    Eigen::Vector3d local = -k.shearNPerM * s.displacementM;
-    local[a] = -k.normalNPerM * s.displacementM[a];
+    // Damage grows with the largest normal stretch; what it takes away stays away.
+    bondMaxStretchM[b] = std::max(bondMaxStretchM[b], s.displacementM[a]);
+    const double intact = 1.0 - bondDamage(b);
+    Eigen::Vector3d local = -intact * k.shearNPerM * s.displacementM;
+    local[a] = -(s.displacementM[a] > 0.0 ? intact : 1.0) * k.normalNPerM * s.displacementM[a];
     const Eigen::Vector3d arm = positionM[bond.high] - positionM[bond.low];
     // The bond's force on `high` (its negative acts on `low`), at the face between them: the
     // pair's moment about either centre is the same, -(arm / 2) × force.
     // The volumetric energy's force along the bond: d(Σ ½ λ h³ (tr ε)²) / d(length) (unit: N).
-    const double volumetric = voxelSizeM * voxelSizeM * (mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a]);
+    const double stretchFactor = arm.norm() > voxelSizeM ? std::sqrt(intact) : 1.0;
+    const double volumetric = stretchFactor * voxelSizeM * voxelSizeM * (mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a]);
     const Eigen::Vector3d force = s.frame * local - volumetric / arm.norm() * arm;
     const Eigen::Vector3d pairMoment = -0.5 * arm.cross(force);
-    Eigen::Vector3d bending = -k.bendingNmPerRad * s.rotationRad;
-    bending[a] = -k.twistingNmPerRad * s.rotationRad[a];
+    Eigen::Vector3d bending = -intact * k.bendingNmPerRad * s.rotationRad;
+    bending[a] = -intact * k.twistingNmPerRad * s.rotationRad[a];
     const Eigen::Vector3d bendingOnHigh = s.frame * bending;
     mForceN[bond.high] += force;
     mForceN[bond.low] -= force;
@@ -204,7 +235,7 @@ void Lattice::computeForces()
     mForceN.assign(particleCount(), Eigen::Vector3d::Zero());
     mMomentNm.assign(particleCount(), Eigen::Vector3d::Zero());
     for (const std::vector<uint32_t>& batch : mBatches)
-        forEach(batch.size(), [&](size_t i) { addBondForces(bonds[batch[i]]); });
+        forEach(batch.size(), [&](size_t i) { addBondForces(batch[i]); });
 }
 
 void Lattice::step(double dtS)
@@ -243,9 +274,11 @@ double Lattice::strainEnergyJ() const
     for (size_t b = 0; b < bonds.size(); ++b) {
         const BondStrain s = strainOf(bonds[b]);
         const int a = bonds[b].axis;
-        const double normal = s.displacementM[a], twist = s.rotationRad[a];
-        sum += 0.5 * k.normalNPerM * normal * normal + 0.5 * k.shearNPerM * (s.displacementM.squaredNorm() - normal * normal) +
-               0.5 * k.bendingNmPerRad * (s.rotationRad.squaredNorm() - twist * twist) + 0.5 * k.twistingNmPerRad * twist * twist;
+        const double normal = s.displacementM[a], twist = s.rotationRad[a], intact = 1.0 - bondDamage(b);
+        sum += 0.5 * (normal > 0.0 ? intact : 1.0) * k.normalNPerM * normal * normal +
+               0.5 * intact *
+                   (k.shearNPerM * (s.displacementM.squaredNorm() - normal * normal) +
+                    k.bendingNmPerRad * (s.rotationRad.squaredNorm() - twist * twist) + k.twistingNmPerRad * twist * twist);
     }
     const double volume = voxelSizeM * voxelSizeM * voxelSizeM;
     for (size_t p = 0; p < particleCount(); ++p) sum += 0.5 * mLambdaPa[p] * volume * mVolumetricStrain[p] * mVolumetricStrain[p];

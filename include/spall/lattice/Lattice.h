@@ -21,11 +21,15 @@
 
 namespace spall {
 
-/// The elastic constants a lattice reproduces.
-struct ElasticConstants {
+/// What a lattice reproduces: elastic constants, and the tensile strength and fracture energy of
+/// its bonds' linear softening (defaults: a C30/37 concrete's order of magnitude, fib Model Code
+/// 2010: E ≈ 33 GPa, fctm ≈ 2.9 MPa, Gf = 73 fcm^0.18 ≈ 140 N/m).
+struct LatticeMaterial {
     double densityKgM3 = 2400.0;
     double youngsModulusPa = 30e9;
     double poissonRatio = 0.2;
+    double tensileStrengthPa = 3e6;
+    double fractureEnergyJPerM2 = 100.0;
 };
 
 /// One bond's stiffnesses and the volumetric modulus, for voxels of edge h. Derivation (energy
@@ -40,8 +44,13 @@ struct LatticeStiffness {
     double twistingNmPerRad = 0.0;
     double lameLambdaPa = 0.0;
     double shearModulusPa = 0.0;
+    /// Linear softening in tension, crack band style (Bažant & Oh 1983): a bond's normal stretch
+    /// peaks at u0 = ft h / E and its traction falls to nothing at uf = 2 Gf / ft, so a broken
+    /// bond has dissipated Gf per unit of its face, whatever h. Needs uf > u0: h < 2 E Gf / ft².
+    double peakStretchM = 0.0;
+    double zeroTractionStretchM = 0.0;
 };
-LatticeStiffness calibrateLattice(const ElasticConstants& material, double voxelSizeM);
+LatticeStiffness calibrateLattice(const LatticeMaterial& material, double voxelSizeM);
 
 /// A bond joins particle `low` to its +axis neighbour `high`.
 struct LatticeBond {
@@ -63,7 +72,7 @@ struct BondStrain {
 class Lattice {
 public:
     /// A body's voxels at their world places, moving with the body's rigid velocity field.
-    static Lattice fromBody(const Body& body, const ElasticConstants& material);
+    static Lattice fromBody(const Body& body, const LatticeMaterial& material);
 
     size_t particleCount() const { return positionM.size(); }
     size_t bondCount() const { return bonds.size(); }
@@ -86,6 +95,12 @@ public:
     std::vector<Eigen::Quaterniond> orientation;
     std::vector<uint8_t> held;  ///< 1: fixed to the world (an anchored voxel)
     std::vector<LatticeBond> bonds;
+    /// Per bond: its strength as a fraction of the material's (1 by default; a notch, a weak
+    /// joint), and the largest normal stretch it has seen (unit: m), from which its damage follows.
+    std::vector<double> bondStrengthScale, bondMaxStretchM;
+    /// 0 intact … 1 broken: the secant stiffness lost in tension, shear and bending (compression
+    /// still carries, as contact).
+    double bondDamage(size_t b) const;
 
     double voxelSizeM = 0.0;
     double particleMassKg = 0.0;
@@ -93,8 +108,8 @@ public:
     LatticeStiffness stiffness;
 
 private:
-    /// Per particle, the particle across each face (LinkBits.h's Face order) or -1.
-    std::vector<std::array<int32_t, 6>> mNeighbour;
+    /// Per particle, the bond across each face (LinkBits.h's Face order) or -1.
+    std::vector<std::array<int32_t, 6>> mBondAcross;
     /// Per particle, λ for the axes it has bonds along (stress-free missing axes condensed out).
     std::vector<double> mLambdaPa;
     /// Bonds in six batches, by axis and by the parity of the low particle's index along it: no
@@ -109,13 +124,23 @@ private:
     std::vector<Eigen::Vector3d> mVolumetricStressShare;
     std::vector<Eigen::Vector3d> mForceN, mMomentNm;
 
+public:
+    /// The bonds' force on particle p at the end of the last step (unit: N).
+    const Eigen::Vector3d& bondForceN(size_t p) const { return mForceN[p]; }
+
+private:
+
     /// Each particle's tr ε: per axis, the mean stretch (length change / h) of its bonds along it.
     void computeVolumetricStrain();
     void computeForces();
     /// f(i) for i < count: in parallel for large lattices, in order for small ones.
     template <typename F>
     void forEach(size_t count, const F& f) const;
-    void addBondForces(const LatticeBond& bond);
+    void addBondForces(size_t b);
+    /// A bond's stretch (length change) as the volumetric term counts it: in tension times
+    /// √(1 − D), so the bond's own share of the volumetric force falls with 1 − D as its
+    /// spring's does and the traction follows the softening line (unit: m).
+    double effectiveStretchM(size_t b) const;
     BondStrain strainOf(const LatticeBond& bond) const;
 
 };
