@@ -107,6 +107,8 @@ Lattice Lattice::fromBody(const Body& body, const LatticeMaterial& material)
         }
     }
     lattice.bondStrengthScale.assign(lattice.bonds.size(), 1.0);
+    const double pWaveSpeed = std::sqrt((lattice.stiffness.lameLambdaPa + 2.0 * lattice.stiffness.shearModulusPa) / material.densityKgM3);
+    lattice.mDashpotPerViscosity = material.densityKgM3 * pWaveSpeed * h * h;
     lattice.bondMaxStretchM.assign(lattice.bonds.size(), 0.0);
     // λ condensed over the axes a particle has no bond along (σ = 0 there): λ for three axes,
     // 2μλ / (λ + 2μ) for two (plane stress), λμ / (λ + μ) for one (a bar: E = 2μ + that).
@@ -218,7 +220,11 @@ void Lattice::addBondForces(size_t b)
     // The volumetric energy's force along the bond: d(Σ ½ λ h³ (tr ε)²) / d(length) (unit: N).
     const double stretchFactor = arm.norm() > voxelSizeM ? std::sqrt(intact) : 1.0;
     const double volumetric = stretchFactor * voxelSizeM * voxelSizeM * (mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a]);
-    const Eigen::Vector3d force = s.frame * local - volumetric / arm.norm() * arm;
+    Eigen::Vector3d force = s.frame * local - volumetric / arm.norm() * arm;
+    if (bulkViscosity > 0.0) {
+        const Eigen::Vector3d along = arm / arm.norm();
+        force -= mDashpotNsPerM * (velocityMS[bond.high] - velocityMS[bond.low]).dot(along) * along;
+    }
     const Eigen::Vector3d pairMoment = -0.5 * arm.cross(force);
     Eigen::Vector3d bending = -intact * k.bendingNmPerRad * s.rotationRad;
     bending[a] = -intact * k.twistingNmPerRad * s.rotationRad[a];
@@ -231,6 +237,7 @@ void Lattice::addBondForces(size_t b)
 
 void Lattice::computeForces()
 {
+    mDashpotNsPerM = bulkViscosity * mDashpotPerViscosity;
     computeVolumetricStrain();
     mForceN.assign(particleCount(), Eigen::Vector3d::Zero());
     mMomentNm.assign(particleCount(), Eigen::Vector3d::Zero());

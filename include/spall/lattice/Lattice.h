@@ -102,6 +102,13 @@ public:
     /// still carries, as contact).
     double bondDamage(size_t b) const;
 
+    /// Linear bulk viscosity: a dashpot along each bond of ζ ρ c h² (c the P-wave speed), as
+    /// explicit codes damp the ringing of a discretised shock front (von Neumann & Richtmyer 1950;
+    /// LS-DYNA's linear term Q2, 0.06 by default there). Without it a sharp front rings and a
+    /// free face's reflection puts spurious tension a few voxels deep (docs/accuracy.md). 0 turns
+    /// it off.
+    double bulkViscosity = 0.1;
+
     double voxelSizeM = 0.0;
     double particleMassKg = 0.0;
     double particleInertiaKgM2 = 0.0;  ///< a cube's, m h² / 6, the same about every axis
@@ -123,6 +130,8 @@ private:
     std::vector<double> mVolumetricStrain;
     std::vector<Eigen::Vector3d> mVolumetricStressShare;
     std::vector<Eigen::Vector3d> mForceN, mMomentNm;
+    double mDashpotPerViscosity = 0.0;  ///< ρ c h² (unit: N s/m)
+    double mDashpotNsPerM = 0.0;
 
 public:
     /// The bonds' force on particle p at the end of the last step (unit: N).
