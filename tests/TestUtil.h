@@ -1,11 +1,13 @@
 #pragma once
 
+#include <spall/fracture/Fracture.h>
 #include <spall/io/VdbIo.h>
 #include <spall/voxel/Body.h>
 
 #include <openvdb/openvdb.h>
 
 #include <initializer_list>
+#include <vector>
 
 namespace spall::test {
 
@@ -39,6 +41,17 @@ inline Body boxBody(int nx, int ny, int nz, double h, double densityKgM3, const 
     b.motion.positionM = positionM;
     b.motion.orientation = orientation;
     return b;
+}
+
+/// A 4 x 1 x 1 bar broken between voxels 1 and 2: its two halves (each with one fracture face),
+/// numbered firstId and firstId + 1.
+inline std::vector<Body> barBrokenInTwo(Body bar, int64_t firstId)
+{
+    auto acc = bar.grid->getAccessor();
+    breakLink(acc, openvdb::Coord(1, 0, 0), kPosX);
+    std::vector<Body> halves = splitBody(bar);
+    for (size_t i = 0; i < halves.size(); ++i) halves[i].id = firstId + int64_t(i);
+    return halves;
 }
 
 }  // namespace spall::test

@@ -162,14 +162,11 @@ TEST(Gltf, FractureMaterialCoversExactlyTheFacesThatBroke)
     // A 4 x 1 x 1 bar broken between voxels 1 and 2, turned about a skew axis: each half has
     // 10 faces of 0.01 m^2, one of them fracture surface, with and without fracture roughness.
     for (const double roughness : {0.0, 0.2}) {
-        Body bar = test::boxBody(4, 1, 1, 0.1, 1000.0, Eigen::Vector3d(0.3, -0.2, 0.5),
-                                 Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())));
-        auto acc = bar.grid->getAccessor();
-        ASSERT_TRUE(breakLink(acc, openvdb::Coord(1, 0, 0), kPosX));
-        std::vector<Body> halves = splitBody(bar);
+        const std::vector<Body> halves = test::barBrokenInTwo(
+            test::boxBody(4, 1, 1, 0.1, 1000.0, Eigen::Vector3d(0.3, -0.2, 0.5),
+                          Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()))),
+            1);
         ASSERT_EQ(halves.size(), 2u);
-        halves[0].id = 1;
-        halves[1].id = 2;
         const std::string dir = (std::filesystem::temp_directory_path() / "spall_test_gltf_fracture").string();
         std::filesystem::remove_all(dir);
         std::filesystem::create_directories(dir);

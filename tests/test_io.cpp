@@ -333,14 +333,8 @@ TEST(Frames, FractureRoughnessMovesBrokenFacesOnlyAndKeepsTheSolid)
 TEST(Frames, FractureFacesAreTheFacesWhoseLinksBroke)
 {
     initialiseOpenVdb();
-    // A 4 x 1 x 1 bar broken between voxels 1 and 2: each half has one fracture face.
-    Body bar = test::boxBody(4, 1, 1, 0.1, 1000.0);
-    auto acc = bar.grid->getAccessor();
-    ASSERT_TRUE(breakLink(acc, openvdb::Coord(1, 0, 0), kPosX));
-    std::vector<Body> halves = splitBody(bar);
+    const std::vector<Body> halves = test::barBrokenInTwo(test::boxBody(4, 1, 1, 0.1, 1000.0), 10);
     ASSERT_EQ(halves.size(), 2u);
-    halves[0].id = 10;
-    halves[1].id = 11;
     FrameWriter writer(scratch("fracture-faces"), OutputSettings{});
     openvdb::io::File file(writer.write({0, 0.0}, halves));
     file.open();
