@@ -6,6 +6,7 @@
 #include <spall/lattice/Lattice.h>
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <random>
@@ -64,6 +65,24 @@ TEST(Lattice, MomentumIsConservedExactly)
     const double scale = lattice.particleMassKg * std::sqrt(double(lattice.particleCount()));
     EXPECT_LT((lattice.linearMomentum() - p0).norm(), 1e-12 * scale);
     EXPECT_LT((lattice.angularMomentumAboutOrigin() - l0).norm(), 1e-12 * scale * 0.1);
+}
+
+TEST(Lattice, OneAndTwoThreadsGiveTheSameBits)
+{
+    // Large enough to step in parallel; bonds add forces in fixed batches, so every particle's
+    // sum has one order whatever the thread count.
+    auto run = [](int threads) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+        Lattice lattice = latticeOfBox(24, 24, 16);
+        std::mt19937 random(11);
+        std::normal_distribution<double> normal(0.0, 0.05);
+        for (Eigen::Vector3d& v : lattice.velocityMS) v = Eigen::Vector3d(normal(random), normal(random), normal(random));
+        for (int i = 0; i < 20; ++i) lattice.step(lattice.stableTimeStepS());
+        return lattice.positionM;
+    };
+    const std::vector<Eigen::Vector3d> one = run(1), two = run(2);
+    ASSERT_EQ(one.size(), two.size());
+    for (size_t p = 0; p < one.size(); ++p) ASSERT_EQ(one[p], two[p]) << p;
 }
 
 TEST(Lattice, LongitudinalPulseTravelsAtTheBarSpeed)
