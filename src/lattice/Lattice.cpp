@@ -223,7 +223,7 @@ void Lattice::addBondForces(size_t b)
     Eigen::Vector3d force = s.frame * local - volumetric / arm.norm() * arm;
     if (bulkViscosity > 0.0) {
         const Eigen::Vector3d along = arm / arm.norm();
-        force -= mDashpotNsPerM * (velocityMS[bond.high] - velocityMS[bond.low]).dot(along) * along;
+        force -= bulkViscosity * mDashpotPerViscosity * (velocityMS[bond.high] - velocityMS[bond.low]).dot(along) * along;
     }
     const Eigen::Vector3d pairMoment = -0.5 * arm.cross(force);
     Eigen::Vector3d bending = -intact * k.bendingNmPerRad * s.rotationRad;
@@ -237,7 +237,6 @@ void Lattice::addBondForces(size_t b)
 
 void Lattice::computeForces()
 {
-    mDashpotNsPerM = bulkViscosity * mDashpotPerViscosity;
     computeVolumetricStrain();
     mForceN.assign(particleCount(), Eigen::Vector3d::Zero());
     mMomentNm.assign(particleCount(), Eigen::Vector3d::Zero());

@@ -88,6 +88,8 @@ public:
     double strainEnergyJ() const;
     Eigen::Vector3d linearMomentum() const;
     Eigen::Vector3d angularMomentumAboutOrigin() const;
+    /// The bonds' force on particle p at the end of the last step (unit: N).
+    const Eigen::Vector3d& bondForceN(size_t p) const { return mForceN[p]; }
 
     // State, world frame, one entry per particle.
     std::vector<openvdb::Coord> voxel;  ///< the body's index of each particle
@@ -131,13 +133,6 @@ private:
     std::vector<Eigen::Vector3d> mVolumetricStressShare;
     std::vector<Eigen::Vector3d> mForceN, mMomentNm;
     double mDashpotPerViscosity = 0.0;  ///< ρ c h² (unit: N s/m)
-    double mDashpotNsPerM = 0.0;
-
-public:
-    /// The bonds' force on particle p at the end of the last step (unit: N).
-    const Eigen::Vector3d& bondForceN(size_t p) const { return mForceN[p]; }
-
-private:
 
     /// Each particle's tr ε: per axis, the mean stretch (length change / h) of its bonds along it.
     void computeVolumetricStrain();
@@ -151,7 +146,6 @@ private:
     /// spring's does and the traction follows the softening line (unit: m).
     double effectiveStretchM(size_t b) const;
     BondStrain strainOf(const LatticeBond& bond) const;
-
 };
 
 }  // namespace spall
