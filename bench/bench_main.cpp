@@ -285,7 +285,7 @@ BENCHMARK(BM_Render_OpenVdbRayTracer)->Unit(benchmark::kMillisecond)->UseRealTim
 Lattice vibratingBlock()
 {
     Body body = makeBody(block(60), 0.01, 2400.0);
-    Lattice lattice = Lattice::fromBody(body, LatticeMaterial{2400.0, 30e9, 0.2, 3e6, 100.0});
+    Lattice lattice = Lattice::fromBody(body, findMaterialPreset("concrete"));
     std::mt19937 random(3);
     std::normal_distribution<double> normal(0.0, 0.01);
     for (Eigen::Vector3d& v : lattice.velocityMS) v = Eigen::Vector3d(normal(random), normal(random), normal(random));

@@ -122,7 +122,8 @@ const char* kEveryKeyScene = R"({
   "ground": {"enabled": false, "normal": [0, 0.6, 0.8], "height_m": 0.5, "restitution": 0.3, "friction": 0.7},
   "colliders": [{"position_m": [1, 2, 3], "size_m": [1, 2, 0.5], "rotation_deg": [0, 0, 10], "restitution": 0.1, "friction": 0.2}],
   "materials": {"stone": {"density_kg_m3": 2500, "mean_yield_Pa": 60000, "yield_variation": 0.2, "weakening_fraction": 0.3,
-                          "orientation_factor": 0.05, "damage_rate_per_s": 200, "damage_stress_scale_per_Pa": 1e-5}},
+                          "orientation_factor": 0.05, "damage_rate_per_s": 200, "damage_stress_scale_per_Pa": 1e-5,
+                          "youngs_modulus_Pa": 2e10, "poisson_ratio": 0.25, "tensile_strength_Pa": 4e6, "fracture_energy_J_per_m2": 90}},
   "objects": [{"name": "block", "primitive": {"shape": "box", "size_m": [1, 1, 1]}, "position_m": [0, 0, 0.5],
                "rotation_deg": [0, 0, 5], "material": "stone", "anchor": "ground"},
               {"name": "sheet", "mesh": "/meshes/sheet.obj", "position_m": [0, 0, 2], "rotation_deg": [0, 0, 0],
@@ -131,6 +132,7 @@ const char* kEveryKeyScene = R"({
   "blast": {"dataset": "kinney-graham", "table_nodes_per_decade": 64},
   "fracture": {"algorithm": "davison-stevens", "weakening": false, "orientation": false, "min_fragment_voxels": 3,
                "small_fragments": "dust"},
+  "lattice": {"bulk_viscosity": 0.2, "handoff_energy_fraction": 0.05, "max_vibration_s": 0.01},
   "solver": {"integrator": "rk4", "max_time_step_s": 0.002, "min_time_step_s": 1e-6, "front_fraction_voxels": 0.4,
              "pulse_fraction": 0.05, "speed_fraction_voxels": 0.4, "linear_drag_per_s": 0.1, "angular_drag_per_s": 0.2,
              "sleep": false, "sleep_speed_m_s": 0.1, "sleep_time_s": 1.0},
@@ -275,6 +277,28 @@ TEST(Checkpoint, ResumedSimulationEndsBitForBitAsTheUninterruptedOne)
     ASSERT_EQ(straight.fractureEvents().size(), resumed.fractureEvents().size());
     ASSERT_EQ(straight.dust().size(), resumed.dust().size());
     for (size_t i = 0; i < straight.dust().size(); ++i) EXPECT_EQ(straight.dust()[i].linearMomentum, resumed.dust()[i].linearMomentum);
+}
+
+TEST(Checkpoint, ResumedInTheDeformablePhaseEndsBitForBitAsTheUninterruptedOne)
+{
+    nlohmann::json j = nlohmann::json::parse(kSmallScene);
+    j["fracture"] = {{"algorithm", "lattice"}};
+    const Scene scene = parseScene(j.dump(), "small", ".");
+    const std::string path = testing::TempDir() + "/spall-test-lattice.checkpoint";
+    Simulation straight(scene), interrupted(scene);
+    straight.advanceTo(0.006);
+    interrupted.advanceTo(0.006);
+    ASSERT_FALSE(interrupted.state().deformable.empty()) << "the checkpoint is meant to fall inside the deformable phase";
+    writeCheckpoint(path, {1, 12, 10, sceneToJson(interrupted.scene()).dump(), interrupted.state()});
+    Checkpoint back = readCheckpoint(path);
+    Simulation resumed(parseScene(back.sceneJson, "checkpoint", "."), std::move(back.state));
+    straight.advanceTo(0.08);
+    resumed.advanceTo(0.08);
+    EXPECT_TRUE(straight.state().deformable.empty());
+    expectSameBodies(straight.bodies(), resumed.bodies());
+    ASSERT_EQ(straight.state().handOffs.size(), resumed.state().handOffs.size());
+    for (size_t i = 0; i < straight.state().handOffs.size(); ++i)
+        EXPECT_EQ(straight.state().handOffs[i].discardedEnergyJ, resumed.state().handOffs[i].discardedEnergyJ);
 }
 
 TEST(Checkpoint, DamagedFilesAreRefusedNamingTheFile)

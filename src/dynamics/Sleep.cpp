@@ -41,7 +41,8 @@ void updateSleep(std::vector<Body>& bodies, const std::vector<BodyPair>& touchin
     for (size_t i = 0; i < bodies.size(); ++i) {
         Body& b = bodies[i];
         if (b.anchored || b.motion.asleep) continue;
-        b.motion.restTimeS = (!loaded[i] && maxVoxelSpeedMS(b) < sleep.speedMS) ? b.motion.restTimeS + dt : 0.0;
+        const bool resting = !loaded[i] && !b.motion.deformable && maxVoxelSpeedMS(b) < sleep.speedMS;
+        b.motion.restTimeS = resting ? b.motion.restTimeS + dt : 0.0;
     }
     DisjointSets islands(bodies.size());
     for (const BodyPair& p : touching)

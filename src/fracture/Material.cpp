@@ -24,6 +24,22 @@ Material calibrateMaterial(const std::string& name, double densityKgM3, double f
     return m;
 }
 
+namespace {
+
+/// `m` with the elastic and fracture properties the deformable phase reads, and their source.
+Material withElasticity(Material m, double youngsModulusPa, double poissonRatio, double tensileStrengthPa, double fractureEnergyJPerM2,
+                        const std::string& source)
+{
+    m.youngsModulusPa = youngsModulusPa;
+    m.poissonRatio = poissonRatio;
+    m.tensileStrengthPa = tensileStrengthPa;
+    m.fractureEnergyJPerM2 = fractureEnergyJPerM2;
+    m.source += "; lattice: " + source;
+    return m;
+}
+
+}  // namespace
+
 const std::vector<Material>& materialPresets()
 {
     // Failure overpressures: Clancey (1972), "Monitoring dangerous explosions", damage table as
@@ -37,16 +53,35 @@ const std::vector<Material>& materialPresets()
     // buildings are severely damaged or demolished"; its low end keeps brick's relative spread
     // (48.2/55.1). Densities: typical values; concrete and reinforced concrete from
     // EN 1991-1-1 Table A.1 (24 and 25 kN/m^3).
+    // Elasticity and fracture for the deformable phase (issue 17; issue 18 refines them):
+    //   glass: EN 572-1 (E 70 GPa, nu 0.2, characteristic bending strength 45 MPa), Gf = KIc^2/E
+    //     with KIc = 0.75 MPa m^0.5 (soda-lime glass, e.g. Wiederhorn 1969): 8 J/m^2;
+    //   wood (spruce, isotropic stand-in): USDA Wood Handbook FPL-GTR-190 (2010) ch. 5, E along
+    //     the grain about 10 GPa, tension across the grain 2.5 MPa; Gf across the grain about
+    //     250 J/m^2 (mode I, TL; Stanzl-Tschegg, Tan & Tschegg 1995, Wood Sci. Technol. 29);
+    //   brick masonry, homogenised on its joints: E = 1000 fk with fk 5 MPa (EN 1996-1-1 3.7.2),
+    //     unit–mortar bond 0.3 MPa and mode I Gf 12 J/m^2 (van der Pluijm's tests as quoted by
+    //     Lourenco 1996, "Computational strategies for masonry structures", ch. 3: 0.3–0.9 MPa
+    //     and 5–20 J/m^2);
+    //   concrete C30/37: fib Model Code 2010 5.1: Eci = 21.5 GPa (fcm/10)^(1/3) = 33.6 GPa,
+    //     fctm = 0.3 fck^(2/3) = 2.9 MPa, Gf = 73 fcm^0.18 = 141 J/m^2 (fcm = 38 MPa); reinforced
+    //     concrete the same concrete (its steel is not modelled).
+    const std::string fibC30 = "fib Model Code 2010, C30/37: E 33.6 GPa, fctm 2.9 MPa, Gf 141 J/m^2";
     static const std::vector<Material> presets = {
-        calibrateMaterial("glass", 2500.0, 3.4e3, 6.9e3, "Clancey 1972: windows shatter at 3.4-6.9 kPa"),
-        calibrateMaterial("wood", 500.0, 6.9e3, 13.8e3, "Clancey 1972: wood panels fail at 6.9-13.8 kPa"),
-        calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
-                          "Clancey 1972: unreinforced brick panels 8-12 in fail at 48.2-55.1 kPa"),
-        calibrateMaterial("concrete", 2400.0, 13.8e3, 20.7e3,
-                          "Clancey 1972: unreinforced concrete/cinder block walls shatter at 13.8-20.7 kPa"),
-        calibrateMaterial("reinforced-concrete", 2500.0, 137.9e3 * (48.2 / 55.1), 137.9e3,
-                          "NUKEMAP 20 psi benchmark: heavily built concrete buildings severely damaged or demolished at "
-                          "137.9 kPa; low end at brick's relative spread (120.6 kPa)"),
+        withElasticity(calibrateMaterial("glass", 2500.0, 3.4e3, 6.9e3, "Clancey 1972: windows shatter at 3.4-6.9 kPa"), 70e9, 0.2,
+                       45e6, 8.0, "EN 572-1 (E, strength); Gf = KIc^2/E, KIc 0.75 MPa m^0.5"),
+        withElasticity(calibrateMaterial("wood", 500.0, 6.9e3, 13.8e3, "Clancey 1972: wood panels fail at 6.9-13.8 kPa"), 10e9, 0.3,
+                       2.5e6, 250.0, "Wood Handbook FPL-GTR-190 (E, tension across grain); Stanzl-Tschegg et al. 1995 (Gf)"),
+        withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
+                                         "Clancey 1972: unreinforced brick panels 8-12 in fail at 48.2-55.1 kPa"),
+                       5e9, 0.2, 0.3e6, 12.0, "EN 1996-1-1 (E = 1000 fk); van der Pluijm via Lourenco 1996 (bond strength, Gf)"),
+        withElasticity(calibrateMaterial("concrete", 2400.0, 13.8e3, 20.7e3,
+                                         "Clancey 1972: unreinforced concrete/cinder block walls shatter at 13.8-20.7 kPa"),
+                       33.6e9, 0.2, 2.9e6, 141.0, fibC30),
+        withElasticity(calibrateMaterial("reinforced-concrete", 2500.0, 137.9e3 * (48.2 / 55.1), 137.9e3,
+                                         "NUKEMAP 20 psi benchmark: heavily built concrete buildings severely damaged or demolished at "
+                                         "137.9 kPa; low end at brick's relative spread (120.6 kPa)"),
+                       33.6e9, 0.2, 2.9e6, 141.0, fibC30 + " (steel not modelled)"),
     };
     return presets;
 }
@@ -72,6 +107,10 @@ const std::vector<Field<Material>>& fieldTable<Material>()
         {"orientation_factor", &Material::orientationFactor, fraction()},
         {"damage_rate_per_s", &Material::damageRatePerS, closed(0, 1e12)},
         {"damage_stress_scale_per_Pa", &Material::damageStressScalePerPa, closed(0, 1e12)},
+        {"youngs_modulus_Pa", &Material::youngsModulusPa, aboveZeroUpTo(1e13)},
+        {"poisson_ratio", &Material::poissonRatio, closed(0.0, 0.45)},
+        {"tensile_strength_Pa", &Material::tensileStrengthPa, aboveZeroUpTo(1e11)},
+        {"fracture_energy_J_per_m2", &Material::fractureEnergyJPerM2, aboveZeroUpTo(1e7)},
     };
     return table;
 }

@@ -73,6 +73,7 @@ void forEachSettings(SceneT& scene, F&& f)
     f(scene.blast);
     f(scene.loads);
     f(scene.fracture);
+    f(scene.lattice);
     f(scene.timeStep);
     f(scene.sleep);
     f(scene.collisions);

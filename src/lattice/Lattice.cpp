@@ -47,7 +47,7 @@ Eigen::Quaterniond rotationOf(const Eigen::Vector3d& turn)
 
 }  // namespace
 
-LatticeStiffness calibrateLattice(const LatticeMaterial& m, double h)
+LatticeStiffness calibrateLattice(const Material& m, double h)
 {
     if (!(m.youngsModulusPa > 0.0) || !(m.poissonRatio > -1.0 && m.poissonRatio < 0.5) || !(m.densityKgM3 > 0.0) || !(h > 0.0))
         throw std::invalid_argument("calibrateLattice: E, density and h must be positive and -1 < nu < 0.5");
@@ -62,14 +62,13 @@ LatticeStiffness calibrateLattice(const LatticeMaterial& m, double h)
     if (!(m.tensileStrengthPa > 0.0) || !(m.fractureEnergyJPerM2 > 0.0))
         throw std::invalid_argument("calibrateLattice: tensile strength and fracture energy must be positive");
     k.peakStretchM = m.tensileStrengthPa * h / e;
-    k.zeroTractionStretchM = 2.0 * m.fractureEnergyJPerM2 / m.tensileStrengthPa;
-    if (!(k.zeroTractionStretchM > k.peakStretchM))
-        throw std::invalid_argument("calibrateLattice: voxels too large for the material's fracture energy (snap-back): h must be below " +
-                                    std::to_string(2.0 * e * m.fractureEnergyJPerM2 / (m.tensileStrengthPa * m.tensileStrengthPa)) + " m");
+    // Voxels too large to soften (snap-back) break at the peak: the strength, which decides
+    // whether a body breaks, is kept, and a crack dissipates ft² h / (2E) per area, more than Gf.
+    k.zeroTractionStretchM = std::max(2.0 * m.fractureEnergyJPerM2 / m.tensileStrengthPa, k.peakStretchM);
     return k;
 }
 
-Lattice Lattice::fromBody(const Body& body, const LatticeMaterial& material)
+Lattice Lattice::fromBody(const Body& body, const Material& material)
 {
     Lattice lattice;
     const double h = body.voxelSizeM;
@@ -125,7 +124,7 @@ Lattice Lattice::fromBody(const Body& body, const LatticeMaterial& material)
         }
         lattice.mLambdaPa[p] = condensed[axes];
     }
-    lattice.computeForces();
+    lattice.refreshForces();
     return lattice;
 }
 
@@ -209,8 +208,6 @@ void Lattice::addBondForces(size_t b)
     const LatticeStiffness& k = stiffness;
     const BondStrain s = strainOf(bond);
     const int a = bond.axis;
-    // Damage grows with the largest normal stretch; what it takes away stays away.
-    bondMaxStretchM[b] = std::max(bondMaxStretchM[b], s.displacementM[a]);
     const double intact = 1.0 - bondDamage(b);
     Eigen::Vector3d local = -intact * k.shearNPerM * s.displacementM;
     local[a] = -(s.displacementM[a] > 0.0 ? intact : 1.0) * k.normalNPerM * s.displacementM[a];
@@ -229,17 +226,23 @@ void Lattice::addBondForces(size_t b)
     Eigen::Vector3d bending = -intact * k.bendingNmPerRad * s.rotationRad;
     bending[a] = -intact * k.twistingNmPerRad * s.rotationRad[a];
     const Eigen::Vector3d bendingOnHigh = s.frame * bending;
-    mForceN[bond.high] += force;
-    mForceN[bond.low] -= force;
-    mMomentNm[bond.high] += pairMoment + bendingOnHigh;
-    mMomentNm[bond.low] += pairMoment - bendingOnHigh;
+    bondForceN[bond.high] += force;
+    bondForceN[bond.low] -= force;
+    bondMomentNm[bond.high] += pairMoment + bendingOnHigh;
+    bondMomentNm[bond.low] += pairMoment - bendingOnHigh;
 }
 
-void Lattice::computeForces()
+void Lattice::refreshForces()
 {
+    // Damage grows with the largest stretch (change of length between the centres); what it
+    // takes away stays away. Updated first, so the forces are a function of the state alone.
+    forEach(bondCount(), [&](size_t b) {
+        const double stretch = (positionM[bonds[b].high] - positionM[bonds[b].low]).norm() - voxelSizeM;
+        bondMaxStretchM[b] = std::max(bondMaxStretchM[b], stretch);
+    });
     computeVolumetricStrain();
-    mForceN.assign(particleCount(), Eigen::Vector3d::Zero());
-    mMomentNm.assign(particleCount(), Eigen::Vector3d::Zero());
+    bondForceN.assign(particleCount(), Eigen::Vector3d::Zero());
+    bondMomentNm.assign(particleCount(), Eigen::Vector3d::Zero());
     for (const std::vector<uint32_t>& batch : mBatches)
         forEach(batch.size(), [&](size_t i) { addBondForces(batch[i]); });
 }
@@ -251,8 +254,8 @@ void Lattice::step(double dtS)
     // the same about every axis, so ω changes by the moment alone (no gyroscopic term).
     auto kick = [&](size_t p) {
         if (held[p]) return;
-        velocityMS[p] += halfDt * invMass * (mForceN[p] + externalForceN[p]);
-        angularVelocityRadS[p] += halfDt * invInertia * mMomentNm[p];
+        velocityMS[p] += halfDt * invMass * (bondForceN[p] + externalForceN[p]);
+        angularVelocityRadS[p] += halfDt * invInertia * bondMomentNm[p];
     };
     forEach(
         particleCount(),
@@ -260,9 +263,25 @@ void Lattice::step(double dtS)
             kick(p);
             positionM[p] += dtS * velocityMS[p];
             orientation[p] = (rotationOf(dtS * angularVelocityRadS[p]) * orientation[p]).normalized();
+            if (ground.enabled && !held[p]) keepAboveGround(p);
         });
-    computeForces();
+    refreshForces();
     forEach(particleCount(), kick);
+}
+
+void Lattice::keepAboveGround(size_t p)
+{
+    const double depth = ground.offsetM + 0.5 * voxelSizeM - ground.normal.dot(positionM[p]);
+    if (depth <= 0.0) return;
+    positionM[p] += depth * ground.normal;
+    const double into = ground.normal.dot(velocityMS[p]);
+    if (into < 0.0) velocityMS[p] -= into * ground.normal;
+}
+
+void Lattice::advance(double dtS)
+{
+    const double substeps = std::ceil(dtS / stableTimeStepS());
+    for (double i = 0; i < substeps; ++i) step(dtS / substeps);
 }
 
 double Lattice::kineticEnergyJ() const

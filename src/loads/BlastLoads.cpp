@@ -196,17 +196,19 @@ void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouet
 }
 
 Wrench BlastLoads::wrenchOf(const Body& body, const std::vector<Silhouette>& outlines, const Exposure* exposure, size_t bodyIndex,
-                            double timeS, double dtS) const
+                            double timeS, double dtS, std::vector<Eigen::Vector3d>* faceForcesN) const
 {
     Wrench total;
+    if (faceForcesN) faceForcesN->assign(body.exposedFaces.size(), Eigen::Vector3d::Zero());
     if (mWindows.empty() || body.exposedFaces.empty() || !(dtS > 0)) return total;
     std::vector<Wrench> partial((body.exposedFaces.size() + kFaceBlock - 1) / kFaceBlock);
     forEachFaceBlock(body.exposedFaces.size(), [&](size_t block, size_t first, size_t end) {
         Wrench w;
         forEachFaceImpulse(body, outlines, exposure, bodyIndex, timeS, dtS, first, end,
-                           [&](size_t, const Eigen::Vector3d& impulse, const Eigen::Vector3d& arm, const Eigen::Vector3d&) {
+                           [&](size_t face, const Eigen::Vector3d& impulse, const Eigen::Vector3d& arm, const Eigen::Vector3d&) {
                                w.forceN += impulse;
                                w.torqueNm += arm.cross(impulse);
+                               if (faceForcesN) (*faceForcesN)[face] += impulse / dtS;
                            });
         partial[block] = w;
     });
@@ -223,13 +225,19 @@ Wrench BlastLoads::stepWrench(const Body& body, double timeS, double dtS) const
 }
 
 std::vector<Wrench> BlastLoads::stepWrenches(const std::vector<Body>& bodies, const std::vector<char>& loaded, double timeS,
-                                             double dtS) const
+                                             double dtS, FaceForces* faces) const
 {
     std::vector<Wrench> wrenches(bodies.size());
-    if (std::find(loaded.begin(), loaded.end(), 1) == loaded.end()) return wrenches;  // the wave is past every body
+    std::vector<char> wanted = loaded;
+    if (faces) {
+        faces->forceN.assign(bodies.size(), {});
+        for (size_t i = 0; i < bodies.size(); ++i) wanted[i] = wanted[i] || faces->wanted[i];
+    }
+    auto faceForcesOf = [&](size_t i) { return faces && faces->wanted[i] ? &faces->forceN[i] : nullptr; };
+    if (std::find(wanted.begin(), wanted.end(), 1) == wanted.end()) return wrenches;  // the wave is past every body
     if (mSettings.model != LoadModel::BlastEngineering) {
         forEachIndex(bodies.size(), [&](size_t i) {
-            if (loaded[i]) wrenches[i] = wrenchOf(bodies[i], silhouettes({&bodies[i]}), nullptr, 0, timeS, dtS);
+            if (wanted[i]) wrenches[i] = wrenchOf(bodies[i], silhouettes({&bodies[i]}), nullptr, 0, timeS, dtS, faceForcesOf(i));
         });
         return wrenches;
     }
@@ -249,7 +257,7 @@ std::vector<Wrench> BlastLoads::stepWrenches(const std::vector<Body>& bodies, co
         if (!members[g].empty()) outlines[g] = silhouettes(members[g]);
     });
     forEachIndex(bodies.size(), [&](size_t i) {
-        if (loaded[i]) wrenches[i] = wrenchOf(bodies[i], outlines[exposure.groupOf()[i]], &exposure, i, timeS, dtS);
+        if (wanted[i]) wrenches[i] = wrenchOf(bodies[i], outlines[exposure.groupOf()[i]], &exposure, i, timeS, dtS, faceForcesOf(i));
     });
     return wrenches;
 }

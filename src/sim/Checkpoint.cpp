@@ -138,6 +138,7 @@ void transferFields(Archive& a, C& c, std::vector<uint8_t>& hasDamage)
         a.vec(b.motion.linearVelocityMS, "velocity");
         a.vec(b.motion.angularVelocityRadS, "angular velocity");
         a.flag(b.motion.asleep, "asleep");
+        a.flag(b.motion.deformable, "deformable");
         a.pod(b.motion.restTimeS, "rest time");
         // Mass, faces, bounds, link count and anchoring are derived from the grid on reading.
         if constexpr (Archive::kReading) hasDamage.resize(index + 1);
@@ -155,6 +156,31 @@ void transferFields(Archive& a, C& c, std::vector<uint8_t>& hasDamage)
         a.pod(d.massKg, "dust mass");
         a.vec(d.linearMomentum, "dust momentum");
         a.vec(d.angularMomentumAboutOrigin, "dust angular momentum");
+    });
+    a.sequence(s.deformable, "deformable bodies", [&](auto& d) {
+        a.pod(d.bodyId, "deformable body");
+        a.pod(d.enteredS, "deformable since");
+        a.pod(d.lastLoadedS, "deformable last loaded");
+        // The particles' state, the forces Verlet carries and the bonds' history; the rest follows
+        // from the body's grid.
+        auto& lattice = d.lattice;
+        a.sequence(lattice.positionM, "particle positions", [&](auto& v) { a.vec(v, "particle position"); });
+        a.sequence(lattice.velocityMS, "particle velocities", [&](auto& v) { a.vec(v, "particle velocity"); });
+        a.sequence(lattice.angularVelocityRadS, "particle spins", [&](auto& v) { a.vec(v, "particle spin"); });
+        a.sequence(lattice.orientation, "particle orientations", [&](auto& q) { a.doubles(q.coeffs().data(), 4, "particle orientation"); });
+        a.sequence(lattice.bondForceN, "particle bond forces", [&](auto& v) { a.vec(v, "particle bond force"); });
+        a.sequence(lattice.bondMomentNm, "particle bond moments", [&](auto& v) { a.vec(v, "particle bond moment"); });
+        a.sequence(lattice.bondMaxStretchM, "bond stretches", [&](auto& x) { a.pod(x, "bond stretch"); });
+        a.sequence(lattice.bondStrengthScale, "bond strengths", [&](auto& x) { a.pod(x, "bond strength"); });
+    });
+    a.sequence(s.handOffs, "hand-offs", [&](auto& h) {
+        a.pod(h.timeS, "hand-off time");
+        a.pod(h.bodyId, "hand-off body");
+        a.pod(h.particles, "hand-off particles");
+        a.pod(h.brokenBonds, "hand-off broken bonds");
+        a.pod(h.deformableS, "hand-off duration");
+        a.pod(h.discardedEnergyJ, "hand-off energy");
+        a.flag(h.timedOut, "hand-off timed out");
     });
     a.sequence(s.contactCache.points, "contact points", [&](auto& p) {
         a.pod(p.key.first, "contact key");

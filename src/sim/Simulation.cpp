@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <unordered_map>
 #include <sstream>
 
 namespace spall {
@@ -162,6 +163,18 @@ Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene
     initialiseOpenVdb();
     mField = makeField(scene);
     mStats.minDtS = scene.timeStep.maxTimeStepS;
+    // A saved lattice holds its state; its bonds and stiffness follow from its body again.
+    for (DeformableBody& d : mState.deformable) {
+        const auto body = std::find_if(mState.bodies.begin(), mState.bodies.end(), [&](const Body& b) { return b.id == d.bodyId; });
+        if (body == mState.bodies.end()) throw InputError("saved state: deformable body " + std::to_string(d.bodyId) + " is not among the bodies");
+        restoreDeformable(d, *body, mScene.materials[body->materialIndex], mScene.lattice, latticeGround());
+    }
+}
+
+Lattice::Ground Simulation::latticeGround() const
+{
+    const GroundPlane& g = mScene.world.ground;
+    return {g.enabled, g.normal.normalized(), g.offsetM};
 }
 
 StepStats Simulation::takeStepStats()
@@ -242,14 +255,19 @@ void Simulation::step(double targetS)
 
     const std::vector<char> cracked = fractureBodies(windows, dt);
     splitBodies(cracked);
+    handOffQuietBodies();
+    enterDeformablePhase(windows);
 
     LoadGeometry geometry{{mScene.world.ground.enabled, mScene.world.ground.normal.normalized(), mScene.world.ground.offsetM}, {}};
     for (const StaticBox& box : mScene.world.colliders) geometry.obstacles.push_back({box.centreM, box.halfExtentM, box.orientation});
     const BlastLoads blast(*mField, windows, mScene.loads, geometry);
     const std::vector<char> loaded = blast.loadedBodies(mState.bodies);
     wakeLoadedBodies(mState.bodies, loaded);
-    const std::vector<Wrench> blastWrenches = blast.stepWrenches(mState.bodies, loaded, mState.timeS, dt);
+    FaceForces faces;
+    for (const Body& body : mState.bodies) faces.wanted.push_back(body.motion.deformable);
+    const std::vector<Wrench> blastWrenches = blast.stepWrenches(mState.bodies, loaded, mState.timeS, dt, &faces);
     integrateBodies(mState.bodies, blastWrenches, mScene.world, mScene.timeStep.integrator, mState.timeS, dt);
+    deformBodies(faces, windows, dt);
 
     const ContactSet contacts = detectContacts(mState.bodies, mScene.world, mScene.collisions, mScene.sleep);
     solveContacts(mState.bodies, contacts, mScene.world, mScene.collisions, dt, mState.contactCache);
@@ -270,7 +288,9 @@ void Simulation::step(double targetS)
 std::vector<char> Simulation::fractureBodies(const std::vector<OpenWindow>& windows, double dt)
 {
     std::vector<char> cracked(mState.bodies.size(), 0);
-    if (windows.empty() || mScene.fracture.algorithm == FractureAlgorithm::None) return cracked;
+    // The lattice breaks its bonds itself (deformBodies).
+    if (windows.empty() || mScene.fracture.algorithm == FractureAlgorithm::None || mScene.fracture.algorithm == FractureAlgorithm::Lattice)
+        return cracked;
     // The pressure table is built only when some body can fracture inside a window: windows
     // stay open far away long after the blast has passed every body.
     std::optional<PressureSnapshot> pressure;
@@ -304,20 +324,29 @@ void Simulation::splitBodies(const std::vector<char>& cracked)
 {
     if (std::none_of(cracked.begin(), cracked.end(), [](char c) { return c; })) return;
     if (mObserver) std::tie(mRecord.linearMomentumBeforeSplit, mRecord.angularMomentumBeforeSplit) = totalMomenta();
-    // Parts replace their parent.
+    std::vector<std::vector<Body>> parts(mState.bodies.size());
+    for (size_t i = 0; i < mState.bodies.size(); ++i)
+        if (cracked[i]) parts[i] = splitBody(mState.bodies[i]);
+    replaceWithParts(parts);
+    if (mObserver) {
+        mRecord.split = true;
+        std::tie(mRecord.linearMomentumAfterSplit, mRecord.angularMomentumAfterSplit) = totalMomenta();
+    }
+}
+
+void Simulation::replaceWithParts(std::vector<std::vector<Body>>& parts)
+{
     std::vector<Body> next;
     next.reserve(mState.bodies.size());
     for (size_t i = 0; i < mState.bodies.size(); ++i) {
-        std::vector<Body> parts;
-        if (cracked[i]) parts = splitBody(mState.bodies[i]);
-        if (parts.empty()) {
+        if (parts[i].empty()) {
             next.push_back(std::move(mState.bodies[i]));
             continue;
         }
         FractureEvent event;
         event.timeS = mState.timeS;
         event.parentId = mState.bodies[i].id;
-        for (Body& part : parts) {
+        for (Body& part : parts[i]) {
             const bool small = part.mass.voxelCount < mScene.fracture.minFragmentVoxels;
             if (small && mScene.fracture.smallFragments == SmallFragmentPolicy::Dust && !part.anchored) {
                 mState.dust.push_back({mState.timeS, mState.bodies[i].id, part.mass.voxelCount, part.mass.massKg, linearMomentum(part),
@@ -331,10 +360,70 @@ void Simulation::splitBodies(const std::vector<char>& cracked)
         mState.events.push_back(std::move(event));
     }
     mState.bodies = std::move(next);
-    if (mObserver) {
-        mRecord.split = true;
-        std::tie(mRecord.linearMomentumAfterSplit, mRecord.angularMomentumAfterSplit) = totalMomenta();
+}
+
+void Simulation::enterDeformablePhase(const std::vector<OpenWindow>& windows)
+{
+    if (mScene.fracture.algorithm != FractureAlgorithm::Lattice || windows.empty()) return;
+    for (Body& body : mState.bodies) {
+        if (body.motion.deformable || body.linkCount == 0 || !bodyInWindows(body, *mField, windows)) continue;
+        mState.deformable.push_back(
+            spall::enterDeformablePhase(body, mScene.materials[body.materialIndex], mScene.lattice, latticeGround(), mState.timeS));
+        body.motion.deformable = true;
+        body.motion.asleep = false;
+        body.motion.restTimeS = 0.0;
     }
+}
+
+void Simulation::deformBodies(const FaceForces& faces, const std::vector<OpenWindow>& windows, double dtS)
+{
+    if (mState.deformable.empty()) return;
+    std::unordered_map<int64_t, size_t> indexOf;
+    for (size_t i = 0; i < mState.bodies.size(); ++i) indexOf[mState.bodies[i].id] = i;
+    for (DeformableBody& d : mState.deformable) {
+        const size_t i = indexOf.at(d.bodyId);
+        Body& body = mState.bodies[i];
+        setExternalForces(d.lattice, body, faces.forceN[i], mScene.world.gravityMS2);
+        const double substepS = d.lattice.stableTimeStepS();
+        d.lattice.advance(dtS);
+        mStats.latticeSubsteps += static_cast<int64_t>(std::ceil(dtS / substepS));
+        followLattice(body, d.lattice);
+        if (bodyInWindows(body, *mField, windows)) d.lastLoadedS = mState.timeS + dtS;
+    }
+}
+
+void Simulation::handOffQuietBodies()
+{
+    if (mState.deformable.empty()) return;
+    std::unordered_map<int64_t, size_t> indexOf;
+    for (size_t i = 0; i < mState.bodies.size(); ++i) indexOf[mState.bodies[i].id] = i;
+    std::vector<std::vector<Body>> parts(mState.bodies.size());
+    std::vector<DeformableBody> staying;
+    for (DeformableBody& d : mState.deformable) {
+        const size_t i = indexOf.at(d.bodyId);
+        const double sinceBlastS = mState.timeS - d.lastLoadedS;
+        const Material& material = mScene.materials[mState.bodies[i].materialIndex];
+        const bool timedOut = sinceBlastS >= mScene.lattice.maxVibrationS;
+        const bool quiet = sinceBlastS > 0.0 && vibrationEnergyJ(d.lattice) <= mScene.lattice.handoffEnergyFraction * elasticCapacityJ(d.lattice, material);
+        if (!quiet && !timedOut) {
+            staying.push_back(std::move(d));
+            continue;
+        }
+        HandOff h = handOff(mState.bodies[i], d.lattice);
+        mState.handOffs.push_back({mState.timeS, d.bodyId, int64_t(d.lattice.particleCount()), h.brokenBonds, mState.timeS - d.enteredS,
+                                   h.discardedEnergyJ, !quiet});
+        mStats.brokenLinks += h.brokenBonds;
+        for (Body& part : h.parts) part.motion.deformable = false;
+        if (h.parts.size() == 1) {
+            h.parts.front().id = mState.bodies[i].id;
+            h.parts.front().parentId = mState.bodies[i].parentId;
+            mState.bodies[i] = std::move(h.parts.front());
+        } else {
+            parts[i] = std::move(h.parts);
+        }
+    }
+    mState.deformable = std::move(staying);
+    replaceWithParts(parts);
 }
 
 void Simulation::adaptStepToPenetration(double maxPenetrationM)

@@ -14,8 +14,8 @@
 
 namespace spall {
 
-/// A body the solver may move: neither anchored nor asleep.
-inline bool movable(const Body& body) { return !body.anchored && !body.motion.asleep; }
+/// A body the solver may move: neither anchored, asleep nor deformable.
+inline bool movable(const Body& body) { return !body.anchored && !body.motion.asleep && !body.motion.deformable; }
 
 /// Upper bound of the speed of any voxel of the body (unit: m/s).
 inline double maxVoxelSpeedMS(const Body& body)

@@ -17,6 +17,12 @@ struct Material {
     double orientationFactor = 0.1;     ///< limit * (1 - f |link . wave|) (unit: fraction; 0 turns it off)
     double damageRatePerS = 300.0;      ///< Davison–Stevens B in rate form (unit: 1/s)
     double damageStressScalePerPa = 0;  ///< Davison–Stevens C (unit: 1/Pa); 0 means 1 / meanYieldPa
+    // What the deformable phase (fracture.algorithm "lattice") reads: elasticity, and the
+    // tensile strength and fracture energy of its bonds' softening.
+    double youngsModulusPa = 30e9;        ///< (unit: Pa)
+    double poissonRatio = 0.2;            ///< (unit: 1)
+    double tensileStrengthPa = 3e6;       ///< (unit: Pa)
+    double fractureEnergyJPerM2 = 100.0;  ///< energy a crack dissipates per unit of its area, Gf (unit: J/m^2)
     /// Where the numbers come from.
     std::string source;
 };

@@ -13,12 +13,16 @@ enum class FractureAlgorithm {
     YieldLimit,      ///< variable limit (1), with weakening (2) and orientation (3) as switched
     DavisonStevens,  ///< damage accumulation (4)
     None,            ///< unbreakable
+    /// From stress: the deformable phase (lattice/), bonds with the material's E, ν, tensile
+    /// strength and fracture energy, while the blast loads a body and it vibrates.
+    Lattice,
 };
 template <>
 struct EnumNames<FractureAlgorithm> {
     static constexpr std::pair<FractureAlgorithm, const char*> kNames[] = {{FractureAlgorithm::YieldLimit, "yield-limit"},
                                                                            {FractureAlgorithm::DavisonStevens, "davison-stevens"},
-                                                                           {FractureAlgorithm::None, "none"}};
+                                                                           {FractureAlgorithm::None, "none"},
+                                                                           {FractureAlgorithm::Lattice, "lattice"}};
 };
 
 /// What happens to parts smaller than the minimum fragment size.

@@ -7,6 +7,7 @@
 #include <spall/dynamics/Settings.h>
 #include <spall/fracture/Material.h>
 #include <spall/fracture/Settings.h>
+#include <spall/lattice/Settings.h>
 #include <spall/loads/Settings.h>
 #include <spall/voxel/Voxelise.h>
 
@@ -82,6 +83,7 @@ struct Scene {
     BlastSettings blast;
     LoadSettings loads;
     FractureSettings fracture;
+    LatticeSettings lattice;
     TimeStepSettings timeStep;
     CollisionSettings collisions;
     std::vector<Material> materials;  ///< presets plus the scene's own

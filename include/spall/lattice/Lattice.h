@@ -10,6 +10,7 @@
 // C12 = λ, C44 = μ; docs/accuracy.md measures it where surfaces break the bulk).
 #pragma once
 
+#include <spall/fracture/Material.h>
 #include <spall/voxel/Body.h>
 
 #include <Eigen/Core>
@@ -20,17 +21,6 @@
 #include <vector>
 
 namespace spall {
-
-/// What a lattice reproduces: elastic constants, and the tensile strength and fracture energy of
-/// its bonds' linear softening (defaults: a C30/37 concrete's order of magnitude, fib Model Code
-/// 2010: E ≈ 33 GPa, fctm ≈ 2.9 MPa, Gf = 73 fcm^0.18 ≈ 140 N/m).
-struct LatticeMaterial {
-    double densityKgM3 = 2400.0;
-    double youngsModulusPa = 30e9;
-    double poissonRatio = 0.2;
-    double tensileStrengthPa = 3e6;
-    double fractureEnergyJPerM2 = 100.0;
-};
 
 /// One bond's stiffnesses and the volumetric modulus, for voxels of edge h. Derivation (energy
 /// per voxel of the lattice equal to the continuum's, docs/architecture.md): normal and shear
@@ -46,11 +36,14 @@ struct LatticeStiffness {
     double shearModulusPa = 0.0;
     /// Linear softening in tension, crack band style (Bažant & Oh 1983): a bond's normal stretch
     /// peaks at u0 = ft h / E and its traction falls to nothing at uf = 2 Gf / ft, so a broken
-    /// bond has dissipated Gf per unit of its face, whatever h. Needs uf > u0: h < 2 E Gf / ft².
+    /// bond has dissipated Gf per unit of its face, whatever h. That needs uf > u0, h < 2 E Gf / ft²
+    /// (0.55 mm for glass, 1.1 m for brick masonry); above it uf = u0: brittle at the full
+    /// strength, dissipating ft² h / (2E) > Gf.
     double peakStretchM = 0.0;
     double zeroTractionStretchM = 0.0;
 };
-LatticeStiffness calibrateLattice(const LatticeMaterial& material, double voxelSizeM);
+/// From the material's density, E, ν, tensile strength and Gf (fracture/Material.h).
+LatticeStiffness calibrateLattice(const Material& material, double voxelSizeM);
 
 /// A bond joins particle `low` to its +axis neighbour `high`.
 struct LatticeBond {
@@ -72,7 +65,7 @@ struct BondStrain {
 class Lattice {
 public:
     /// A body's voxels at their world places, moving with the body's rigid velocity field.
-    static Lattice fromBody(const Body& body, const LatticeMaterial& material);
+    static Lattice fromBody(const Body& body, const Material& material);
 
     size_t particleCount() const { return positionM.size(); }
     size_t bondCount() const { return bonds.size(); }
@@ -82,19 +75,26 @@ public:
     /// breathing mode (ω² = (8μ + 12λ) h / m) added.
     double stableTimeStepS() const;
     void step(double dtS);
+    /// The bonds' forces from the state (after the state arrays were written from outside, as a
+    /// checkpoint does; each step calls it).
+    void refreshForces();
+    /// Steps over dtS in equal substeps no longer than stableTimeStepS().
+    void advance(double dtS);
 
     double kineticEnergyJ() const;
     /// Of the strains as the last step (or construction) left them.
     double strainEnergyJ() const;
     Eigen::Vector3d linearMomentum() const;
     Eigen::Vector3d angularMomentumAboutOrigin() const;
-    /// The bonds' force on particle p at the end of the last step (unit: N).
-    const Eigen::Vector3d& bondForceN(size_t p) const { return mForceN[p]; }
 
     // State, world frame, one entry per particle.
     std::vector<openvdb::Coord> voxel;  ///< the body's index of each particle
     std::vector<Eigen::Vector3d> positionM, velocityMS, angularVelocityRadS, externalForceN;
     std::vector<Eigen::Quaterniond> orientation;
+    /// The bonds' force and moment on each particle as the last step left them (unit: N, N m):
+    /// velocity Verlet's first half kick of the next step uses them. They depend on the
+    /// velocities half-way through that step (the dashpots), so a checkpoint saves them.
+    std::vector<Eigen::Vector3d> bondForceN, bondMomentNm;
     std::vector<uint8_t> held;  ///< 1: fixed to the world (an anchored voxel)
     std::vector<LatticeBond> bonds;
     /// Per bond: its strength as a fraction of the material's (1 by default; a notch, a weak
@@ -110,6 +110,15 @@ public:
     /// free face's reflection puts spurious tension a few voxels deep (docs/accuracy.md). 0 turns
     /// it off.
     double bulkViscosity = 0.1;
+
+    /// A ground plane n·x = offset the particles' cubes may not sink into: a particle that
+    /// would is put back on it and loses its velocity into it (a perfectly plastic contact, as
+    /// a rigid body's resting contact; no friction). Off unless set.
+    struct Ground {
+        bool enabled = false;
+        Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+        double offsetM = 0.0;
+    } ground;
 
     double voxelSizeM = 0.0;
     double particleMassKg = 0.0;
@@ -127,20 +136,19 @@ private:
     std::array<std::vector<uint32_t>, 6> mBatches;
     /// Per particle and axis, 1 / (its bonds along the axis), or 0 without any.
     std::vector<Eigen::Vector3d> mInverseBondCount;
-    // Per particle: tr ε, λ tr ε / (bonds along each axis), and the bonds' force and moment on it
-    // (external forces apart).
+    // Per particle: tr ε and λ tr ε / (bonds along each axis).
     std::vector<double> mVolumetricStrain;
     std::vector<Eigen::Vector3d> mVolumetricStressShare;
-    std::vector<Eigen::Vector3d> mForceN, mMomentNm;
     double mDashpotPerViscosity = 0.0;  ///< ρ c h² (unit: N s/m)
 
     /// Each particle's tr ε: per axis, the mean stretch (length change / h) of its bonds along it.
     void computeVolumetricStrain();
-    void computeForces();
     /// f(i) for i < count: in parallel for large lattices, in order for small ones.
     template <typename F>
     void forEach(size_t count, const F& f) const;
     void addBondForces(size_t b);
+    /// Puts a particle that sank into the ground back on it (Ground).
+    void keepAboveGround(size_t p);
     /// A bond's stretch (length change) as the volumetric term counts it: in tension times
     /// √(1 − D), so the bond's own share of the volumetric force falls with 1 − D as its
     /// spring's does and the traction follows the softening line (unit: m).

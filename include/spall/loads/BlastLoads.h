@@ -47,6 +47,14 @@ struct Silhouette {
 Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vector3d& chargeM, double shockSpeedMS,
                         const LoadGround& ground);
 
+/// Face by face loads, for bodies that are not rigid (the deformable phase): per body, the mean
+/// force over the step on each exposed face (body.exposedFaces order, world frame, unit: N),
+/// filled where `wanted` is set.
+struct FaceForces {
+    std::vector<char> wanted;
+    std::vector<std::vector<Eigen::Vector3d>> forceN;
+};
+
 /// The blast's loads during one step: the field and the windows open at the step's start.
 class BlastLoads {
 public:
@@ -66,7 +74,9 @@ public:
     /// bodies pressed together clear as one outline, and a face that looks at a charge through
     /// a body or an obstacle box is in shadow and loaded as a rear face by the wave that wraps
     /// around (UFC 3-340-02 §2-15.4's rear-wall load: side-on plus rear drag, with its rise).
-    std::vector<Wrench> stepWrenches(const std::vector<Body>& bodies, const std::vector<char>& loaded, double timeS, double dtS) const;
+    /// With `faces`, the bodies it wants (loaded or not) also get their forces face by face.
+    std::vector<Wrench> stepWrenches(const std::vector<Body>& bodies, const std::vector<char>& loaded, double timeS, double dtS,
+                                     FaceForces* faces = nullptr) const;
 
     /// Per exposed face (in body.exposedFaces order): the impulse per area pushing into it over
     /// [t, t + dt] (unit: Pa s).
@@ -95,9 +105,10 @@ private:
                            size_t excludeGroup, double groundToleranceM, Eigen::Vector3d& travelM) const;
     /// The group's silhouette from each open window's charge (blast engineering only).
     std::vector<Silhouette> silhouettes(const std::vector<const Body*>& group) const;
-    /// stepWrench with the outlines and the faces to skip given.
+    /// stepWrench with the outlines and the faces to skip given; each face's mean force into
+    /// `faceForcesN` (may be null).
     Wrench wrenchOf(const Body& body, const std::vector<Silhouette>& outlines, const Exposure* exposure, size_t bodyIndex, double timeS,
-                    double dtS) const;
+                    double dtS, std::vector<Eigen::Vector3d>* faceForcesN = nullptr) const;
 
     const BlastField& mField;
     const std::vector<OpenWindow>& mWindows;

@@ -7,6 +7,8 @@
 #include <spall/fracture/Events.h>
 #include <spall/fracture/Fracture.h>
 #include <spall/io/Scene.h>
+#include <spall/lattice/Deformable.h>
+#include <spall/loads/BlastLoads.h>
 #include <spall/voxel/Body.h>
 
 #include <functional>
@@ -22,6 +24,18 @@ struct StepStats {
     int64_t steps = 0;
     double minDtS = 0;
     int64_t brokenLinks = 0;
+    int64_t latticeSubsteps = 0;  ///< the deformable phase's, summed over its bodies
+};
+
+/// A body leaving the deformable phase (fracture.algorithm "lattice").
+struct HandOffRecord {
+    double timeS = 0;  ///< (unit: s)
+    int64_t bodyId = 0;
+    int64_t particles = 0;
+    int64_t brokenBonds = 0;
+    double deformableS = 0;       ///< how long it was deformable (unit: s)
+    double discardedEnergyJ = 0;  ///< its vibration then, which the rigid parts do not carry (unit: J)
+    bool timedOut = false;        ///< left at lattice.max_vibration_s, not because it was quiet
 };
 
 /// Everything a simulation carries from one step to the next besides its scene: what a
@@ -30,6 +44,8 @@ struct SimulationState {
     std::vector<Body> bodies;
     std::vector<FractureEvent> events;
     std::vector<DustRecord> dust;
+    std::vector<DeformableBody> deformable;  ///< bodies in the deformable phase, in the order they entered
+    std::vector<HandOffRecord> handOffs;
     double timeS = 0;
     int64_t nextId = 0;
     int64_t initialVoxels = 0;
@@ -68,8 +84,8 @@ public:
     void advanceTo(double timeS);
 
     /// One step toward `targetS` (landing on it when it is near; by default the step is the one
-    /// chosen). Its phases, in order: open windows, choose dt, fracture, split, loads, integrate,
-    /// detect, solve, correct, sleep.
+    /// chosen). Its phases, in order: open windows, choose dt, fracture, split, hand off, enter
+    /// the deformable phase, loads, integrate, deform, detect, solve, correct, sleep.
     void step(double targetS = std::numeric_limits<double>::infinity());
 
     double timeS() const { return mState.timeS; }
@@ -96,6 +112,18 @@ private:
     std::vector<char> fractureBodies(const std::vector<OpenWindow>& windows, double dtS);
     /// Bodies that lost links split into their connected parts (or dust), in body order.
     void splitBodies(const std::vector<char>& cracked);
+    /// Replaces each body i with parts[i] (when not empty): small ones become dust as the
+    /// scene says, the others get ids, and a fracture event records them.
+    void replaceWithParts(std::vector<std::vector<Body>>& parts);
+    /// Bodies the blast reaches become lattices (fracture.algorithm "lattice").
+    void enterDeformablePhase(const std::vector<OpenWindow>& windows);
+    /// Deformable bodies the blast has passed whose vibration has died down (or lasted
+    /// lattice.max_vibration_s) become rigid pieces again.
+    void handOffQuietBodies();
+    /// Each deformable body's lattice through the step under its face loads and gravity.
+    void deformBodies(const FaceForces& faces, const std::vector<OpenWindow>& windows, double dtS);
+    /// The ground as the lattices see it.
+    Lattice::Ground latticeGround() const;
     /// The paper's adaptive step: halve while bodies interpenetrate beyond the tolerance.
     void adaptStepToPenetration(double maxPenetrationM);
     std::pair<Eigen::Vector3d, Eigen::Vector3d> totalMomenta() const;

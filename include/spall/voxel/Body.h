@@ -65,6 +65,9 @@ struct BodyMotion {
     Eigen::Vector3d linearVelocityMS = Eigen::Vector3d::Zero();       ///< (unit: m/s)
     Eigen::Vector3d angularVelocityRadS = Eigen::Vector3d::Zero();    ///< world frame (unit: rad/s)
     bool asleep = false;
+    /// In the deformable phase: its lattice moves it (lattice/Deformable.h) and the rigid phases
+    /// leave it alone.
+    bool deformable = false;
     double restTimeS = 0.0;  ///< how long the body has been below the sleep thresholds (unit: s)
 };
 

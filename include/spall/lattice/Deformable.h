@@ -1,0 +1,73 @@
+// The deformable phase (issue 17): while the blast loads a body and it vibrates, the body is its
+// lattice (lattice/Lattice.h), not a rigid body; once the blast has passed and the vibration has
+// died down, each piece its intact bonds hold together becomes a rigid body again with exactly the
+// particles' linear and angular momentum. Simulation::step calls these in its deform phase.
+#pragma once
+
+#include <spall/lattice/Lattice.h>
+#include <spall/lattice/Settings.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace spall {
+
+/// A body in the deformable phase.
+struct DeformableBody {
+    int64_t bodyId = 0;
+    Lattice lattice;
+    double enteredS = 0.0;     ///< (unit: s)
+    double lastLoadedS = 0.0;  ///< the end of the last step it spent inside an open blast window (unit: s)
+};
+
+/// The lattice of a body entering the phase, moving with the body.
+DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
+                                    const Lattice::Ground& ground, double timeS);
+
+/// Rebuilds a saved lattice (a checkpoint holds only its particles' state, the bond forces velocity
+/// Verlet carries, and its bonds' stretch and strength) from its body; throws InputError when the saved arrays do not fit the body.
+void restoreDeformable(DeformableBody& saved, const Body& body, const Material& material, const LatticeSettings& settings,
+                       const Lattice::Ground& ground);
+
+/// Each particle's external force for the next step: the mean force on each of the body's exposed
+/// faces (body.exposedFaces order, from the loads phase; empty when nothing loads it) on the
+/// particle behind the face, and its weight.
+void setExternalForces(Lattice& lattice, const Body& body, const std::vector<Eigen::Vector3d>& faceForcesN, const Eigen::Vector3d& gravityMS2);
+
+/// Particles taken as one rigid body: the motion with their linear and angular momentum, at the
+/// pose that fits their places best (least squares; Kabsch's rotation).
+struct RigidFit {
+    Eigen::Vector3d centreM = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< body frame (index h) to world
+    Eigen::Vector3d velocityMS = Eigen::Vector3d::Zero();
+    Eigen::Vector3d angularMomentumKgM2S = Eigen::Vector3d::Zero();  ///< about the centre
+    double kineticEnergyJ = 0.0;  ///< the particles' own, translation and spin
+};
+RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& particles);
+
+/// Sets the body's pose and velocities to its lattice's rigid fit (as a whole), so frames, the
+/// history and the other bodies' contacts see where it is. An anchored body stays put.
+void followLattice(Body& body, const Lattice& lattice);
+
+/// The particles in pieces held together by bonds that have not broken (lowest particle first).
+std::vector<std::vector<uint32_t>> latticePieces(const Lattice& lattice);
+
+/// Strain energy plus each piece's kinetic energy about its rigid motion (held pieces: all of
+/// it): what a hand-off now would discard (unit: J).
+double vibrationEnergyJ(const Lattice& lattice);
+
+/// What the body's material can hold elastically: ft² / (2E) times its volume (unit: J), the
+/// scale the hand-off tolerance is a fraction of.
+double elasticCapacityJ(const Lattice& lattice, const Material& material);
+
+/// The body back as rigid bodies: each bond that broke breaks its link (the frames' fracture
+/// surface), and each connected part gets its particles' momenta and best-fit pose; anchored
+/// parts stay where they are. Part ids are left to the caller; with one part, it is the body.
+struct HandOff {
+    std::vector<Body> parts;
+    int64_t brokenBonds = 0;
+    double discardedEnergyJ = 0.0;  ///< vibration the rigid parts cannot carry (unit: J)
+};
+HandOff handOff(const Body& body, const Lattice& lattice);
+
+}  // namespace spall

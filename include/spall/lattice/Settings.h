@@ -1,0 +1,27 @@
+// Settings of the deformable phase (fracture.algorithm "lattice"): plain struct, a unit on every
+// field.
+#pragma once
+
+#include <spall/core/Fields.h>
+
+namespace spall {
+
+struct LatticeSettings {
+    /// Linear bulk viscosity ζ: a dashpot of ζ ρ c h² along each bond (Lattice::bulkViscosity)
+    /// (unit: 1).
+    double bulkViscosity = 0.1;
+    /// A body leaves the deformable phase once the blast has passed it and its vibration (strain
+    /// energy plus kinetic energy about each piece's rigid motion) is below this fraction of
+    /// ft² / (2E) times its volume, the elastic energy it would hold at its tensile strength
+    /// throughout: stresses are then a tenth of the strength or less on average (unit: 1).
+    double handoffEnergyFraction = 0.01;
+    /// ... or at the latest this long after the blast has passed it, the vibration left then
+    /// discarded and reported (unit: s).
+    double maxVibrationS = 0.02;
+};
+
+// Keys and ranges (src/lattice/Settings.cpp).
+template <>
+const std::vector<Field<LatticeSettings>>& fieldTable<LatticeSettings>();
+
+}  // namespace spall

@@ -1,0 +1,211 @@
+#include <spall/lattice/Deformable.h>
+
+#include <spall/core/DisjointSets.h>
+#include <spall/core/Error.h>
+#include <spall/fracture/Fracture.h>
+
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <numeric>
+#include <stdexcept>
+
+namespace spall {
+
+namespace {
+
+/// ω from angular momentum about the centre and the body-frame inertia at `rotation`.
+Eigen::Vector3d angularVelocityOf(const Eigen::Vector3d& angularMomentum, const Eigen::Matrix3d& inertiaLocal, const Eigen::Matrix3d& rotation)
+{
+    return (rotation * inertiaLocal * rotation.transpose()).ldlt().solve(angularMomentum);
+}
+
+/// A particle's place in the body frame, index h (unit: m).
+Eigen::Vector3d restPlaceM(const Lattice& lattice, uint32_t p)
+{
+    const openvdb::Coord& v = lattice.voxel[p];
+    return lattice.voxelSizeM * Eigen::Vector3d(v.x(), v.y(), v.z());
+}
+
+/// The rigid kinetic energy of a fit, with its own inertia (points plus each particle's cube).
+double rigidKineticEnergyJ(const Lattice& lattice, const std::vector<uint32_t>& particles, const RigidFit& fit)
+{
+    const double m = lattice.particleMassKg;
+    Eigen::Vector3d restCentre = Eigen::Vector3d::Zero();
+    for (const uint32_t p : particles) restCentre += restPlaceM(lattice, p);
+    restCentre /= double(particles.size());
+    Eigen::Matrix3d inertia = double(particles.size()) * lattice.particleInertiaKgM2 * Eigen::Matrix3d::Identity();
+    for (const uint32_t p : particles) {
+        const Eigen::Vector3d r = restPlaceM(lattice, p) - restCentre;
+        inertia += m * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
+    }
+    const Eigen::Vector3d omega = angularVelocityOf(fit.angularMomentumKgM2S, inertia, fit.rotation);
+    return 0.5 * m * double(particles.size()) * fit.velocityMS.squaredNorm() + 0.5 * omega.dot(fit.angularMomentumKgM2S);
+}
+
+}  // namespace
+
+DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
+                                    const Lattice::Ground& ground, double timeS)
+{
+    DeformableBody d{body.id, Lattice::fromBody(body, material), timeS, timeS};
+    d.lattice.bulkViscosity = settings.bulkViscosity;
+    d.lattice.ground = ground;
+    return d;
+}
+
+void restoreDeformable(DeformableBody& saved, const Body& body, const Material& material, const LatticeSettings& settings,
+                       const Lattice::Ground& ground)
+{
+    DeformableBody fresh = enterDeformablePhase(body, material, settings, ground, saved.enteredS);
+    fresh.lastLoadedS = saved.lastLoadedS;
+    Lattice& to = fresh.lattice;
+    Lattice& from = saved.lattice;
+    const size_t n = to.particleCount(), bonds = to.bondCount();
+    if (from.positionM.size() != n || from.velocityMS.size() != n || from.angularVelocityRadS.size() != n || from.orientation.size() != n ||
+        from.bondMaxStretchM.size() != bonds || from.bondStrengthScale.size() != bonds || from.bondForceN.size() != n ||
+        from.bondMomentNm.size() != n)
+        throw InputError("saved state: the lattice of body " + std::to_string(body.id) + " does not fit its voxels and links");
+    to.positionM = std::move(from.positionM);
+    to.velocityMS = std::move(from.velocityMS);
+    to.angularVelocityRadS = std::move(from.angularVelocityRadS);
+    to.orientation = std::move(from.orientation);
+    to.bondMaxStretchM = std::move(from.bondMaxStretchM);
+    to.bondStrengthScale = std::move(from.bondStrengthScale);
+    to.refreshForces();  // the volumetric strain; the forces as the step left them come next
+    to.bondForceN = std::move(from.bondForceN);
+    to.bondMomentNm = std::move(from.bondMomentNm);
+    saved = std::move(fresh);
+}
+
+void setExternalForces(Lattice& lattice, const Body& body, const std::vector<Eigen::Vector3d>& faceForcesN, const Eigen::Vector3d& gravityMS2)
+{
+    const Eigen::Vector3d weight = lattice.particleMassKg * gravityMS2;
+    for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = lattice.held[p] ? Eigen::Vector3d::Zero() : weight;
+    if (faceForcesN.empty()) return;
+    // Faces and particles are both in the grid's leaf order: walk them side by side.
+    size_t p = 0;
+    for (size_t f = 0; f < body.exposedFaces.size(); ++f) {
+        while (p < lattice.particleCount() && lattice.voxel[p] != body.exposedFaces[f].voxel) ++p;
+        if (p == lattice.particleCount()) throw std::logic_error("setExternalForces: the body's faces are not in its lattice's order");
+        if (!lattice.held[p]) lattice.externalForceN[p] += faceForcesN[f];
+    }
+}
+
+RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& particles)
+{
+    RigidFit fit;
+    const double m = lattice.particleMassKg, n = double(particles.size());
+    const double cubeMoment = lattice.voxelSizeM * lattice.voxelSizeM / 12.0;
+    Eigen::Vector3d restCentre = Eigen::Vector3d::Zero();
+    for (const uint32_t p : particles) {
+        fit.centreM += lattice.positionM[p];
+        fit.velocityMS += lattice.velocityMS[p];
+        restCentre += restPlaceM(lattice, p);
+    }
+    fit.centreM /= n;
+    fit.velocityMS /= n;
+    restCentre /= n;
+    // Kabsch (1976): the rotation R minimising Σ |R r_i - d_i|² is U diag(1, 1, det) Vᵀ from the
+    // SVD of Σ d_i r_iᵀ; over the points of each particle's cube too (their second moment, h²/12
+    // per axis, times its orientation), so one particle or a row of them has a rotation as well.
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+    for (const uint32_t p : particles) {
+        const Eigen::Vector3d d = lattice.positionM[p] - fit.centreM;
+        covariance += d * (restPlaceM(lattice, p) - restCentre).transpose() + cubeMoment * lattice.orientation[p].toRotationMatrix();
+        fit.angularMomentumKgM2S += d.cross(m * (lattice.velocityMS[p] - fit.velocityMS)) + lattice.particleInertiaKgM2 * lattice.angularVelocityRadS[p];
+        fit.kineticEnergyJ += 0.5 * m * lattice.velocityMS[p].squaredNorm() + 0.5 * lattice.particleInertiaKgM2 * lattice.angularVelocityRadS[p].squaredNorm();
+    }
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d flip = Eigen::Matrix3d::Identity();
+    flip(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+    fit.rotation = svd.matrixU() * flip * svd.matrixV().transpose();
+    return fit;
+}
+
+void followLattice(Body& body, const Lattice& lattice)
+{
+    if (body.anchored) return;
+    std::vector<uint32_t> all(lattice.particleCount());
+    std::iota(all.begin(), all.end(), 0u);
+    const RigidFit fit = fitRigidMotion(lattice, all);
+    body.motion.positionM = fit.centreM;
+    body.motion.orientation = Eigen::Quaterniond(fit.rotation).normalized();
+    body.motion.linearVelocityMS = fit.velocityMS;
+    body.motion.angularVelocityRadS = angularVelocityOf(fit.angularMomentumKgM2S, body.mass.inertiaKgM2, fit.rotation);
+}
+
+std::vector<std::vector<uint32_t>> latticePieces(const Lattice& lattice)
+{
+    DisjointSets sets(lattice.particleCount());
+    for (size_t b = 0; b < lattice.bondCount(); ++b)
+        if (lattice.bondDamage(b) < 1.0) sets.join(lattice.bonds[b].low, lattice.bonds[b].high);
+    std::vector<int32_t> pieceOfRoot(lattice.particleCount(), -1);
+    std::vector<std::vector<uint32_t>> pieces;
+    for (uint32_t p = 0; p < lattice.particleCount(); ++p) {
+        int32_t& piece = pieceOfRoot[sets.root(p)];
+        if (piece < 0) {
+            piece = int32_t(pieces.size());
+            pieces.emplace_back();
+        }
+        pieces[size_t(piece)].push_back(p);
+    }
+    return pieces;
+}
+
+double vibrationEnergyJ(const Lattice& lattice)
+{
+    double energy = lattice.strainEnergyJ();
+    for (const std::vector<uint32_t>& piece : latticePieces(lattice)) {
+        const RigidFit fit = fitRigidMotion(lattice, piece);
+        const bool held = std::any_of(piece.begin(), piece.end(), [&](uint32_t p) { return lattice.held[p] != 0; });
+        energy += fit.kineticEnergyJ - (held ? 0.0 : rigidKineticEnergyJ(lattice, piece, fit));
+    }
+    return energy;
+}
+
+double elasticCapacityJ(const Lattice& lattice, const Material& material)
+{
+    const double volume = double(lattice.particleCount()) * lattice.voxelSizeM * lattice.voxelSizeM * lattice.voxelSizeM;
+    return material.tensileStrengthPa * material.tensileStrengthPa / (2.0 * material.youngsModulusPa) * volume;
+}
+
+HandOff handOff(const Body& body, const Lattice& lattice)
+{
+    HandOff result;
+    Body whole = body;
+    whole.grid = body.grid->deepCopy();
+    auto links = whole.grid->getAccessor();
+    for (size_t b = 0; b < lattice.bondCount(); ++b) {
+        if (lattice.bondDamage(b) < 1.0) continue;
+        const LatticeBond& bond = lattice.bonds[b];
+        result.brokenBonds += breakLink(links, lattice.voxel[bond.low], 2 * bond.axis + 1) ? 1 : 0;
+    }
+    refreshDerivedData(whole);
+    result.parts = splitBody(whole);
+    if (result.parts.empty()) result.parts.push_back(std::move(whole));
+    // Particle numbers by voxel (a fragment keeps its parent's index space).
+    LinkTree particleOf(-1);
+    for (uint32_t p = 0; p < lattice.particleCount(); ++p) particleOf.setValueOn(lattice.voxel[p], int32_t(p));
+    double rigidEnergyJ = 0.0;
+    for (Body& part : result.parts) {
+        if (part.anchored) {
+            part.motion.linearVelocityMS = part.motion.angularVelocityRadS = Eigen::Vector3d::Zero();
+            continue;
+        }
+        std::vector<uint32_t> particles;
+        for (auto it = part.grid->constTree().cbeginValueOn(); it; ++it) particles.push_back(uint32_t(particleOf.getValue(it.getCoord())));
+        const RigidFit fit = fitRigidMotion(lattice, particles);
+        part.motion.positionM = fit.centreM;
+        part.motion.orientation = Eigen::Quaterniond(fit.rotation).normalized();
+        part.motion.linearVelocityMS = fit.velocityMS;
+        part.motion.angularVelocityRadS = angularVelocityOf(fit.angularMomentumKgM2S, part.mass.inertiaKgM2, part.motion.orientation.toRotationMatrix());
+        part.motion.asleep = false;
+        part.motion.restTimeS = 0.0;
+        rigidEnergyJ += 0.5 * part.mass.massKg * fit.velocityMS.squaredNorm() + 0.5 * part.motion.angularVelocityRadS.dot(fit.angularMomentumKgM2S);
+    }
+    result.discardedEnergyJ = lattice.kineticEnergyJ() + lattice.strainEnergyJ() - rigidEnergyJ;
+    return result;
+}
+
+}  // namespace spall

@@ -1,0 +1,16 @@
+#include <spall/lattice/Settings.h>
+
+namespace spall {
+
+template <>
+const std::vector<Field<LatticeSettings>>& fieldTable<LatticeSettings>()
+{
+    static const std::vector<Field<LatticeSettings>> table = {
+        {"lattice.bulk_viscosity", &LatticeSettings::bulkViscosity, closed(0.0, 1.0)},
+        {"lattice.handoff_energy_fraction", &LatticeSettings::handoffEnergyFraction, closed(0.0, 1.0)},
+        {"lattice.max_vibration_s", &LatticeSettings::maxVibrationS, closed(0.0, 10.0)},
+    };
+    return table;
+}
+
+}  // namespace spall
