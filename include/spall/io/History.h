@@ -15,7 +15,7 @@
 namespace spall {
 
 inline constexpr const char* kHistoryFormatName = "spall-history";
-inline constexpr int kHistoryFormatVersion = 1;
+inline constexpr int kHistoryFormatVersion = 2;
 
 struct FrameRow {
     double timeS = 0;
@@ -28,6 +28,8 @@ struct FrameRow {
     int64_t bodyCount = 0;
     int64_t voxelCount = 0;
     double dustMassKg = 0;    ///< cumulative
+    int64_t latticeSubsteps = 0;     ///< the deformable phase's, over its bodies, since the previous frame
+    double discardedVibrationJ = 0;  ///< cumulative: vibration the hand-offs left behind (HandOffRecord)
 };
 
 struct BodyRow {
@@ -94,8 +96,8 @@ struct History {
     bool runComplete = false;
     double voxelSizeM = 0;
     uint64_t seed = 0;
-    std::vector<double> timeS, kineticEnergyJ, minDtS, dustMassKg;
-    std::vector<int64_t> bodyOffset, brokenLinks, steps, bodyCount, voxelCount;
+    std::vector<double> timeS, kineticEnergyJ, minDtS, dustMassKg, discardedVibrationJ;
+    std::vector<int64_t> bodyOffset, brokenLinks, steps, bodyCount, voxelCount, latticeSubsteps;
     std::vector<Eigen::Vector3d> linearMomentum, angularMomentum;
     std::vector<int64_t> bodyId, bodyParentId, bodyVoxelCount;
     std::vector<double> bodyMassKg;
