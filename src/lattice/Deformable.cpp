@@ -46,16 +46,15 @@ double rigidKineticEnergyJ(const Lattice& lattice, const std::vector<uint32_t>& 
 }  // namespace
 
 DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
-                                    const Lattice::Ground& ground, double timeS)
+                                    const LatticeGround& ground, double timeS)
 {
-    DeformableBody d{body.id, Lattice::fromBody(body, material), timeS, timeS};
+    DeformableBody d{body.id, Lattice::fromBody(body, material, ground), timeS, timeS};
     d.lattice.bulkViscosity = settings.bulkViscosity;
-    d.lattice.ground = ground;
     return d;
 }
 
 void restoreDeformable(DeformableBody& saved, const Body& body, const Material& material, const LatticeSettings& settings,
-                       const Lattice::Ground& ground)
+                       const LatticeGround& ground)
 {
     DeformableBody fresh = enterDeformablePhase(body, material, settings, ground, saved.enteredS);
     fresh.lastLoadedS = saved.lastLoadedS;
@@ -126,9 +125,9 @@ RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& par
 void followLattice(Body& body, const Lattice& lattice)
 {
     if (body.anchored) return;
-    std::vector<uint32_t> all(lattice.particleCount());
-    std::iota(all.begin(), all.end(), 0u);
-    const RigidFit fit = fitRigidMotion(lattice, all);
+    std::vector<uint32_t> voxels(lattice.voxelParticleCount);
+    std::iota(voxels.begin(), voxels.end(), 0u);
+    const RigidFit fit = fitRigidMotion(lattice, voxels);
     body.motion.positionM = fit.centreM;
     body.motion.orientation = Eigen::Quaterniond(fit.rotation).normalized();
     body.motion.linearVelocityMS = fit.velocityMS;
@@ -166,7 +165,7 @@ double vibrationEnergyJ(const Lattice& lattice)
 
 double elasticCapacityJ(const Lattice& lattice, const Material& material)
 {
-    const double volume = double(lattice.particleCount()) * lattice.voxelSizeM * lattice.voxelSizeM * lattice.voxelSizeM;
+    const double volume = double(lattice.voxelParticleCount) * lattice.voxelSizeM * lattice.voxelSizeM * lattice.voxelSizeM;
     return material.tensileStrengthPa * material.tensileStrengthPa / (2.0 * material.youngsModulusPa) * volume;
 }
 
@@ -179,6 +178,14 @@ HandOff handOff(const Body& body, const Lattice& lattice)
     for (size_t b = 0; b < lattice.bondCount(); ++b) {
         if (lattice.bondDamage(b) < 1.0) continue;
         const LatticeBond& bond = lattice.bonds[b];
+        const uint32_t groundPoint = std::max(bond.low, bond.high);
+        if (groundPoint >= lattice.voxelParticleCount) {
+            // An anchor: its voxel lets go of the ground.
+            const openvdb::Coord& v = lattice.voxel[std::min(bond.low, bond.high)];
+            links.setValueOn(v, links.getValue(v) & ~kAnchorBit);
+            ++result.brokenAnchors;
+            continue;
+        }
         result.brokenBonds += breakLink(links, lattice.voxel[bond.low], 2 * bond.axis + 1) ? 1 : 0;
     }
     refreshDerivedData(whole);
@@ -186,7 +193,7 @@ HandOff handOff(const Body& body, const Lattice& lattice)
     if (result.parts.empty()) result.parts.push_back(std::move(whole));
     // Particle numbers by voxel (a fragment keeps its parent's index space).
     LinkTree particleOf(-1);
-    for (uint32_t p = 0; p < lattice.particleCount(); ++p) particleOf.setValueOn(lattice.voxel[p], int32_t(p));
+    for (uint32_t p = 0; p < lattice.voxelParticleCount; ++p) particleOf.setValueOn(lattice.voxel[p], int32_t(p));
     double rigidEnergyJ = 0.0;
     for (Body& part : result.parts) {
         if (part.anchored) {

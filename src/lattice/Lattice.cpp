@@ -68,7 +68,7 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
     return k;
 }
 
-Lattice Lattice::fromBody(const Body& body, const Material& material)
+Lattice Lattice::fromBody(const Body& body, const Material& material, const LatticeGround& ground)
 {
     Lattice lattice;
     const double h = body.voxelSizeM;
@@ -76,56 +76,100 @@ Lattice Lattice::fromBody(const Body& body, const Material& material)
     lattice.particleMassKg = material.densityKgM3 * h * h * h;
     lattice.particleInertiaKgM2 = lattice.particleMassKg * h * h / 6.0;
     lattice.stiffness = calibrateLattice(material, h);
-    // Particle numbers by voxel, in a tree of the body's own shape.
-    LinkTree index(-1);
-    for (auto it = body.grid->constTree().cbeginValueOn(); it; ++it) {
-        index.setValueOn(it.getCoord(), int32_t(lattice.voxel.size()));
-        lattice.voxel.push_back(it.getCoord());
-        const Eigen::Vector3d offset = body.motion.orientation * body.voxelOffsetM(it.getCoord());
-        lattice.positionM.push_back(body.motion.positionM + offset);
-        lattice.velocityMS.push_back(body.motion.linearVelocityMS + body.motion.angularVelocityRadS.cross(offset));
-        lattice.angularVelocityRadS.push_back(body.motion.angularVelocityRadS);
-        lattice.orientation.push_back(body.motion.orientation);
-        lattice.held.push_back((it.getValue() & kAnchorBit) ? 1 : 0);
-        if (lattice.held.back()) lattice.velocityMS.back() = lattice.angularVelocityRadS.back() = Eigen::Vector3d::Zero();
-    }
-    const size_t n = lattice.voxel.size();
-    lattice.externalForceN.assign(n, Eigen::Vector3d::Zero());
-    lattice.mBondAcross.assign(n, {-1, -1, -1, -1, -1, -1});
-    auto links = body.grid->getConstAccessor();
-    openvdb::tree::ValueAccessor<const LinkTree> indices(index);
-    for (uint32_t p = 0; p < n; ++p) {
-        const int32_t bits = links.getValue(lattice.voxel[p]);
-        for (const int face : {kPosX, kPosY, kPosZ}) {
-            if (!(bits & (1 << face))) continue;
-            const int32_t q = indices.getValue(lattice.voxel[p] + faceOffset(face));
-            lattice.mBondAcross[p][face] = lattice.mBondAcross[q][oppositeFace(face)] = int32_t(lattice.bonds.size());
-            const int axis = faceAxis(face);
-            lattice.mBatches[2 * axis + (lattice.voxel[p][axis] & 1)].push_back(uint32_t(lattice.bonds.size()));
-            lattice.bonds.push_back({p, uint32_t(q), axis});
-        }
-    }
+    lattice.ground = ground;
+    LinkTree index(-1);  // particle numbers by voxel, in a tree of the body's own shape
+    lattice.addVoxelParticles(body, index);
+    lattice.addLinkBonds(body, index);
+    if (ground.enabled) lattice.addGroundBonds(body, index);
     lattice.bondStrengthScale.assign(lattice.bonds.size(), 1.0);
+    lattice.bondMaxStretchM.assign(lattice.bonds.size(), 0.0);
     const double pWaveSpeed = std::sqrt((lattice.stiffness.lameLambdaPa + 2.0 * lattice.stiffness.shearModulusPa) / material.densityKgM3);
     lattice.mDashpotPerViscosity = material.densityKgM3 * pWaveSpeed * h * h;
-    lattice.bondMaxStretchM.assign(lattice.bonds.size(), 0.0);
-    // λ condensed over the axes a particle has no bond along (σ = 0 there): λ for three axes,
-    // 2μλ / (λ + 2μ) for two (plane stress), λμ / (λ + μ) for one (a bar: E = 2μ + that).
-    const double lambda = lattice.stiffness.lameLambdaPa, mu = lattice.stiffness.shearModulusPa;
-    const double condensed[4] = {0.0, lambda * mu / (lambda + mu), 2.0 * mu * lambda / (lambda + 2.0 * mu), lambda};
-    lattice.mLambdaPa.resize(n);
-    lattice.mInverseBondCount.resize(n);
-    for (size_t p = 0; p < n; ++p) {
-        int axes = 0;
-        for (int axis = 0; axis < 3; ++axis) {
-            const int count = int(lattice.mBondAcross[p][2 * axis] >= 0) + int(lattice.mBondAcross[p][2 * axis + 1] >= 0);
-            lattice.mInverseBondCount[p][axis] = count > 0 ? 1.0 / count : 0.0;
-            axes += count > 0;
-        }
-        lattice.mLambdaPa[p] = condensed[axes];
-    }
+    lattice.condenseVolumetricModulus();
     lattice.refreshForces();
     return lattice;
+}
+
+void Lattice::addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& positionM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
+                          const Eigen::Quaterniond& q, bool isHeld)
+{
+    voxel.push_back(ijk);
+    this->positionM.push_back(positionM);
+    velocityMS.push_back(isHeld ? Eigen::Vector3d::Zero() : velocity);
+    angularVelocityRadS.push_back(isHeld ? Eigen::Vector3d::Zero() : spin);
+    orientation.push_back(q);
+    held.push_back(isHeld ? 1 : 0);
+    externalForceN.push_back(Eigen::Vector3d::Zero());
+    mBondAcross.push_back({-1, -1, -1, -1, -1, -1});
+}
+
+void Lattice::addVoxelParticles(const Body& body, LinkTree& index)
+{
+    for (auto it = body.grid->constTree().cbeginValueOn(); it; ++it) {
+        index.setValueOn(it.getCoord(), int32_t(voxel.size()));
+        const Eigen::Vector3d offset = body.motion.orientation * body.voxelOffsetM(it.getCoord());
+        addParticle(it.getCoord(), body.motion.positionM + offset, body.motion.linearVelocityMS + body.motion.angularVelocityRadS.cross(offset),
+                    body.motion.angularVelocityRadS, body.motion.orientation, (it.getValue() & kAnchorBit) != 0);
+    }
+    voxelParticleCount = voxel.size();
+}
+
+void Lattice::addBond(uint32_t low, uint32_t high, int axis)
+{
+    mBondAcross[low][2 * axis + 1] = mBondAcross[high][2 * axis] = int32_t(bonds.size());
+    mBatches[2 * axis + (voxel[low][axis] & 1)].push_back(uint32_t(bonds.size()));
+    bonds.push_back({low, high, axis});
+}
+
+void Lattice::addLinkBonds(const Body& body, const LinkTree& index)
+{
+    auto links = body.grid->getConstAccessor();
+    openvdb::tree::ValueAccessor<const LinkTree> indices(index);
+    for (uint32_t p = 0; p < voxelParticleCount; ++p) {
+        const int32_t bits = links.getValue(voxel[p]);
+        for (const int face : {kPosX, kPosY, kPosZ})
+            if (bits & (1 << face)) addBond(p, uint32_t(indices.getValue(voxel[p] + faceOffset(face))), faceAxis(face));
+    }
+}
+
+void Lattice::addGroundBonds(const Body& body, const LinkTree& index)
+{
+    // The face of the body's voxels that looks most directly into the ground.
+    const Eigen::Vector3d down = body.motion.orientation.inverse() * -ground.normal;
+    int axis = 0;
+    down.cwiseAbs().maxCoeff(&axis);
+    const int face = 2 * axis + (down[axis] > 0.0 ? 1 : 0);
+    const Eigen::Vector3d step = body.motion.orientation * (voxelSizeM * faceNormal(face));
+    for (uint32_t p = 0; p < voxelParticleCount; ++p) {
+        const openvdb::Coord below = voxel[p] + faceOffset(face);
+        if (!held[p] || index.isValueOn(below)) continue;
+        // The ground point: a held particle a voxel below, as if the ground were more of the
+        // material, joined by a bond of the material's own stiffness and strength.
+        const uint32_t groundPoint = uint32_t(particleCount());
+        addParticle(below, positionM[p] + step, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), body.motion.orientation, true);
+        held[p] = 0;
+        if (face & 1) addBond(p, groundPoint, axis);
+        else addBond(groundPoint, p, axis);
+    }
+}
+
+void Lattice::condenseVolumetricModulus()
+{
+    // λ condensed over the axes a particle has no bond along (σ = 0 there): λ for three axes,
+    // 2μλ / (λ + 2μ) for two (plane stress), λμ / (λ + μ) for one (a bar: E = 2μ + that).
+    const double lambda = stiffness.lameLambdaPa, mu = stiffness.shearModulusPa;
+    const double condensed[4] = {0.0, lambda * mu / (lambda + mu), 2.0 * mu * lambda / (lambda + 2.0 * mu), lambda};
+    mLambdaPa.resize(particleCount());
+    mInverseBondCount.resize(particleCount());
+    for (size_t p = 0; p < particleCount(); ++p) {
+        int axes = 0;
+        for (int axis = 0; axis < 3; ++axis) {
+            const int count = int(mBondAcross[p][2 * axis] >= 0) + int(mBondAcross[p][2 * axis + 1] >= 0);
+            mInverseBondCount[p][axis] = count > 0 ? 1.0 / count : 0.0;
+            axes += count > 0;
+        }
+        mLambdaPa[p] = condensed[axes];
+    }
 }
 
 double Lattice::stableTimeStepS() const
@@ -219,8 +263,10 @@ void Lattice::addBondForces(size_t b)
     const double volumetric = stretchFactor * voxelSizeM * voxelSizeM * (mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a]);
     Eigen::Vector3d force = s.frame * local - volumetric / arm.norm() * arm;
     if (bulkViscosity > 0.0) {
+        // A crack opening carries no viscous stress either: the dashpot softens with the spring.
         const Eigen::Vector3d along = arm / arm.norm();
-        force -= bulkViscosity * mDashpotPerViscosity * (velocityMS[bond.high] - velocityMS[bond.low]).dot(along) * along;
+        const double opening = arm.norm() > voxelSizeM ? intact : 1.0;
+        force -= opening * bulkViscosity * mDashpotPerViscosity * (velocityMS[bond.high] - velocityMS[bond.low]).dot(along) * along;
     }
     const Eigen::Vector3d pairMoment = -0.5 * arm.cross(force);
     Eigen::Vector3d bending = -intact * k.bendingNmPerRad * s.rotationRad;

@@ -178,6 +178,7 @@ void transferFields(Archive& a, C& c, std::vector<uint8_t>& hasDamage)
         a.pod(h.bodyId, "hand-off body");
         a.pod(h.particles, "hand-off particles");
         a.pod(h.brokenBonds, "hand-off broken bonds");
+        a.pod(h.brokenAnchors, "hand-off broken anchors");
         a.pod(h.deformableS, "hand-off duration");
         a.pod(h.discardedEnergyJ, "hand-off energy");
         a.flag(h.timedOut, "hand-off timed out");

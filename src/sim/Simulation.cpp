@@ -171,7 +171,7 @@ Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene
     }
 }
 
-Lattice::Ground Simulation::latticeGround() const
+LatticeGround Simulation::latticeGround() const
 {
     const GroundPlane& g = mScene.world.ground;
     return {g.enabled, g.normal.normalized(), g.offsetM};
@@ -366,7 +366,7 @@ void Simulation::enterDeformablePhase(const std::vector<OpenWindow>& windows)
 {
     if (mScene.fracture.algorithm != FractureAlgorithm::Lattice || windows.empty()) return;
     for (Body& body : mState.bodies) {
-        if (body.motion.deformable || body.linkCount == 0 || !bodyInWindows(body, *mField, windows)) continue;
+        if (body.motion.deformable || (body.linkCount == 0 && !body.anchored) || !bodyInWindows(body, *mField, windows)) continue;
         mState.deformable.push_back(
             spall::enterDeformablePhase(body, mScene.materials[body.materialIndex], mScene.lattice, latticeGround(), mState.timeS));
         body.motion.deformable = true;
@@ -410,7 +410,8 @@ void Simulation::handOffQuietBodies()
             continue;
         }
         HandOff h = handOff(mState.bodies[i], d.lattice);
-        mState.handOffs.push_back({mState.timeS, d.bodyId, int64_t(d.lattice.particleCount()), h.brokenBonds, mState.timeS - d.enteredS,
+        mState.handOffs.push_back({mState.timeS, d.bodyId, int64_t(d.lattice.voxelParticleCount), h.brokenBonds, h.brokenAnchors,
+                                   mState.timeS - d.enteredS,
                                    h.discardedEnergyJ, !quiet});
         mStats.brokenLinks += h.brokenBonds;
         for (Body& part : h.parts) part.motion.deformable = false;

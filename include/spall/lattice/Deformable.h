@@ -22,12 +22,12 @@ struct DeformableBody {
 
 /// The lattice of a body entering the phase, moving with the body.
 DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
-                                    const Lattice::Ground& ground, double timeS);
+                                    const LatticeGround& ground, double timeS);
 
 /// Rebuilds a saved lattice (a checkpoint holds only its particles' state, the bond forces velocity
 /// Verlet carries, and its bonds' stretch and strength) from its body; throws InputError when the saved arrays do not fit the body.
 void restoreDeformable(DeformableBody& saved, const Body& body, const Material& material, const LatticeSettings& settings,
-                       const Lattice::Ground& ground);
+                       const LatticeGround& ground);
 
 /// Each particle's external force for the next step: the mean force on each of the body's exposed
 /// faces (body.exposedFaces order, from the loads phase; empty when nothing loads it) on the
@@ -66,6 +66,7 @@ double elasticCapacityJ(const Lattice& lattice, const Material& material);
 struct HandOff {
     std::vector<Body> parts;
     int64_t brokenBonds = 0;
+    int64_t brokenAnchors = 0;  ///< bonds to the ground that broke
     double discardedEnergyJ = 0.0;  ///< vibration the rigid parts cannot carry (unit: J)
 };
 HandOff handOff(const Body& body, const Lattice& lattice);

@@ -58,14 +58,26 @@ struct BondStrain {
     Eigen::Vector3d rotationRad = Eigen::Vector3d::Zero();    ///< of high relative to low
 };
 
+/// A ground plane n·x = offset the particles' cubes may not sink into: a particle that would is
+/// put back on it and loses its velocity into it (a perfectly plastic contact, as a rigid body's
+/// resting contact; no friction). Off unless set.
+struct LatticeGround {
+    bool enabled = false;
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+    double offsetM = 0.0;
+};
+
 /// Particles (one per voxel, in the grid's leaf order) and bonds (one per intact link) as flat
 /// arrays. The caller sets externalForceN before a step (it acts through the step); step()
 /// integrates by velocity Verlet, symplectic, so with no damping the energy oscillates but does
 /// not drift. Held particles (the body's anchored voxels) stay where they are.
 class Lattice {
 public:
-    /// A body's voxels at their world places, moving with the body's rigid velocity field.
-    static Lattice fromBody(const Body& body, const Material& material);
+    /// A body's voxels at their world places, moving with the body's rigid velocity field. With
+    /// a ground, each anchored voxel is bonded to a held ground point a voxel below it (across
+    /// the face that looks most directly into the ground) by a bond like the others, so a body
+    /// can break at its base; without one, anchored voxels are held.
+    static Lattice fromBody(const Body& body, const Material& material, const LatticeGround& ground = LatticeGround());
 
     size_t particleCount() const { return positionM.size(); }
     size_t bondCount() const { return bonds.size(); }
@@ -88,7 +100,10 @@ public:
     Eigen::Vector3d angularMomentumAboutOrigin() const;
 
     // State, world frame, one entry per particle.
-    std::vector<openvdb::Coord> voxel;  ///< the body's index of each particle
+    /// Particles [0, voxelParticleCount) are the body's voxels, in its leaf order; those after
+    /// them are its anchors' ground points (held).
+    size_t voxelParticleCount = 0;
+    std::vector<openvdb::Coord> voxel;  ///< the body's index of each particle (a ground point: the cell below its voxel)
     std::vector<Eigen::Vector3d> positionM, velocityMS, angularVelocityRadS, externalForceN;
     std::vector<Eigen::Quaterniond> orientation;
     /// The bonds' force and moment on each particle as the last step left them (unit: N, N m):
@@ -106,19 +121,12 @@ public:
 
     /// Linear bulk viscosity: a dashpot along each bond of ζ ρ c h² (c the P-wave speed), as
     /// explicit codes damp the ringing of a discretised shock front (von Neumann & Richtmyer 1950;
-    /// LS-DYNA's linear term Q2, 0.06 by default there). Without it a sharp front rings and a
+    /// LS-DYNA's linear term Q2, 0.06 by default there), softening with the bond as it opens (a
+    /// crack carries no viscous stress). Without it a sharp front rings and a
     /// free face's reflection puts spurious tension a few voxels deep (docs/accuracy.md). 0 turns
     /// it off.
     double bulkViscosity = 0.1;
-
-    /// A ground plane n·x = offset the particles' cubes may not sink into: a particle that
-    /// would is put back on it and loses its velocity into it (a perfectly plastic contact, as
-    /// a rigid body's resting contact; no friction). Off unless set.
-    struct Ground {
-        bool enabled = false;
-        Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
-        double offsetM = 0.0;
-    } ground;
+    LatticeGround ground;
 
     double voxelSizeM = 0.0;
     double particleMassKg = 0.0;
@@ -143,11 +151,20 @@ private:
 
     /// Each particle's tr ε: per axis, the mean stretch (length change / h) of its bonds along it.
     void computeVolumetricStrain();
+    // Building (fromBody).
+    void addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& positionM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
+                     const Eigen::Quaterniond& q, bool isHeld);
+    void addVoxelParticles(const Body& body, LinkTree& index);
+    /// A bond from `low` to its +axis neighbour `high`, in its batch.
+    void addBond(uint32_t low, uint32_t high, int axis);
+    void addLinkBonds(const Body& body, const LinkTree& index);
+    void addGroundBonds(const Body& body, const LinkTree& index);
+    void condenseVolumetricModulus();
     /// f(i) for i < count: in parallel for large lattices, in order for small ones.
     template <typename F>
     void forEach(size_t count, const F& f) const;
     void addBondForces(size_t b);
-    /// Puts a particle that sank into the ground back on it (Ground).
+    /// Puts a particle that sank into the ground back on it (LatticeGround).
     void keepAboveGround(size_t p);
     /// A bond's stretch (length change) as the volumetric term counts it: in tension times
     /// √(1 − D), so the bond's own share of the volumetric force falls with 1 − D as its

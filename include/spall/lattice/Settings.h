@@ -16,8 +16,10 @@ struct LatticeSettings {
     /// throughout: stresses are then a tenth of the strength or less on average (unit: 1).
     double handoffEnergyFraction = 0.01;
     /// ... or at the latest this long after the blast has passed it, the vibration left then
-    /// discarded and reported (unit: s).
-    double maxVibrationS = 0.02;
+    /// discarded and reported. Long enough for a wall's slowest bending mode to swing through
+    /// once (a 2.5 m brick cantilever 0.3 m thick: 80 ms), since that swing is what breaks a
+    /// wall at its base; vibration that outlasts it is rigid-body motion's loss (unit: s).
+    double maxVibrationS = 0.1;
 };
 
 // Keys and ranges (src/lattice/Settings.cpp).

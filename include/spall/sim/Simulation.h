@@ -33,6 +33,7 @@ struct HandOffRecord {
     int64_t bodyId = 0;
     int64_t particles = 0;
     int64_t brokenBonds = 0;
+    int64_t brokenAnchors = 0;
     double deformableS = 0;       ///< how long it was deformable (unit: s)
     double discardedEnergyJ = 0;  ///< its vibration then, which the rigid parts do not carry (unit: J)
     bool timedOut = false;        ///< left at lattice.max_vibration_s, not because it was quiet
@@ -123,7 +124,7 @@ private:
     /// Each deformable body's lattice through the step under its face loads and gravity.
     void deformBodies(const FaceForces& faces, const std::vector<OpenWindow>& windows, double dtS);
     /// The ground as the lattices see it.
-    Lattice::Ground latticeGround() const;
+    LatticeGround latticeGround() const;
     /// The paper's adaptive step: halve while bodies interpenetrate beyond the tolerance.
     void adaptStepToPenetration(double maxPenetrationM);
     std::pair<Eigen::Vector3d, Eigen::Vector3d> totalMomenta() const;
