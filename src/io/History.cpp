@@ -143,7 +143,7 @@ struct HistoryWriter::Impl {
     std::string path;
     hid_t file = -1;
     hid_t groups[6] = {-1, -1, -1, -1, -1, -1};
-    Series time, bodyOffset, kinetic, linear, angular, broken, steps, minDt, bodyCount, voxelCount, dustMass, latticeSubsteps, discardedVibration;
+    Series time, bodyOffset, kinetic, linear, angular, broken, steps, minDt, bodyCount, voxelCount, dustMass, latticeParticleSteps, discardedVibration;
     Series id, parent, position, orientation, linVel, angVel, mass, voxels, asleep, anchored;
     Series eventTime, eventParent, eventChildOffset, eventChild;
     Series dustTime, dustParent, dustVoxels, dustMassRows, dustMomentum;
@@ -158,7 +158,7 @@ struct HistoryWriter::Impl {
     void close()
     {
         for (Series* s : {&time, &bodyOffset, &kinetic, &linear, &angular, &broken, &steps, &minDt, &bodyCount, &voxelCount, &dustMass,
-                          &latticeSubsteps, &discardedVibration,
+                          &latticeParticleSteps, &discardedVibration,
                           &id, &parent, &position, &orientation, &linVel, &angVel, &mass, &voxels, &asleep, &anchored, &eventTime,
                           &eventParent, &eventChildOffset, &eventChild, &dustTime, &dustParent, &dustVoxels, &dustMassRows, &dustMomentum})
             s->close();
@@ -199,7 +199,7 @@ std::vector<SeriesSpec> seriesSpecs()
         {&I::bodyCount, kFrames, "body_count", i64, 1, 256},
         {&I::voxelCount, kFrames, "voxel_count", i64, 1, 256},
         {&I::dustMass, kFrames, "dust_mass_kg", d, 1, 256},
-        {&I::latticeSubsteps, kFrames, "lattice_substeps", i64, 1, 256},
+        {&I::latticeParticleSteps, kFrames, "lattice_particle_steps", i64, 1, 256},
         {&I::discardedVibration, kFrames, "discarded_vibration_J", d, 1, 256},
         {&I::id, kBodies, "id", i64, 1, 1024},
         {&I::parent, kBodies, "parent_id", i64, 1, 1024},
@@ -394,7 +394,7 @@ void HistoryWriter::Impl::appendFrameRow(const FrameRow& f)
     bodyCount.append(&f.bodyCount, 1);
     voxelCount.append(&f.voxelCount, 1);
     dustMass.append(&f.dustMassKg, 1);
-    latticeSubsteps.append(&f.latticeSubsteps, 1);
+    latticeParticleSteps.append(&f.latticeParticleSteps, 1);
     discardedVibration.append(&f.discardedVibrationJ, 1);
     bodyOffset.append(&bodyRows, 1);
     time.append(&f.timeS, 1);
@@ -493,7 +493,7 @@ History readHistory(const std::string& path)
     h.minDtS = r.read<double>("/frames/min_dt_s", d);
     h.dustMassKg = r.read<double>("/frames/dust_mass_kg", d);
     h.discardedVibrationJ = r.read<double>("/frames/discarded_vibration_J", d);
-    h.latticeSubsteps = r.read<int64_t>("/frames/lattice_substeps", i64);
+    h.latticeParticleSteps = r.read<int64_t>("/frames/lattice_particle_steps", i64);
     h.bodyOffset = r.read<int64_t>("/frames/body_offset", i64);
     h.brokenLinks = r.read<int64_t>("/frames/broken_links", i64);
     h.steps = r.read<int64_t>("/frames/steps", i64);

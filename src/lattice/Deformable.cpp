@@ -7,6 +7,7 @@
 #include <Eigen/SVD>
 
 #include <algorithm>
+#include <array>
 #include <numeric>
 #include <stdexcept>
 
@@ -134,39 +135,80 @@ void followLattice(Body& body, const Lattice& lattice)
     body.motion.angularVelocityRadS = angularVelocityOf(fit.angularMomentumKgM2S, body.mass.inertiaKgM2, fit.rotation);
 }
 
-std::vector<std::vector<uint32_t>> latticePieces(const Lattice& lattice)
+LatticePieces latticePieces(const Lattice& lattice)
 {
+    LatticePieces pieces;
     DisjointSets sets(lattice.particleCount());
     for (size_t b = 0; b < lattice.bondCount(); ++b)
         if (lattice.bondDamage(b) < 1.0) sets.join(lattice.bonds[b].low, lattice.bonds[b].high);
     std::vector<int32_t> pieceOfRoot(lattice.particleCount(), -1);
-    std::vector<std::vector<uint32_t>> pieces;
+    pieces.pieceOf.resize(lattice.particleCount());
     for (uint32_t p = 0; p < lattice.particleCount(); ++p) {
         int32_t& piece = pieceOfRoot[sets.root(p)];
         if (piece < 0) {
-            piece = int32_t(pieces.size());
-            pieces.emplace_back();
+            piece = int32_t(pieces.particles.size());
+            pieces.particles.emplace_back();
+            pieces.held.push_back(0);
+            pieces.voxels.push_back(0);
         }
-        pieces[size_t(piece)].push_back(p);
+        pieces.pieceOf[p] = uint32_t(piece);
+        pieces.particles[size_t(piece)].push_back(p);
+        pieces.held[size_t(piece)] |= lattice.held[p];
+        pieces.voxels[size_t(piece)] += p < lattice.voxelParticleCount;
+    }
+    pieces.vibrationJ.assign(pieces.particles.size(), 0.0);
+    // A broken bond between two pieces holds only contact: its energy belongs to neither.
+    for (size_t b = 0; b < lattice.bondCount(); ++b)
+        if (pieces.pieceOf[lattice.bonds[b].low] == pieces.pieceOf[lattice.bonds[b].high])
+            pieces.vibrationJ[pieces.pieceOf[lattice.bonds[b].low]] += lattice.bondStrainEnergyJ(b);
+    for (uint32_t p = 0; p < lattice.particleCount(); ++p) pieces.vibrationJ[pieces.pieceOf[p]] += lattice.volumetricEnergyJ(p);
+    for (size_t i = 0; i < pieces.particles.size(); ++i) {
+        const RigidFit fit = fitRigidMotion(lattice, pieces.particles[i]);
+        pieces.vibrationJ[i] += fit.kineticEnergyJ - (pieces.held[i] ? 0.0 : rigidKineticEnergyJ(lattice, pieces.particles[i], fit));
     }
     return pieces;
 }
 
 double vibrationEnergyJ(const Lattice& lattice)
 {
-    double energy = lattice.strainEnergyJ();
-    for (const std::vector<uint32_t>& piece : latticePieces(lattice)) {
-        const RigidFit fit = fitRigidMotion(lattice, piece);
-        const bool held = std::any_of(piece.begin(), piece.end(), [&](uint32_t p) { return lattice.held[p] != 0; });
-        energy += fit.kineticEnergyJ - (held ? 0.0 : rigidKineticEnergyJ(lattice, piece, fit));
-    }
-    return energy;
+    const LatticePieces pieces = latticePieces(lattice);
+    return std::accumulate(pieces.vibrationJ.begin(), pieces.vibrationJ.end(), 0.0);
 }
 
-double elasticCapacityJ(const Lattice& lattice, const Material& material)
+double elasticCapacityPerVoxelJ(const Material& material, double voxelSizeM)
 {
-    const double volume = double(lattice.voxelParticleCount) * lattice.voxelSizeM * lattice.voxelSizeM * lattice.voxelSizeM;
-    return material.tensileStrengthPa * material.tensileStrengthPa / (2.0 * material.youngsModulusPa) * volume;
+    return material.tensileStrengthPa * material.tensileStrengthPa / (2.0 * material.youngsModulusPa) * voxelSizeM * voxelSizeM * voxelSizeM;
+}
+
+DeformableBody continueDeformable(const Body& part, const DeformableBody& whole, const Material& material, const LatticeSettings& settings,
+                                  const LatticeGround& ground)
+{
+    DeformableBody d = enterDeformablePhase(part, material, settings, ground, whole.enteredS);
+    d.lastLoadedS = whole.lastLoadedS;
+    const Lattice& from = whole.lattice;
+    Lattice& to = d.lattice;
+    // The whole's particles by voxel (ground points too: theirs lie outside every voxel), its
+    // bonds by low voxel and axis.
+    LinkTree particleOf(-1);
+    std::array<LinkTree, 3> bondOf{LinkTree(-1), LinkTree(-1), LinkTree(-1)};
+    for (uint32_t p = 0; p < from.particleCount(); ++p) particleOf.setValueOn(from.voxel[p], int32_t(p));
+    for (size_t b = 0; b < from.bondCount(); ++b) bondOf[size_t(from.bonds[b].axis)].setValueOn(from.voxel[from.bonds[b].low], int32_t(b));
+    for (size_t p = 0; p < to.particleCount(); ++p) {
+        const size_t q = size_t(particleOf.getValue(to.voxel[p]));
+        to.positionM[p] = from.positionM[q];
+        to.velocityMS[p] = from.velocityMS[q];
+        to.angularVelocityRadS[p] = from.angularVelocityRadS[q];
+        to.orientation[p] = from.orientation[q];
+    }
+    for (size_t b = 0; b < to.bondCount(); ++b) {
+        const size_t c = size_t(bondOf[size_t(to.bonds[b].axis)].getValue(to.voxel[to.bonds[b].low]));
+        to.bondMaxStretchM[b] = from.bondMaxStretchM[c];
+        to.bondStrengthScale[b] = from.bondStrengthScale[c];
+    }
+    // The forces of the part's own bonds; those of bonds to the pieces that left (broken, in
+    // contact at most) are gone with them.
+    to.refreshForces();
+    return d;
 }
 
 HandOff handOff(const Body& body, const Lattice& lattice)

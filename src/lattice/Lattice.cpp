@@ -324,10 +324,11 @@ void Lattice::keepAboveGround(size_t p)
     if (into < 0.0) velocityMS[p] -= into * ground.normal;
 }
 
-void Lattice::advance(double dtS)
+int64_t Lattice::advance(double dtS)
 {
-    const double substeps = std::ceil(dtS / stableTimeStepS());
-    for (double i = 0; i < substeps; ++i) step(dtS / substeps);
+    const int64_t substeps = static_cast<int64_t>(std::ceil(dtS / stableTimeStepS()));
+    for (int64_t i = 0; i < substeps; ++i) step(dtS / double(substeps));
+    return substeps;
 }
 
 double Lattice::kineticEnergyJ() const
@@ -338,21 +339,28 @@ double Lattice::kineticEnergyJ() const
     return sum;
 }
 
-double Lattice::strainEnergyJ() const
+double Lattice::bondStrainEnergyJ(size_t b) const
 {
     const LatticeStiffness& k = stiffness;
+    const BondStrain s = strainOf(bonds[b]);
+    const int a = bonds[b].axis;
+    const double normal = s.displacementM[a], twist = s.rotationRad[a], intact = 1.0 - bondDamage(b);
+    return 0.5 * (normal > 0.0 ? intact : 1.0) * k.normalNPerM * normal * normal +
+           0.5 * intact *
+               (k.shearNPerM * (s.displacementM.squaredNorm() - normal * normal) +
+                k.bendingNmPerRad * (s.rotationRad.squaredNorm() - twist * twist) + k.twistingNmPerRad * twist * twist);
+}
+
+double Lattice::volumetricEnergyJ(size_t p) const
+{
+    return 0.5 * mLambdaPa[p] * voxelSizeM * voxelSizeM * voxelSizeM * mVolumetricStrain[p] * mVolumetricStrain[p];
+}
+
+double Lattice::strainEnergyJ() const
+{
     double sum = 0.0;
-    for (size_t b = 0; b < bonds.size(); ++b) {
-        const BondStrain s = strainOf(bonds[b]);
-        const int a = bonds[b].axis;
-        const double normal = s.displacementM[a], twist = s.rotationRad[a], intact = 1.0 - bondDamage(b);
-        sum += 0.5 * (normal > 0.0 ? intact : 1.0) * k.normalNPerM * normal * normal +
-               0.5 * intact *
-                   (k.shearNPerM * (s.displacementM.squaredNorm() - normal * normal) +
-                    k.bendingNmPerRad * (s.rotationRad.squaredNorm() - twist * twist) + k.twistingNmPerRad * twist * twist);
-    }
-    const double volume = voxelSizeM * voxelSizeM * voxelSizeM;
-    for (size_t p = 0; p < particleCount(); ++p) sum += 0.5 * mLambdaPa[p] * volume * mVolumetricStrain[p] * mVolumetricStrain[p];
+    for (size_t b = 0; b < bonds.size(); ++b) sum += bondStrainEnergyJ(b);
+    for (size_t p = 0; p < particleCount(); ++p) sum += volumetricEnergyJ(p);
     return sum;
 }
 

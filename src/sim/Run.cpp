@@ -51,7 +51,7 @@ public:
         const auto& events = sim.fractureEvents();
         const auto& dust = sim.dust();
         for (const DustRecord& d : dust) row.dustMassKg += d.massKg;
-        row.latticeSubsteps = stats.latticeSubsteps;
+        row.latticeParticleSteps = stats.latticeParticleSteps;
         for (const HandOffRecord& h : sim.state().handOffs) row.discardedVibrationJ += h.discardedEnergyJ;
         mWriter->appendFrame(row, rows, {events.begin() + mEventsWritten, events.end()}, {dust.begin() + mDustWritten, dust.end()});
         mEventsWritten = events.size();

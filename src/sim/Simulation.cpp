@@ -384,9 +384,7 @@ void Simulation::deformBodies(const FaceForces& faces, const std::vector<OpenWin
         const size_t i = indexOf.at(d.bodyId);
         Body& body = mState.bodies[i];
         setExternalForces(d.lattice, body, faces.forceN[i], mScene.world.gravityMS2);
-        const double substepS = d.lattice.stableTimeStepS();
-        d.lattice.advance(dtS);
-        mStats.latticeSubsteps += static_cast<int64_t>(std::ceil(dtS / substepS));
+        mStats.latticeParticleSteps += d.lattice.advance(dtS) * static_cast<int64_t>(d.lattice.particleCount());
         followLattice(body, d.lattice);
         if (bodyInWindows(body, *mField, windows)) d.lastLoadedS = mState.timeS + dtS;
     }
@@ -398,33 +396,64 @@ void Simulation::handOffQuietBodies()
     std::unordered_map<int64_t, size_t> indexOf;
     for (size_t i = 0; i < mState.bodies.size(); ++i) indexOf[mState.bodies[i].id] = i;
     std::vector<std::vector<Body>> parts(mState.bodies.size());
-    std::vector<DeformableBody> staying;
+    std::vector<DeformableBody> staying, leaving;
     for (DeformableBody& d : mState.deformable) {
         const size_t i = indexOf.at(d.bodyId);
         const double sinceBlastS = mState.timeS - d.lastLoadedS;
-        const Material& material = mScene.materials[mState.bodies[i].materialIndex];
+        if (sinceBlastS <= 0.0) {
+            staying.push_back(std::move(d));
+            continue;
+        }
+        // Pieces the blast has passed leave once quiet; all of them at the time limit.
+        const LatticePieces pieces = latticePieces(d.lattice);
+        const double tolerancePerVoxelJ =
+            mScene.lattice.handoffEnergyFraction * elasticCapacityPerVoxelJ(mScene.materials[mState.bodies[i].materialIndex], mScene.voxelSizeM);
+        std::vector<char> quiet(pieces.particles.size());
+        for (size_t k = 0; k < quiet.size(); ++k) quiet[k] = pieces.vibrationJ[k] <= tolerancePerVoxelJ * double(pieces.voxels[k]);
         const bool timedOut = sinceBlastS >= mScene.lattice.maxVibrationS;
-        const bool quiet = sinceBlastS > 0.0 && vibrationEnergyJ(d.lattice) <= mScene.lattice.handoffEnergyFraction * elasticCapacityJ(d.lattice, material);
-        if (!quiet && !timedOut) {
+        const bool allQuiet = std::all_of(quiet.begin(), quiet.end(), [](char q) { return q != 0; });
+        bool freeAndQuiet = false;
+        for (size_t k = 0; k < quiet.size(); ++k) freeAndQuiet = freeAndQuiet || (quiet[k] && !pieces.held[k]);
+        if (!timedOut && !allQuiet && !freeAndQuiet) {
             staying.push_back(std::move(d));
             continue;
         }
         HandOff h = handOff(mState.bodies[i], d.lattice);
+        const bool whole = timedOut || allQuiet;
+        LinkTree particleOf(-1);
+        for (uint32_t p = 0; p < d.lattice.voxelParticleCount; ++p) particleOf.setValueOn(d.lattice.voxel[p], int32_t(p));
+        double discardedJ = 0.0;
+        for (Body& part : h.parts) {
+            // A part is a piece, or pieces joined through the ground: its first voxel says which.
+            const uint32_t piece = pieces.pieceOf[size_t(particleOf.getValue(part.grid->cbeginValueOn().getCoord()))];
+            part.motion.deformable = !whole && !quiet[piece];
+        }
+        for (size_t k = 0; k < quiet.size(); ++k) discardedJ += (whole || quiet[k]) ? pieces.vibrationJ[k] : 0.0;
         mState.handOffs.push_back({mState.timeS, d.bodyId, int64_t(d.lattice.voxelParticleCount), h.brokenBonds, h.brokenAnchors,
-                                   mState.timeS - d.enteredS,
-                                   h.discardedEnergyJ, !quiet});
+                                   mState.timeS - d.enteredS, discardedJ, timedOut && !allQuiet});
         mStats.brokenLinks += h.brokenBonds;
-        for (Body& part : h.parts) part.motion.deformable = false;
-        if (h.parts.size() == 1) {
+        if (h.parts.size() == 1 && !h.parts.front().motion.deformable) {
             h.parts.front().id = mState.bodies[i].id;
             h.parts.front().parentId = mState.bodies[i].parentId;
             mState.bodies[i] = std::move(h.parts.front());
+        } else if (h.parts.size() == 1) {
+            staying.push_back(std::move(d));  // one piece, not yet quiet: nothing changes
         } else {
             parts[i] = std::move(h.parts);
+            leaving.push_back(std::move(d));
         }
     }
     mState.deformable = std::move(staying);
     replaceWithParts(parts);
+    // Parts still vibrating carry on in the phase with their particles' state.
+    std::unordered_map<int64_t, const DeformableBody*> leftBy;
+    for (const DeformableBody& d : leaving) leftBy[d.bodyId] = &d;
+    for (const Body& body : mState.bodies) {
+        if (!body.motion.deformable || !leftBy.count(body.parentId)) continue;
+        mState.deformable.push_back(continueDeformable(body, *leftBy.at(body.parentId), mScene.materials[body.materialIndex], mScene.lattice,
+                                                       latticeGround()));
+        mState.deformable.back().bodyId = body.id;
+    }
 }
 
 void Simulation::adaptStepToPenetration(double maxPenetrationM)

@@ -28,7 +28,7 @@ struct FrameRow {
     int64_t bodyCount = 0;
     int64_t voxelCount = 0;
     double dustMassKg = 0;    ///< cumulative
-    int64_t latticeSubsteps = 0;     ///< the deformable phase's, over its bodies, since the previous frame
+    int64_t latticeParticleSteps = 0;  ///< the deformable phase's steps times particles, over its bodies, since the previous frame
     double discardedVibrationJ = 0;  ///< cumulative: vibration the hand-offs left behind (HandOffRecord)
 };
 
@@ -97,7 +97,7 @@ struct History {
     double voxelSizeM = 0;
     uint64_t seed = 0;
     std::vector<double> timeS, kineticEnergyJ, minDtS, dustMassKg, discardedVibrationJ;
-    std::vector<int64_t> bodyOffset, brokenLinks, steps, bodyCount, voxelCount, latticeSubsteps;
+    std::vector<int64_t> bodyOffset, brokenLinks, steps, bodyCount, voxelCount, latticeParticleSteps;
     std::vector<Eigen::Vector3d> linearMomentum, angularMomentum;
     std::vector<int64_t> bodyId, bodyParentId, bodyVoxelCount;
     std::vector<double> bodyMassKg;

@@ -49,16 +49,29 @@ RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& par
 /// history and the other bodies' contacts see where it is. An anchored body stays put.
 void followLattice(Body& body, const Lattice& lattice);
 
-/// The particles in pieces held together by bonds that have not broken (lowest particle first).
-std::vector<std::vector<uint32_t>> latticePieces(const Lattice& lattice);
+/// A lattice's particles in pieces held together by bonds that have not broken (numbered by their
+/// lowest particle), each with its vibration: the strain energy of its bonds and particles plus
+/// its kinetic energy about its rigid motion, or all of it for a piece the ground holds.
+struct LatticePieces {
+    std::vector<uint32_t> pieceOf;                  ///< per particle
+    std::vector<std::vector<uint32_t>> particles;   ///< per piece
+    std::vector<char> held;                         ///< per piece: bonded to the ground
+    std::vector<double> vibrationJ;                 ///< per piece (unit: J)
+    std::vector<int64_t> voxels;                    ///< per piece: its particles that are voxels
+};
+LatticePieces latticePieces(const Lattice& lattice);
 
-/// Strain energy plus each piece's kinetic energy about its rigid motion (held pieces: all of
-/// it): what a hand-off now would discard (unit: J).
+/// What a hand-off now would discard, over all pieces (unit: J).
 double vibrationEnergyJ(const Lattice& lattice);
 
-/// What the body's material can hold elastically: ft² / (2E) times its volume (unit: J), the
-/// scale the hand-off tolerance is a fraction of.
-double elasticCapacityJ(const Lattice& lattice, const Material& material);
+/// What one voxel of the material holds elastically at its tensile strength, ft² / (2E) h³
+/// (unit: J): the scale the hand-off tolerance is a fraction of.
+double elasticCapacityPerVoxelJ(const Material& material, double voxelSizeM);
+
+/// A part of a body that left the phase (handOff) carrying on in it: a lattice of the part whose
+/// particles and bonds take their state from the body's lattice.
+DeformableBody continueDeformable(const Body& part, const DeformableBody& whole, const Material& material, const LatticeSettings& settings,
+                                  const LatticeGround& ground);
 
 /// The body back as rigid bodies: each bond that broke breaks its link (the frames' fracture
 /// surface), and each connected part gets its particles' momenta and best-fit pose; anchored

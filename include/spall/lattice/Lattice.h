@@ -90,12 +90,15 @@ public:
     /// The bonds' forces from the state (after the state arrays were written from outside, as a
     /// checkpoint does; each step calls it).
     void refreshForces();
-    /// Steps over dtS in equal substeps no longer than stableTimeStepS().
-    void advance(double dtS);
+    /// Steps over dtS in equal substeps no longer than stableTimeStepS(); returns how many.
+    int64_t advance(double dtS);
 
     double kineticEnergyJ() const;
-    /// Of the strains as the last step (or construction) left them.
+    /// Of the strains as the last step (or construction) left them: the bonds' and the
+    /// particles' volumetric terms.
     double strainEnergyJ() const;
+    double bondStrainEnergyJ(size_t b) const;
+    double volumetricEnergyJ(size_t p) const;
     Eigen::Vector3d linearMomentum() const;
     Eigen::Vector3d angularMomentumAboutOrigin() const;
 

@@ -24,7 +24,7 @@ struct StepStats {
     int64_t steps = 0;
     double minDtS = 0;
     int64_t brokenLinks = 0;
-    int64_t latticeSubsteps = 0;  ///< the deformable phase's, summed over its bodies
+    int64_t latticeParticleSteps = 0;  ///< the deformable phase's work: lattice steps times particles, over its bodies
 };
 
 /// A body leaving the deformable phase (fracture.algorithm "lattice").
