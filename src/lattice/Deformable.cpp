@@ -236,7 +236,6 @@ HandOff handOff(const Body& body, const Lattice& lattice)
     // Particle numbers by voxel (a fragment keeps its parent's index space).
     LinkTree particleOf(-1);
     for (uint32_t p = 0; p < lattice.voxelParticleCount; ++p) particleOf.setValueOn(lattice.voxel[p], int32_t(p));
-    double rigidEnergyJ = 0.0;
     for (Body& part : result.parts) {
         if (part.anchored) {
             part.motion.linearVelocityMS = part.motion.angularVelocityRadS = Eigen::Vector3d::Zero();
@@ -251,10 +250,35 @@ HandOff handOff(const Body& body, const Lattice& lattice)
         part.motion.angularVelocityRadS = angularVelocityOf(fit.angularMomentumKgM2S, part.mass.inertiaKgM2, part.motion.orientation.toRotationMatrix());
         part.motion.asleep = false;
         part.motion.restTimeS = 0.0;
-        rigidEnergyJ += 0.5 * part.mass.massKg * fit.velocityMS.squaredNorm() + 0.5 * part.motion.angularVelocityRadS.dot(fit.angularMomentumKgM2S);
     }
-    result.discardedEnergyJ = lattice.kineticEnergyJ() + lattice.strainEnergyJ() - rigidEnergyJ;
     return result;
+}
+
+Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tolerancePerVoxelJ, bool timeUp)
+{
+    Departure departure;
+    const LatticePieces pieces = latticePieces(lattice);
+    std::vector<char> quiet(pieces.particles.size());
+    bool freeAndQuiet = false;
+    for (size_t k = 0; k < quiet.size(); ++k) {
+        quiet[k] = pieces.vibrationJ[k] <= tolerancePerVoxelJ * double(pieces.voxels[k]);
+        freeAndQuiet = freeAndQuiet || (quiet[k] && !pieces.held[k]);
+    }
+    const bool allQuiet = std::all_of(quiet.begin(), quiet.end(), [](char q) { return q != 0; });
+    if (!timeUp && !allQuiet && !freeAndQuiet) return departure;
+    const bool all = timeUp || allQuiet;
+    departure.timedOut = !allQuiet;
+    departure.handOff = handOff(body, lattice);
+    LinkTree particleOf(-1);
+    for (uint32_t p = 0; p < lattice.voxelParticleCount; ++p) particleOf.setValueOn(lattice.voxel[p], int32_t(p));
+    for (Body& part : departure.handOff.parts) {
+        // A part is a piece, or pieces joined through the ground: its first voxel says which.
+        const uint32_t piece = pieces.pieceOf[size_t(particleOf.getValue(part.grid->cbeginValueOn().getCoord()))];
+        part.motion.deformable = !all && !quiet[piece];
+    }
+    for (size_t k = 0; k < quiet.size(); ++k)
+        if (all || quiet[k]) departure.discardedEnergyJ += pieces.vibrationJ[k];
+    return departure;
 }
 
 }  // namespace spall

@@ -400,52 +400,34 @@ void Simulation::handOffQuietBodies()
     for (DeformableBody& d : mState.deformable) {
         const size_t i = indexOf.at(d.bodyId);
         const double sinceBlastS = mState.timeS - d.lastLoadedS;
-        if (sinceBlastS <= 0.0) {
-            staying.push_back(std::move(d));
-            continue;
-        }
-        // Pieces the blast has passed leave once quiet; all of them at the time limit.
-        const LatticePieces pieces = latticePieces(d.lattice);
-        const double tolerancePerVoxelJ =
+        const double toleranceJ =
             mScene.lattice.handoffEnergyFraction * elasticCapacityPerVoxelJ(mScene.materials[mState.bodies[i].materialIndex], mScene.voxelSizeM);
-        std::vector<char> quiet(pieces.particles.size());
-        for (size_t k = 0; k < quiet.size(); ++k) quiet[k] = pieces.vibrationJ[k] <= tolerancePerVoxelJ * double(pieces.voxels[k]);
-        const bool timedOut = sinceBlastS >= mScene.lattice.maxVibrationS;
-        const bool allQuiet = std::all_of(quiet.begin(), quiet.end(), [](char q) { return q != 0; });
-        bool freeAndQuiet = false;
-        for (size_t k = 0; k < quiet.size(); ++k) freeAndQuiet = freeAndQuiet || (quiet[k] && !pieces.held[k]);
-        if (!timedOut && !allQuiet && !freeAndQuiet) {
-            staying.push_back(std::move(d));
+        Departure out;
+        if (sinceBlastS > 0.0) out = leaveQuietPieces(mState.bodies[i], d.lattice, toleranceJ, sinceBlastS >= mScene.lattice.maxVibrationS);
+        std::vector<Body>& leftParts = out.handOff.parts;
+        if (leftParts.empty() || (leftParts.size() == 1 && leftParts.front().motion.deformable)) {
+            staying.push_back(std::move(d));  // nothing leaves yet
             continue;
         }
-        HandOff h = handOff(mState.bodies[i], d.lattice);
-        const bool whole = timedOut || allQuiet;
-        LinkTree particleOf(-1);
-        for (uint32_t p = 0; p < d.lattice.voxelParticleCount; ++p) particleOf.setValueOn(d.lattice.voxel[p], int32_t(p));
-        double discardedJ = 0.0;
-        for (Body& part : h.parts) {
-            // A part is a piece, or pieces joined through the ground: its first voxel says which.
-            const uint32_t piece = pieces.pieceOf[size_t(particleOf.getValue(part.grid->cbeginValueOn().getCoord()))];
-            part.motion.deformable = !whole && !quiet[piece];
+        mState.handOffs.push_back({mState.timeS, d.bodyId, int64_t(d.lattice.voxelParticleCount), out.handOff.brokenBonds,
+                                   out.handOff.brokenAnchors, mState.timeS - d.enteredS, out.discardedEnergyJ, out.timedOut});
+        mStats.brokenLinks += out.handOff.brokenBonds;
+        if (leftParts.size() == 1) {
+            leftParts.front().id = mState.bodies[i].id;
+            leftParts.front().parentId = mState.bodies[i].parentId;
+            mState.bodies[i] = std::move(leftParts.front());
+            continue;
         }
-        for (size_t k = 0; k < quiet.size(); ++k) discardedJ += (whole || quiet[k]) ? pieces.vibrationJ[k] : 0.0;
-        mState.handOffs.push_back({mState.timeS, d.bodyId, int64_t(d.lattice.voxelParticleCount), h.brokenBonds, h.brokenAnchors,
-                                   mState.timeS - d.enteredS, discardedJ, timedOut && !allQuiet});
-        mStats.brokenLinks += h.brokenBonds;
-        if (h.parts.size() == 1 && !h.parts.front().motion.deformable) {
-            h.parts.front().id = mState.bodies[i].id;
-            h.parts.front().parentId = mState.bodies[i].parentId;
-            mState.bodies[i] = std::move(h.parts.front());
-        } else if (h.parts.size() == 1) {
-            staying.push_back(std::move(d));  // one piece, not yet quiet: nothing changes
-        } else {
-            parts[i] = std::move(h.parts);
-            leaving.push_back(std::move(d));
-        }
+        parts[i] = std::move(leftParts);
+        leaving.push_back(std::move(d));
     }
     mState.deformable = std::move(staying);
     replaceWithParts(parts);
-    // Parts still vibrating carry on in the phase with their particles' state.
+    continueVibratingParts(leaving);
+}
+
+void Simulation::continueVibratingParts(const std::vector<DeformableBody>& leaving)
+{
     std::unordered_map<int64_t, const DeformableBody*> leftBy;
     for (const DeformableBody& d : leaving) leftBy[d.bodyId] = &d;
     for (const Body& body : mState.bodies) {

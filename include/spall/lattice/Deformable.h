@@ -74,14 +74,25 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
                                   const LatticeGround& ground);
 
 /// The body back as rigid bodies: each bond that broke breaks its link (the frames' fracture
-/// surface), and each connected part gets its particles' momenta and best-fit pose; anchored
-/// parts stay where they are. Part ids are left to the caller; with one part, it is the body.
+/// surface), each ground bond that broke clears its voxel's anchor bit, and each connected part
+/// gets its particles' momenta and best-fit pose; anchored parts stay where they are. Part ids
+/// are left to the caller; with one part, it is the body.
 struct HandOff {
     std::vector<Body> parts;
     int64_t brokenBonds = 0;
     int64_t brokenAnchors = 0;  ///< bonds to the ground that broke
-    double discardedEnergyJ = 0.0;  ///< vibration the rigid parts cannot carry (unit: J)
 };
 HandOff handOff(const Body& body, const Lattice& lattice);
+
+/// Leaving the phase, for a body the blast has passed: nothing (no parts) while no free piece is
+/// quiet (vibration at most `tolerancePerVoxelJ` per voxel), not all are, and the time is not
+/// up; otherwise handOff's parts, each marked deformable when its piece must carry on in the
+/// phase, and the vibration of the pieces that leave.
+struct Departure {
+    HandOff handOff;
+    double discardedEnergyJ = 0.0;  ///< (unit: J)
+    bool timedOut = false;          ///< some piece leaves without being quiet
+};
+Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tolerancePerVoxelJ, bool timeUp);
 
 }  // namespace spall

@@ -118,9 +118,12 @@ private:
     void replaceWithParts(std::vector<std::vector<Body>>& parts);
     /// Bodies the blast reaches become lattices (fracture.algorithm "lattice").
     void enterDeformablePhase(const std::vector<OpenWindow>& windows);
-    /// Deformable bodies the blast has passed whose vibration has died down (or lasted
-    /// lattice.max_vibration_s) become rigid pieces again.
+    /// Pieces of deformable bodies the blast has passed leave the phase once their vibration has
+    /// died down (all of them after lattice.max_vibration_s) and become rigid bodies again.
     void handOffQuietBodies();
+    /// Parts of bodies in `leaving` that are marked deformable (still vibrating) get lattices
+    /// that carry on from their parent's.
+    void continueVibratingParts(const std::vector<DeformableBody>& leaving);
     /// Each deformable body's lattice through the step under its face loads and gravity.
     void deformBodies(const FaceForces& faces, const std::vector<OpenWindow>& windows, double dtS);
     /// The ground as the lattices see it.
