@@ -155,6 +155,28 @@ TEST(Deformable, BrickWallBreaksUnderAKilogramAt50cmAndKeepsItsStump)
     EXPECT_GE(anchoredParts, 1) << "a wall anchored at its base keeps a stump";
 }
 
+TEST(Deformable, MoreExplosiveBreaksMore)
+{
+    // Issue 17: with the pressure rule every link broke once a charge was big enough, whatever
+    // more was added. From stress, more explosive makes more pieces, and detaches more until
+    // all but the stump has gone.
+    const double wallKg = 1900.0 * 1.0 * 0.2 * 1.0;
+    size_t previousBodies = 0;
+    double firstDetachedKg = 0.0, lastDetachedKg = 0.0;
+    for (const double tntKg : {0.1, 0.4, 1.6}) {
+        Simulation sim(wallScene(tntKg, 0.5));
+        sim.advanceTo(0.05);
+        double detachedKg = 0.0;
+        for (const Body& b : sim.bodies()) detachedKg += b.anchored ? 0.0 : b.mass.massKg;
+        std::printf("%.1f kg TNT at 0.5 m: %zu bodies, %.1f kg of %.0f kg detached\n", tntKg, sim.bodies().size(), detachedKg, wallKg);
+        EXPECT_GT(sim.bodies().size(), previousBodies) << tntKg << " kg";
+        previousBodies = sim.bodies().size();
+        if (firstDetachedKg == 0.0) firstDetachedKg = detachedKg;
+        lastDetachedKg = detachedKg;
+    }
+    EXPECT_GT(lastDetachedKg, 1.5 * firstDetachedKg);
+}
+
 TEST(Deformable, AnchorsHoldTheMaterialsTensileStrengthAndThenLetGo)
 {
     // A 0.1 × 0.1 × 0.25 m brick column anchored at its base, pulled up by a body force that
