@@ -7,7 +7,6 @@
 #include <Eigen/SVD>
 
 #include <algorithm>
-#include <array>
 #include <numeric>
 #include <stdexcept>
 
@@ -19,6 +18,16 @@ namespace {
 Eigen::Vector3d angularVelocityOf(const Eigen::Vector3d& angularMomentum, const Eigen::Matrix3d& inertiaLocal, const Eigen::Matrix3d& rotation)
 {
     return (rotation * inertiaLocal * rotation.transpose()).ldlt().solve(angularMomentum);
+}
+
+/// A body's motion as a fit gives it, with the body's own inertia (so its angular momentum is
+/// exactly the particles').
+void setMotionFromFit(BodyMotion& motion, const RigidFit& fit, const Eigen::Matrix3d& inertiaLocal)
+{
+    motion.positionM = fit.centreM;
+    motion.orientation = Eigen::Quaterniond(fit.rotation).normalized();
+    motion.linearVelocityMS = fit.velocityMS;
+    motion.angularVelocityRadS = angularVelocityOf(fit.angularMomentumKgM2S, inertiaLocal, motion.orientation.toRotationMatrix());
 }
 
 /// A particle's place in the body frame, index h (unit: m).
@@ -128,11 +137,7 @@ void followLattice(Body& body, const Lattice& lattice)
     if (body.anchored) return;
     std::vector<uint32_t> voxels(lattice.voxelParticleCount);
     std::iota(voxels.begin(), voxels.end(), 0u);
-    const RigidFit fit = fitRigidMotion(lattice, voxels);
-    body.motion.positionM = fit.centreM;
-    body.motion.orientation = Eigen::Quaterniond(fit.rotation).normalized();
-    body.motion.linearVelocityMS = fit.velocityMS;
-    body.motion.angularVelocityRadS = angularVelocityOf(fit.angularMomentumKgM2S, body.mass.inertiaKgM2, fit.rotation);
+    setMotionFromFit(body.motion, fitRigidMotion(lattice, voxels), body.mass.inertiaKgM2);
 }
 
 LatticePieces latticePieces(const Lattice& lattice)
@@ -187,21 +192,15 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
     d.lastLoadedS = whole.lastLoadedS;
     const Lattice& from = whole.lattice;
     Lattice& to = d.lattice;
-    // The whole's particles by voxel (ground points too: theirs lie outside every voxel), its
-    // bonds by low voxel and axis.
-    LinkTree particleOf(-1);
-    std::array<LinkTree, 3> bondOf{LinkTree(-1), LinkTree(-1), LinkTree(-1)};
-    for (uint32_t p = 0; p < from.particleCount(); ++p) particleOf.setValueOn(from.voxel[p], int32_t(p));
-    for (size_t b = 0; b < from.bondCount(); ++b) bondOf[size_t(from.bonds[b].axis)].setValueOn(from.voxel[from.bonds[b].low], int32_t(b));
     for (size_t p = 0; p < to.particleCount(); ++p) {
-        const size_t q = size_t(particleOf.getValue(to.voxel[p]));
+        const size_t q = size_t(from.particleAt(to.voxel[p]));
         to.positionM[p] = from.positionM[q];
         to.velocityMS[p] = from.velocityMS[q];
         to.angularVelocityRadS[p] = from.angularVelocityRadS[q];
         to.orientation[p] = from.orientation[q];
     }
     for (size_t b = 0; b < to.bondCount(); ++b) {
-        const size_t c = size_t(bondOf[size_t(to.bonds[b].axis)].getValue(to.voxel[to.bonds[b].low]));
+        const size_t c = size_t(from.bondAcross(size_t(from.particleAt(to.voxel[to.bonds[b].low])), 2 * to.bonds[b].axis + 1));
         to.bondMaxStretchM[b] = from.bondMaxStretchM[c];
         to.bondStrengthScale[b] = from.bondStrengthScale[c];
     }
@@ -233,21 +232,15 @@ HandOff handOff(const Body& body, const Lattice& lattice)
     refreshDerivedData(whole);
     result.parts = splitBody(whole);
     if (result.parts.empty()) result.parts.push_back(std::move(whole));
-    // Particle numbers by voxel (a fragment keeps its parent's index space).
-    LinkTree particleOf(-1);
-    for (uint32_t p = 0; p < lattice.voxelParticleCount; ++p) particleOf.setValueOn(lattice.voxel[p], int32_t(p));
     for (Body& part : result.parts) {
         if (part.anchored) {
             part.motion.linearVelocityMS = part.motion.angularVelocityRadS = Eigen::Vector3d::Zero();
             continue;
         }
+        // A fragment keeps its parent's index space: its voxels name their particles.
         std::vector<uint32_t> particles;
-        for (auto it = part.grid->constTree().cbeginValueOn(); it; ++it) particles.push_back(uint32_t(particleOf.getValue(it.getCoord())));
-        const RigidFit fit = fitRigidMotion(lattice, particles);
-        part.motion.positionM = fit.centreM;
-        part.motion.orientation = Eigen::Quaterniond(fit.rotation).normalized();
-        part.motion.linearVelocityMS = fit.velocityMS;
-        part.motion.angularVelocityRadS = angularVelocityOf(fit.angularMomentumKgM2S, part.mass.inertiaKgM2, part.motion.orientation.toRotationMatrix());
+        for (auto it = part.grid->constTree().cbeginValueOn(); it; ++it) particles.push_back(uint32_t(lattice.particleAt(it.getCoord())));
+        setMotionFromFit(part.motion, fitRigidMotion(lattice, particles), part.mass.inertiaKgM2);
         part.motion.asleep = false;
         part.motion.restTimeS = 0.0;
     }
@@ -269,11 +262,9 @@ Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tole
     const bool all = timeUp || allQuiet;
     departure.timedOut = !allQuiet;
     departure.handOff = handOff(body, lattice);
-    LinkTree particleOf(-1);
-    for (uint32_t p = 0; p < lattice.voxelParticleCount; ++p) particleOf.setValueOn(lattice.voxel[p], int32_t(p));
     for (Body& part : departure.handOff.parts) {
         // A part is a piece, or pieces joined through the ground: its first voxel says which.
-        const uint32_t piece = pieces.pieceOf[size_t(particleOf.getValue(part.grid->cbeginValueOn().getCoord()))];
+        const uint32_t piece = pieces.pieceOf[size_t(lattice.particleAt(part.grid->cbeginValueOn().getCoord()))];
         part.motion.deformable = !all && !quiet[piece];
     }
     for (size_t k = 0; k < quiet.size(); ++k)

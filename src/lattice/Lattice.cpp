@@ -77,10 +77,9 @@ Lattice Lattice::fromBody(const Body& body, const Material& material, const Latt
     lattice.particleInertiaKgM2 = lattice.particleMassKg * h * h / 6.0;
     lattice.stiffness = calibrateLattice(material, h);
     lattice.ground = ground;
-    LinkTree index(-1);  // particle numbers by voxel, in a tree of the body's own shape
-    lattice.addVoxelParticles(body, index);
-    lattice.addLinkBonds(body, index);
-    if (ground.enabled) lattice.addGroundBonds(body, index);
+    lattice.addVoxelParticles(body);
+    lattice.addLinkBonds(body);
+    if (ground.enabled) lattice.addGroundBonds(body);
     lattice.bondStrengthScale.assign(lattice.bonds.size(), 1.0);
     lattice.bondMaxStretchM.assign(lattice.bonds.size(), 0.0);
     const double pWaveSpeed = std::sqrt((lattice.stiffness.lameLambdaPa + 2.0 * lattice.stiffness.shearModulusPa) / material.densityKgM3);
@@ -90,11 +89,12 @@ Lattice Lattice::fromBody(const Body& body, const Material& material, const Latt
     return lattice;
 }
 
-void Lattice::addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& positionM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
+void Lattice::addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& placeM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
                           const Eigen::Quaterniond& q, bool isHeld)
 {
+    mParticleIndex->setValueOn(ijk, int32_t(voxel.size()));
     voxel.push_back(ijk);
-    this->positionM.push_back(positionM);
+    positionM.push_back(placeM);
     velocityMS.push_back(isHeld ? Eigen::Vector3d::Zero() : velocity);
     angularVelocityRadS.push_back(isHeld ? Eigen::Vector3d::Zero() : spin);
     orientation.push_back(q);
@@ -103,10 +103,9 @@ void Lattice::addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& posi
     mBondAcross.push_back({-1, -1, -1, -1, -1, -1});
 }
 
-void Lattice::addVoxelParticles(const Body& body, LinkTree& index)
+void Lattice::addVoxelParticles(const Body& body)
 {
     for (auto it = body.grid->constTree().cbeginValueOn(); it; ++it) {
-        index.setValueOn(it.getCoord(), int32_t(voxel.size()));
         const Eigen::Vector3d offset = body.motion.orientation * body.voxelOffsetM(it.getCoord());
         addParticle(it.getCoord(), body.motion.positionM + offset, body.motion.linearVelocityMS + body.motion.angularVelocityRadS.cross(offset),
                     body.motion.angularVelocityRadS, body.motion.orientation, (it.getValue() & kAnchorBit) != 0);
@@ -121,10 +120,10 @@ void Lattice::addBond(uint32_t low, uint32_t high, int axis)
     bonds.push_back({low, high, axis});
 }
 
-void Lattice::addLinkBonds(const Body& body, const LinkTree& index)
+void Lattice::addLinkBonds(const Body& body)
 {
     auto links = body.grid->getConstAccessor();
-    openvdb::tree::ValueAccessor<const LinkTree> indices(index);
+    openvdb::tree::ValueAccessor<const LinkTree> indices(*mParticleIndex);
     for (uint32_t p = 0; p < voxelParticleCount; ++p) {
         const int32_t bits = links.getValue(voxel[p]);
         for (const int face : {kPosX, kPosY, kPosZ})
@@ -132,7 +131,7 @@ void Lattice::addLinkBonds(const Body& body, const LinkTree& index)
     }
 }
 
-void Lattice::addGroundBonds(const Body& body, const LinkTree& index)
+void Lattice::addGroundBonds(const Body& body)
 {
     // The face of the body's voxels that looks most directly into the ground.
     const Eigen::Vector3d down = body.motion.orientation.inverse() * -ground.normal;
@@ -142,7 +141,7 @@ void Lattice::addGroundBonds(const Body& body, const LinkTree& index)
     const Eigen::Vector3d step = body.motion.orientation * (voxelSizeM * faceNormal(face));
     for (uint32_t p = 0; p < voxelParticleCount; ++p) {
         const openvdb::Coord below = voxel[p] + faceOffset(face);
-        if (!held[p] || index.isValueOn(below)) continue;
+        if (!held[p] || body.grid->tree().isValueOn(below)) continue;
         // The ground point: a held particle a voxel below, as if the ground were more of the
         // material, joined by a bond of the material's own stiffness and strength.
         const uint32_t groundPoint = uint32_t(particleCount());

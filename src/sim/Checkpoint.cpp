@@ -112,6 +112,38 @@ private:
     uint64_t mSize = 0;
 };
 
+/// A body in the deformable phase: the particles' state, the forces velocity Verlet carries and
+/// the bonds' history; the rest follows from the body's grid (restoreDeformable).
+template <typename Archive, typename D>
+void transferDeformable(Archive& a, D& d)
+{
+    a.pod(d.bodyId, "deformable body");
+    a.pod(d.enteredS, "deformable since");
+    a.pod(d.lastLoadedS, "deformable last loaded");
+    auto& lattice = d.lattice;
+    a.sequence(lattice.positionM, "particle positions", [&](auto& v) { a.vec(v, "particle position"); });
+    a.sequence(lattice.velocityMS, "particle velocities", [&](auto& v) { a.vec(v, "particle velocity"); });
+    a.sequence(lattice.angularVelocityRadS, "particle spins", [&](auto& v) { a.vec(v, "particle spin"); });
+    a.sequence(lattice.orientation, "particle orientations", [&](auto& q) { a.doubles(q.coeffs().data(), 4, "particle orientation"); });
+    a.sequence(lattice.bondForceN, "particle bond forces", [&](auto& v) { a.vec(v, "particle bond force"); });
+    a.sequence(lattice.bondMomentNm, "particle bond moments", [&](auto& v) { a.vec(v, "particle bond moment"); });
+    a.sequence(lattice.bondMaxStretchM, "bond stretches", [&](auto& x) { a.pod(x, "bond stretch"); });
+    a.sequence(lattice.bondStrengthScale, "bond strengths", [&](auto& x) { a.pod(x, "bond strength"); });
+}
+
+template <typename Archive, typename H>
+void transferHandOff(Archive& a, H& h)
+{
+    a.pod(h.timeS, "hand-off time");
+    a.pod(h.bodyId, "hand-off body");
+    a.pod(h.particles, "hand-off particles");
+    a.pod(h.brokenBonds, "hand-off broken bonds");
+    a.pod(h.brokenAnchors, "hand-off broken anchors");
+    a.pod(h.deformableS, "hand-off duration");
+    a.pod(h.discardedEnergyJ, "hand-off energy");
+    a.flag(h.timedOut, "hand-off timed out");
+}
+
 /// Every field but the grids, in file order. `C` is `const Checkpoint` when writing.
 /// `hasDamage[i]` says whether body i has a damage grid.
 template <typename Archive, typename C>
@@ -157,32 +189,8 @@ void transferFields(Archive& a, C& c, std::vector<uint8_t>& hasDamage)
         a.vec(d.linearMomentum, "dust momentum");
         a.vec(d.angularMomentumAboutOrigin, "dust angular momentum");
     });
-    a.sequence(s.deformable, "deformable bodies", [&](auto& d) {
-        a.pod(d.bodyId, "deformable body");
-        a.pod(d.enteredS, "deformable since");
-        a.pod(d.lastLoadedS, "deformable last loaded");
-        // The particles' state, the forces Verlet carries and the bonds' history; the rest follows
-        // from the body's grid.
-        auto& lattice = d.lattice;
-        a.sequence(lattice.positionM, "particle positions", [&](auto& v) { a.vec(v, "particle position"); });
-        a.sequence(lattice.velocityMS, "particle velocities", [&](auto& v) { a.vec(v, "particle velocity"); });
-        a.sequence(lattice.angularVelocityRadS, "particle spins", [&](auto& v) { a.vec(v, "particle spin"); });
-        a.sequence(lattice.orientation, "particle orientations", [&](auto& q) { a.doubles(q.coeffs().data(), 4, "particle orientation"); });
-        a.sequence(lattice.bondForceN, "particle bond forces", [&](auto& v) { a.vec(v, "particle bond force"); });
-        a.sequence(lattice.bondMomentNm, "particle bond moments", [&](auto& v) { a.vec(v, "particle bond moment"); });
-        a.sequence(lattice.bondMaxStretchM, "bond stretches", [&](auto& x) { a.pod(x, "bond stretch"); });
-        a.sequence(lattice.bondStrengthScale, "bond strengths", [&](auto& x) { a.pod(x, "bond strength"); });
-    });
-    a.sequence(s.handOffs, "hand-offs", [&](auto& h) {
-        a.pod(h.timeS, "hand-off time");
-        a.pod(h.bodyId, "hand-off body");
-        a.pod(h.particles, "hand-off particles");
-        a.pod(h.brokenBonds, "hand-off broken bonds");
-        a.pod(h.brokenAnchors, "hand-off broken anchors");
-        a.pod(h.deformableS, "hand-off duration");
-        a.pod(h.discardedEnergyJ, "hand-off energy");
-        a.flag(h.timedOut, "hand-off timed out");
-    });
+    a.sequence(s.deformable, "deformable bodies", [&](auto& d) { transferDeformable(a, d); });
+    a.sequence(s.handOffs, "hand-offs", [&](auto& h) { transferHandOff(a, h); });
     a.sequence(s.contactCache.points, "contact points", [&](auto& p) {
         a.pod(p.key.first, "contact key");
         a.pod(p.key.second, "contact key");

@@ -18,6 +18,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace spall {
@@ -80,6 +81,10 @@ public:
     static Lattice fromBody(const Body& body, const Material& material, const LatticeGround& ground = LatticeGround());
 
     size_t particleCount() const { return positionM.size(); }
+    /// The particle at a voxel (a ground point at the cell below its voxel), or -1.
+    int32_t particleAt(const openvdb::Coord& ijk) const { return mParticleIndex->getValue(ijk); }
+    /// The bond across a face of particle p (LinkBits.h's Face order), or -1.
+    int32_t bondAcross(size_t p, int face) const { return mBondAcross[p][face]; }
     size_t bondCount() const { return bonds.size(); }
 
     /// Largest stable step (unit: s): 0.9 × 2/ω with ω bounding the lattice's highest frequency,
@@ -137,6 +142,9 @@ public:
     LatticeStiffness stiffness;
 
 private:
+    /// Particle numbers by voxel, in a tree of the body's own shape (and its ground points).
+    /// Written only while building, so copies of a lattice share it.
+    std::shared_ptr<LinkTree> mParticleIndex = std::make_shared<LinkTree>(-1);
     /// Per particle, the bond across each face (LinkBits.h's Face order) or -1.
     std::vector<std::array<int32_t, 6>> mBondAcross;
     /// Per particle, λ for the axes it has bonds along (stress-free missing axes condensed out).
@@ -155,13 +163,13 @@ private:
     /// Each particle's tr ε: per axis, the mean stretch (length change / h) of its bonds along it.
     void computeVolumetricStrain();
     // Building (fromBody).
-    void addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& positionM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
+    void addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& placeM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
                      const Eigen::Quaterniond& q, bool isHeld);
-    void addVoxelParticles(const Body& body, LinkTree& index);
+    void addVoxelParticles(const Body& body);
     /// A bond from `low` to its +axis neighbour `high`, in its batch.
     void addBond(uint32_t low, uint32_t high, int axis);
-    void addLinkBonds(const Body& body, const LinkTree& index);
-    void addGroundBonds(const Body& body, const LinkTree& index);
+    void addLinkBonds(const Body& body);
+    void addGroundBonds(const Body& body);
     void condenseVolumetricModulus();
     /// f(i) for i < count: in parallel for large lattices, in order for small ones.
     template <typename F>
