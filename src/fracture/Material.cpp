@@ -6,6 +6,23 @@
 
 namespace spall {
 
+double dynamicIncreaseFactor(StrengthRateLaw law, double strainRatePerS)
+{
+    switch (law) {
+    case StrengthRateLaw::None:
+        return 1.0;
+    case StrengthRateLaw::FibModelCode2010: {
+        // fib Model Code 2010, eqs. 5.1-108 and 5.1-109 (tension); the two branches meet at
+        // 10 1/s (1.3366 and 1.3357).
+        constexpr double kQuasiStaticPerS = 1e-6;
+        const double ratio = strainRatePerS / kQuasiStaticPerS;
+        if (ratio <= 1.0) return 1.0;
+        return strainRatePerS <= 10.0 ? std::pow(ratio, 0.018) : 0.0062 * std::cbrt(ratio);
+    }
+    }
+    return 1.0;
+}
+
 Material calibrateMaterial(const std::string& name, double densityKgM3, double failureLowPa, double failureHighPa,
                            const std::string& source)
 {
@@ -38,6 +55,26 @@ Material withElasticity(Material m, double youngsModulusPa, double poissonRatio,
     return m;
 }
 
+/// `m` with its Mohr–Coulomb shear strength and friction, their source, and its rate law.
+Material withShear(Material m, double shearStrengthPa, double frictionCoefficient, StrengthRateLaw rateLaw, const std::string& source)
+{
+    m.shearStrengthPa = shearStrengthPa;
+    m.frictionCoefficient = frictionCoefficient;
+    m.strengthRateLaw = rateLaw;
+    m.source += "; shear: " + source;
+    return m;
+}
+
+/// Mohr–Coulomb through a material's uniaxial compressive and tensile strengths:
+/// fc = 2c cos φ / (1 − sin φ) and ft = 2c cos φ / (1 + sin φ) give c = √(fc ft) / 2 and
+/// sin φ = (fc − ft) / (fc + ft) (Jaeger, Cook & Zimmerman, Fundamentals of Rock Mechanics, 4th
+/// ed., 2007, §4.5). Returns {c, tan φ}.
+std::pair<double, double> mohrCoulombThrough(double compressiveStrengthPa, double tensileStrengthPa)
+{
+    const double sinPhi = (compressiveStrengthPa - tensileStrengthPa) / (compressiveStrengthPa + tensileStrengthPa);
+    return {0.5 * std::sqrt(compressiveStrengthPa * tensileStrengthPa), sinPhi / std::sqrt(1.0 - sinPhi * sinPhi)};
+}
+
 }  // namespace
 
 const std::vector<Material>& materialPresets()
@@ -66,22 +103,38 @@ const std::vector<Material>& materialPresets()
     //   concrete C30/37: fib Model Code 2010 5.1: Eci = 21.5 GPa (fcm/10)^(1/3) = 33.6 GPa,
     //     fctm = 0.3 fck^(2/3) = 2.9 MPa, Gf = 73 fcm^0.18 = 141 J/m^2 (fcm = 38 MPa); reinforced
     //     concrete the same concrete (its steel is not modelled).
+    //   Shear (Mohr–Coulomb with the tension cut-off above):
+    //   glass fails by principal tension, so in pure shear at τ = ft, and Rankine's criterion
+    //     linearised at no normal stress adds half the compression: c = ft, μ = 0.5;
+    //   wood: shear parallel to the grain 7.9 MPa (Wood Handbook table 5-3b, Sitka spruce, 12 %
+    //     moisture); the handbook gives no friction, none assumed (μ = 0);
+    //   brick masonry: EN 1996-1-1 table 3.4 (clay units, general-purpose mortar M10–M20)
+    //     fvko = 0.3 MPa and eq. 3.5, fvk = fvko + 0.4 σd;
+    //   concrete: Mohr–Coulomb through fcm = 38 MPa and fctm (mohrCoulombThrough), strength
+    //     rising with strain rate as fib Model Code 2010 5.1.11 gives for tension.
     const std::string fibC30 = "fib Model Code 2010, C30/37: E 33.6 GPa, fctm 2.9 MPa, Gf 141 J/m^2";
+    const auto [concreteCohesionPa, concreteFriction] = mohrCoulombThrough(38e6, 2.9e6);
+    const std::string concreteShear = "Mohr-Coulomb through fcm 38 MPa and fctm (Jaeger, Cook & Zimmerman 2007); rate: fib MC2010 5.1.11";
     static const std::vector<Material> presets = {
-        withElasticity(calibrateMaterial("glass", 2500.0, 3.4e3, 6.9e3, "Clancey 1972: windows shatter at 3.4-6.9 kPa"), 70e9, 0.2,
-                       45e6, 8.0, "EN 572-1 (E, strength); Gf = KIc^2/E, KIc 0.75 MPa m^0.5"),
-        withElasticity(calibrateMaterial("wood", 500.0, 6.9e3, 13.8e3, "Clancey 1972: wood panels fail at 6.9-13.8 kPa"), 10e9, 0.3,
-                       2.5e6, 250.0, "Wood Handbook FPL-GTR-190 (E, tension across grain); Stanzl-Tschegg et al. 1995 (Gf)"),
-        withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
-                                         "Clancey 1972: unreinforced brick panels 8-12 in fail at 48.2-55.1 kPa"),
-                       5e9, 0.2, 0.3e6, 12.0, "EN 1996-1-1 (E = 1000 fk); van der Pluijm via Lourenco 1996 (bond strength, Gf)"),
-        withElasticity(calibrateMaterial("concrete", 2400.0, 13.8e3, 20.7e3,
-                                         "Clancey 1972: unreinforced concrete/cinder block walls shatter at 13.8-20.7 kPa"),
-                       33.6e9, 0.2, 2.9e6, 141.0, fibC30),
-        withElasticity(calibrateMaterial("reinforced-concrete", 2500.0, 137.9e3 * (48.2 / 55.1), 137.9e3,
-                                         "NUKEMAP 20 psi benchmark: heavily built concrete buildings severely damaged or demolished at "
-                                         "137.9 kPa; low end at brick's relative spread (120.6 kPa)"),
-                       33.6e9, 0.2, 2.9e6, 141.0, fibC30 + " (steel not modelled)"),
+        withShear(withElasticity(calibrateMaterial("glass", 2500.0, 3.4e3, 6.9e3, "Clancey 1972: windows shatter at 3.4-6.9 kPa"), 70e9,
+                                 0.2, 45e6, 8.0, "EN 572-1 (E, strength); Gf = KIc^2/E, KIc 0.75 MPa m^0.5"),
+                  45e6, 0.5, StrengthRateLaw::None, "Rankine (principal tension) linearised: c = ft, mu 0.5"),
+        withShear(withElasticity(calibrateMaterial("wood", 500.0, 6.9e3, 13.8e3, "Clancey 1972: wood panels fail at 6.9-13.8 kPa"), 10e9,
+                                 0.3, 2.5e6, 250.0, "Wood Handbook FPL-GTR-190 (E, tension across grain); Stanzl-Tschegg et al. 1995 (Gf)"),
+                  7.9e6, 0.0, StrengthRateLaw::None, "Wood Handbook table 5-3b, Sitka spruce shear parallel to grain; no friction"),
+        withShear(withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
+                                                   "Clancey 1972: unreinforced brick panels 8-12 in fail at 48.2-55.1 kPa"),
+                                 5e9, 0.2, 0.3e6, 12.0, "EN 1996-1-1 (E = 1000 fk); van der Pluijm via Lourenco 1996 (bond strength, Gf)"),
+                  0.3e6, 0.4, StrengthRateLaw::None, "EN 1996-1-1 table 3.4 and eq. 3.5 (fvko 0.3 MPa, 0.4 sigma_d)"),
+        withShear(withElasticity(calibrateMaterial("concrete", 2400.0, 13.8e3, 20.7e3,
+                                                   "Clancey 1972: unreinforced concrete/cinder block walls shatter at 13.8-20.7 kPa"),
+                                 33.6e9, 0.2, 2.9e6, 141.0, fibC30),
+                  concreteCohesionPa, concreteFriction, StrengthRateLaw::FibModelCode2010, concreteShear),
+        withShear(withElasticity(calibrateMaterial("reinforced-concrete", 2500.0, 137.9e3 * (48.2 / 55.1), 137.9e3,
+                                                   "NUKEMAP 20 psi benchmark: heavily built concrete buildings severely damaged or demolished at "
+                                                   "137.9 kPa; low end at brick's relative spread (120.6 kPa)"),
+                                 33.6e9, 0.2, 2.9e6, 141.0, fibC30 + " (steel not modelled)"),
+                  concreteCohesionPa, concreteFriction, StrengthRateLaw::FibModelCode2010, concreteShear),
     };
     return presets;
 }
@@ -111,6 +164,9 @@ const std::vector<Field<Material>>& fieldTable<Material>()
         {"poisson_ratio", &Material::poissonRatio, closed(0.0, 0.45)},
         {"tensile_strength_Pa", &Material::tensileStrengthPa, aboveZeroUpTo(1e11)},
         {"fracture_energy_J_per_m2", &Material::fractureEnergyJPerM2, aboveZeroUpTo(1e7)},
+        {"shear_strength_Pa", &Material::shearStrengthPa, aboveZeroUpTo(1e11)},
+        {"friction_coefficient", &Material::frictionCoefficient, closed(0.0, 10.0)},
+        {"strength_rate_law", choice(&Material::strengthRateLaw)},
     };
     return table;
 }

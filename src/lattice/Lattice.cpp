@@ -65,6 +65,11 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
     // Voxels too large to soften (snap-back) break at the peak: the strength, which decides
     // whether a body breaks, is kept, and a crack dissipates ft² h / (2E) per area, more than Gf.
     k.zeroTractionStretchM = std::max(2.0 * m.fractureEnergyJPerM2 / m.tensileStrengthPa, k.peakStretchM);
+    if (!(m.shearStrengthPa > 0.0) || !(m.frictionCoefficient >= 0.0))
+        throw std::invalid_argument("calibrateLattice: the shear strength must be positive and the friction coefficient not negative");
+    k.shearStrengthPa = m.shearStrengthPa;
+    k.frictionCoefficient = m.frictionCoefficient;
+    k.strengthRateLaw = m.strengthRateLaw;
     return k;
 }
 
@@ -81,7 +86,8 @@ Lattice Lattice::fromBody(const Body& body, const Material& material, const Latt
     lattice.addLinkBonds(body);
     if (ground.enabled) lattice.addGroundBonds(body);
     lattice.bondStrengthScale.assign(lattice.bonds.size(), 1.0);
-    lattice.bondMaxStretchM.assign(lattice.bonds.size(), 0.0);
+    lattice.bondMaxEquivalentStretchM.assign(lattice.bonds.size(), 0.0);
+    lattice.bondDamageDriverM.assign(lattice.bonds.size(), 0.0);
     const double pWaveSpeed = std::sqrt((lattice.stiffness.lameLambdaPa + 2.0 * lattice.stiffness.shearModulusPa) / material.densityKgM3);
     lattice.mDashpotPerViscosity = material.densityKgM3 * pWaveSpeed * h * h;
     lattice.condenseVolumetricModulus();
@@ -231,7 +237,7 @@ double Lattice::bondDamage(size_t b) const
 {
     const double scale = bondStrengthScale[b];
     const double u0 = scale * stiffness.peakStretchM, uf = stiffness.zeroTractionStretchM / scale;
-    const double kappa = bondMaxStretchM[b];
+    const double kappa = bondDamageDriverM[b];
     if (kappa <= u0) return 0.0;
     if (kappa >= uf) return 1.0;
     // Secant stiffness on the softening line: (1 - D) κ / u0 = (uf - κ) / (uf - u0).
@@ -277,14 +283,53 @@ void Lattice::addBondForces(size_t b)
     bondMomentNm[bond.low] += pairMoment - bendingOnHigh;
 }
 
+double Lattice::equivalentStretchM(size_t b) const
+{
+    const LatticeBond& bond = bonds[b];
+    const LatticeStiffness& k = stiffness;
+    const Eigen::Vector3d arm = positionM[bond.high] - positionM[bond.low];
+    const double stretch = arm.norm() - voxelSizeM;
+    // The shear displacement: the arm across the bond's axis, in its half-way frame.
+    const Eigen::Quaterniond& qa = orientation[bond.low];
+    const Eigen::Quaterniond& qb = orientation[bond.high];
+    Eigen::Quaterniond half;
+    half.coeffs() = qa.coeffs() + (qa.coeffs().dot(qb.coeffs()) >= 0.0 ? 1.0 : -1.0) * qb.coeffs();
+    const Eigen::Vector3d axis = half.normalized() * Eigen::Vector3d::Unit(bond.axis);
+    const double shearTractionPa = k.shearNPerM * (arm - arm.dot(axis) * axis).norm() / (voxelSizeM * voxelSizeM);
+    const double shearIndex = shearTractionPa / k.shearStrengthPa;
+    double index = 0.0;
+    if (stretch >= 0.0) {
+        const double tensionIndex = stretch / k.peakStretchM;
+        index = std::sqrt(tensionIndex * tensionIndex + shearIndex * shearIndex);
+    } else {
+        // The compression across the bond: its spring's and its particles' volumetric share, as
+        // the last force pass left them (a substep behind; a function of the saved state).
+        const double normalTractionPa = k.normalNPerM * (arm.dot(axis) - voxelSizeM) / (voxelSizeM * voxelSizeM) +
+                                        mVolumetricStressShare[bond.low][bond.axis] + mVolumetricStressShare[bond.high][bond.axis];
+        index = std::max(0.0, shearTractionPa - k.frictionCoefficient * std::max(0.0, -normalTractionPa)) / k.shearStrengthPa;
+    }
+    return index * k.peakStretchM;
+}
+
+double Lattice::strainRatePerS(size_t b) const
+{
+    const Eigen::Vector3d arm = positionM[bonds[b].high] - positionM[bonds[b].low];
+    return std::abs((velocityMS[bonds[b].high] - velocityMS[bonds[b].low]).dot(arm)) / (arm.norm() * voxelSizeM);
+}
+
+void Lattice::updateBondDamage()
+{
+    forEach(bondCount(), [&](size_t b) {
+        const double increaseM = equivalentStretchM(b) - bondMaxEquivalentStretchM[b];
+        if (increaseM <= 0.0) return;
+        bondMaxEquivalentStretchM[b] += increaseM;
+        const bool rateDependent = stiffness.strengthRateLaw != StrengthRateLaw::None;
+        bondDamageDriverM[b] += rateDependent ? increaseM / dynamicIncreaseFactor(stiffness.strengthRateLaw, strainRatePerS(b)) : increaseM;
+    });
+}
+
 void Lattice::refreshForces()
 {
-    // Damage grows with the largest stretch (change of length between the centres); what it
-    // takes away stays away. Updated first, so the forces are a function of the state alone.
-    forEach(bondCount(), [&](size_t b) {
-        const double stretch = (positionM[bonds[b].high] - positionM[bonds[b].low]).norm() - voxelSizeM;
-        bondMaxStretchM[b] = std::max(bondMaxStretchM[b], stretch);
-    });
     computeVolumetricStrain();
     bondForceN.assign(particleCount(), Eigen::Vector3d::Zero());
     bondMomentNm.assign(particleCount(), Eigen::Vector3d::Zero());
@@ -310,6 +355,9 @@ void Lattice::step(double dtS)
             orientation[p] = (rotationOf(dtS * angularVelocityRadS[p]) * orientation[p]).normalized();
             if (ground.enabled && !held[p]) keepAboveGround(p);
         });
+    // Damage first, from the new positions (and the velocities half-way through the step, for
+    // the strain rate), then the forces from the state.
+    updateBondDamage();
     refreshForces();
     forEach(particleCount(), kick);
 }

@@ -1,12 +1,29 @@
 // Materials in physical units, with presets calibrated on published blast-damage tables.
 #pragma once
 
+#include <spall/core/EnumNames.h>
 #include <spall/core/Fields.h>
 
 #include <string>
 #include <vector>
 
 namespace spall {
+
+/// How a material's strength rises with the rate it is strained at.
+enum class StrengthRateLaw {
+    None,
+    /// fib Model Code 2010 (5.1.11.2), concrete in tension: (ε̇/ε̇0)^0.018 up to 10 1/s, then
+    /// 0.0062 (ε̇/ε̇0)^(1/3), ε̇0 = 1e-6 1/s.
+    FibModelCode2010,
+};
+template <>
+struct EnumNames<StrengthRateLaw> {
+    static constexpr std::pair<StrengthRateLaw, const char*> kNames[] = {{StrengthRateLaw::None, "none"},
+                                                                         {StrengthRateLaw::FibModelCode2010, "fib-mc2010"}};
+};
+
+/// The dynamic increase factor of strength at a strain rate (unit: 1/s); 1 below the quasi-static rate.
+double dynamicIncreaseFactor(StrengthRateLaw law, double strainRatePerS);
 
 struct Material {
     std::string name;
@@ -23,6 +40,11 @@ struct Material {
     double poissonRatio = 0.2;            ///< (unit: 1)
     double tensileStrengthPa = 3e6;       ///< (unit: Pa)
     double fractureEnergyJPerM2 = 100.0;  ///< energy a crack dissipates per unit of its area, Gf (unit: J/m^2)
+    /// Mohr–Coulomb with a tension cut-off: a plane fails in shear when |τ| > c + μ·(compression
+    /// across it); c is the shear strength at no normal stress (unit: Pa) ...
+    double shearStrengthPa = 6e6;
+    double frictionCoefficient = 0.5;  ///< ... and μ = tan φ (unit: 1)
+    StrengthRateLaw strengthRateLaw = StrengthRateLaw::None;
     /// Where the numbers come from.
     std::string source;
 };

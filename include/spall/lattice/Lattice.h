@@ -42,6 +42,13 @@ struct LatticeStiffness {
     /// strength, dissipating ft² h / (2E) > Gf.
     double peakStretchM = 0.0;
     double zeroTractionStretchM = 0.0;
+    /// Mohr–Coulomb with the tension cut-off (Material): the shear strength at no normal stress
+    /// and the friction coefficient, the friction on the bond's normal traction. (The cut-off is
+    /// on the normal strain, E ε = ft, exact in uniaxial stress and 11 % stronger than a stress
+    /// cut-off in uniaxial strain at ν = 0.2.)
+    double shearStrengthPa = 0.0;
+    double frictionCoefficient = 0.0;
+    StrengthRateLaw strengthRateLaw = StrengthRateLaw::None;
 };
 /// From the material's density, E, ν, tensile strength and Gf (fracture/Material.h).
 LatticeStiffness calibrateLattice(const Material& material, double voxelSizeM);
@@ -93,7 +100,7 @@ public:
     double stableTimeStepS() const;
     void step(double dtS);
     /// The bonds' forces from the state (after the state arrays were written from outside, as a
-    /// checkpoint does; each step calls it).
+    /// checkpoint does; each step calls it after updating the bonds' damage).
     void refreshForces();
     /// Steps over dtS in equal substeps no longer than stableTimeStepS(); returns how many.
     int64_t advance(double dtS);
@@ -121,8 +128,19 @@ public:
     std::vector<uint8_t> held;  ///< 1: fixed to the world (an anchored voxel)
     std::vector<LatticeBond> bonds;
     /// Per bond: its strength as a fraction of the material's (1 by default; a notch, a weak
-    /// joint), and the largest normal stretch it has seen (unit: m), from which its damage follows.
-    std::vector<double> bondStrengthScale, bondMaxStretchM;
+    /// joint); the largest equivalent stretch it has seen (equivalentStretchM; unit: m); and
+    /// what drives its damage, the same with each increase divided by the rate law's dynamic
+    /// increase factor at the strain rate of that moment (unit: m). Weighting by increase, not
+    /// by the moment, keeps a bond loaded steadily at a rate as strong as the law says, though
+    /// ringing makes its instantaneous strain rate swing through zero.
+    std::vector<double> bondStrengthScale, bondMaxEquivalentStretchM, bondDamageDriverM;
+    /// How close a bond is to failing, as a stretch: the normal stretch that would load it as
+    /// much in pure tension, u0 × f with f its failure index (1 on the failure surface).
+    /// Tension: f² = (stretch/u0)² + (τ/c)² (the tension cut-off joined to pure shear by an
+    /// ellipse, Camacho & Ortiz 1996's effective traction); compression: f = (|τ| − μ σc)/c,
+    /// Mohr–Coulomb. Bending does not count: its stress at a face vanishes with h for a smooth
+    /// curvature (unit: m).
+    double equivalentStretchM(size_t b) const;
     /// 0 intact … 1 broken: the secant stiffness lost in tension, shear and bending (compression
     /// still carries, as contact).
     double bondDamage(size_t b) const;
@@ -162,6 +180,10 @@ private:
 
     /// Each particle's tr ε: per axis, the mean stretch (length change / h) of its bonds along it.
     void computeVolumetricStrain();
+    /// Damage grows with the damage driver; what it takes away stays away.
+    void updateBondDamage();
+    /// A bond's normal strain rate (unit: 1/s).
+    double strainRatePerS(size_t b) const;
     // Building (fromBody).
     void addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& placeM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
                      const Eigen::Quaterniond& q, bool isHeld);
