@@ -123,10 +123,11 @@ Scene wallScene(double tntKg, double standoffM)
     return parseScene(j.dump(), "wall", ".");
 }
 
+/// Bonds broken so far, those to the ground included: the crack surface in voxel faces.
 int64_t brokenBondsOf(const Simulation& sim)
 {
     int64_t broken = 0;
-    for (const HandOffRecord& h : sim.state().handOffs) broken += h.brokenBonds;
+    for (const HandOffRecord& h : sim.state().handOffs) broken += h.brokenBonds + h.brokenAnchors;
     return broken;
 }
 
@@ -144,37 +145,33 @@ TEST(Deformable, BrickWallStandsAGramOfTntAt30cm)
     EXPECT_EQ(sim.bodies().size(), 1u);
 }
 
-TEST(Deformable, BrickWallBreaksUnderAKilogramAt50cmAndKeepsItsStump)
+TEST(Deformable, BrickWallBreaksUnderAKilogramAt50cm)
 {
+    // Broken into pieces, and off its base: the base's bed joint, loaded at once in flexure
+    // and in shear, cracks through (the classic failure of an unreinforced cantilever wall,
+    // which then rocks on its base). With tension failure only, a stump stayed bonded.
     Simulation sim(wallScene(1.0, 0.5));
     sim.advanceTo(0.05);
     EXPECT_GT(brokenBondsOf(sim), 0);
     EXPECT_GT(sim.bodies().size(), 2u);
-    int anchoredParts = 0;
-    for (const Body& b : sim.bodies()) anchoredParts += b.anchored;
-    EXPECT_GE(anchoredParts, 1) << "a wall anchored at its base keeps a stump";
 }
 
 TEST(Deformable, MoreExplosiveBreaksMore)
 {
     // Issue 17: with the pressure rule every link broke once a charge was big enough, whatever
-    // more was added. From stress, more explosive makes more pieces, and detaches more until
-    // all but the stump has gone.
-    const double wallKg = 1900.0 * 1.0 * 0.2 * 1.0;
+    // more was added. From stress, more explosive makes more pieces and more crack surface.
     size_t previousBodies = 0;
-    double firstDetachedKg = 0.0, lastDetachedKg = 0.0;
+    int64_t previousBrokenBonds = 0;
     for (const double tntKg : {0.1, 0.4, 1.6}) {
         Simulation sim(wallScene(tntKg, 0.5));
         sim.advanceTo(0.05);
-        double detachedKg = 0.0;
-        for (const Body& b : sim.bodies()) detachedKg += b.anchored ? 0.0 : b.mass.massKg;
-        std::printf("%.1f kg TNT at 0.5 m: %zu bodies, %.1f kg of %.0f kg detached\n", tntKg, sim.bodies().size(), detachedKg, wallKg);
+        const int64_t broken = brokenBondsOf(sim);
+        std::printf("%.1f kg TNT at 0.5 m: %zu bodies, %lld bonds broken (ground bonds included)\n", tntKg, sim.bodies().size(), static_cast<long long>(broken));
         EXPECT_GT(sim.bodies().size(), previousBodies) << tntKg << " kg";
+        EXPECT_GT(broken, previousBrokenBonds + previousBrokenBonds / 2) << tntKg << " kg";
         previousBodies = sim.bodies().size();
-        if (firstDetachedKg == 0.0) firstDetachedKg = detachedKg;
-        lastDetachedKg = detachedKg;
+        previousBrokenBonds = broken;
     }
-    EXPECT_GT(lastDetachedKg, 1.5 * firstDetachedKg);
 }
 
 TEST(Deformable, AnchorsHoldTheMaterialsTensileStrengthAndThenLetGo)
@@ -213,3 +210,4 @@ TEST(Deformable, AnchorsHoldTheMaterialsTensileStrengthAndThenLetGo)
     EXPECT_FALSE(handed.parts.front().anchored);
     EXPECT_GT(handed.parts.front().motion.linearVelocityMS.z(), 0.0);
 }
+
