@@ -92,6 +92,22 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "collisions": {"solver_iterations": 4294967297}})")
                   .find("collisions.solver_iterations: must be an integer that fits in 32 bits"),
               std::string::npos);
+    // Fracture from stress: its settings and the material values it reads.
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"bulk_viscosity": -0.1}})").find("lattice.bulk_viscosity: must be in"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"handoff_energy_fraction": 2}})").find("lattice.handoff_energy_fraction"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"max_vibration_s": "long"}})").find("lattice.max_vibration_s: must be a number"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"damage_law": "paper"}})").find("lattice.damage_law"), std::string::npos);
+    const std::string stone = R"(}], "materials": {"stone": {)";
+    for (const std::string& bad : {R"("youngs_modulus_Pa": 0)", R"("poisson_ratio": 0.5)", R"("tensile_strength_Pa": -1)",
+                                   R"("fracture_energy_J_per_m2": 0)", R"("shear_strength_Pa": 0)", R"("friction_coefficient": -0.2)"}) {
+        const std::string key = bad.substr(1, bad.find('"', 1) - 1);
+        EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + bad + "}}}").find("materials.stone." + key + ": must be"), std::string::npos) << bad;
+    }
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("strength_rate_law": "fast"}}})").find("materials.stone.strength_rate_law"),
+              std::string::npos);
     EXPECT_EQ(errorOf(defaultSceneJson()), "");
 }
 
@@ -133,7 +149,7 @@ const char* kEveryKeyScene = R"({
   "blast": {"dataset": "kinney-graham", "table_nodes_per_decade": 64},
   "fracture": {"algorithm": "davison-stevens", "weakening": false, "orientation": false, "min_fragment_voxels": 3,
                "small_fragments": "dust"},
-  "lattice": {"bulk_viscosity": 0.2, "handoff_energy_fraction": 0.05, "max_vibration_s": 0.01},
+  "lattice": {"bulk_viscosity": 0.2, "handoff_energy_fraction": 0.05, "max_vibration_s": 0.01, "damage_law": "davison-stevens"},
   "solver": {"integrator": "rk4", "max_time_step_s": 0.002, "min_time_step_s": 1e-6, "front_fraction_voxels": 0.4,
              "pulse_fraction": 0.05, "speed_fraction_voxels": 0.4, "linear_drag_per_s": 0.1, "angular_drag_per_s": 0.2,
              "sleep": false, "sleep_speed_m_s": 0.1, "sleep_time_s": 1.0},

@@ -60,6 +60,7 @@ DeformableBody enterDeformablePhase(const Body& body, const Material& material, 
 {
     DeformableBody d{body.id, Lattice::fromBody(body, material, ground), timeS, timeS};
     d.lattice.bulkViscosity = settings.bulkViscosity;
+    d.lattice.damageLaw = settings.damageLaw;
     return d;
 }
 
@@ -72,16 +73,13 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
     Lattice& from = saved.lattice;
     const size_t n = to.particleCount(), bonds = to.bondCount();
     if (from.positionM.size() != n || from.velocityMS.size() != n || from.angularVelocityRadS.size() != n || from.orientation.size() != n ||
-        from.bondMaxEquivalentStretchM.size() != bonds || from.bondDamageDriverM.size() != bonds || from.bondStrengthScale.size() != bonds || from.bondForceN.size() != n ||
-        from.bondMomentNm.size() != n)
+        from.bondHistory.size() != bonds || from.bondForceN.size() != n || from.bondMomentNm.size() != n)
         throw InputError("saved state: the lattice of body " + std::to_string(body.id) + " does not fit its voxels and links");
     to.positionM = std::move(from.positionM);
     to.velocityMS = std::move(from.velocityMS);
     to.angularVelocityRadS = std::move(from.angularVelocityRadS);
     to.orientation = std::move(from.orientation);
-    to.bondMaxEquivalentStretchM = std::move(from.bondMaxEquivalentStretchM);
-    to.bondDamageDriverM = std::move(from.bondDamageDriverM);
-    to.bondStrengthScale = std::move(from.bondStrengthScale);
+    to.bondHistory = std::move(from.bondHistory);
     to.refreshForces();  // the volumetric strain; the forces as the step left them come next
     to.bondForceN = std::move(from.bondForceN);
     to.bondMomentNm = std::move(from.bondMomentNm);
@@ -202,9 +200,7 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
     }
     for (size_t b = 0; b < to.bondCount(); ++b) {
         const size_t c = size_t(from.bondAcross(size_t(from.particleAt(to.voxel[to.bonds[b].low])), 2 * to.bonds[b].axis + 1));
-        to.bondMaxEquivalentStretchM[b] = from.bondMaxEquivalentStretchM[c];
-        to.bondDamageDriverM[b] = from.bondDamageDriverM[c];
-        to.bondStrengthScale[b] = from.bondStrengthScale[c];
+        to.bondHistory[b] = from.bondHistory[c];
     }
     // The forces of the part's own bonds; those of bonds to the pieces that left (broken, in
     // contact at most) are gone with them.

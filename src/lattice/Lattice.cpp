@@ -70,6 +70,9 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
     k.shearStrengthPa = m.shearStrengthPa;
     k.frictionCoefficient = m.frictionCoefficient;
     k.strengthRateLaw = m.strengthRateLaw;
+    k.youngsModulusPa = e;
+    k.damageRatePerS = m.damageRatePerS;
+    k.damageStressScalePerPa = m.damageStressScalePerPa > 0.0 ? m.damageStressScalePerPa : 1.0 / m.tensileStrengthPa;
     return k;
 }
 
@@ -85,9 +88,7 @@ Lattice Lattice::fromBody(const Body& body, const Material& material, const Latt
     lattice.addVoxelParticles(body);
     lattice.addLinkBonds(body);
     if (ground.enabled) lattice.addGroundBonds(body);
-    lattice.bondStrengthScale.assign(lattice.bonds.size(), 1.0);
-    lattice.bondMaxEquivalentStretchM.assign(lattice.bonds.size(), 0.0);
-    lattice.bondDamageDriverM.assign(lattice.bonds.size(), 0.0);
+    lattice.bondHistory.assign(lattice.bonds.size(), BondHistory());
     const double pWaveSpeed = std::sqrt((lattice.stiffness.lameLambdaPa + 2.0 * lattice.stiffness.shearModulusPa) / material.densityKgM3);
     lattice.mDashpotPerViscosity = material.densityKgM3 * pWaveSpeed * h * h;
     lattice.condenseVolumetricModulus();
@@ -235,9 +236,14 @@ void Lattice::computeVolumetricStrain()
 
 double Lattice::bondDamage(size_t b) const
 {
-    const double scale = bondStrengthScale[b];
+    return damageLaw == LatticeDamageLaw::DavisonStevens ? bondHistory[b].rateDamage : softeningDamage(b);
+}
+
+double Lattice::softeningDamage(size_t b) const
+{
+    const double scale = bondHistory[b].strengthScale;
     const double u0 = scale * stiffness.peakStretchM, uf = stiffness.zeroTractionStretchM / scale;
-    const double kappa = bondDamageDriverM[b];
+    const double kappa = bondHistory[b].damageDriverM;
     if (kappa <= u0) return 0.0;
     if (kappa >= uf) return 1.0;
     // Secant stiffness on the softening line: (1 - D) κ / u0 = (uf - κ) / (uf - u0).
@@ -317,15 +323,37 @@ double Lattice::strainRatePerS(size_t b) const
     return std::abs((velocityMS[bonds[b].high] - velocityMS[bonds[b].low]).dot(arm)) / (arm.norm() * voxelSizeM);
 }
 
-void Lattice::updateBondDamage()
+void Lattice::updateBondDamage(double dtS)
 {
     forEach(bondCount(), [&](size_t b) {
-        const double increaseM = equivalentStretchM(b) - bondMaxEquivalentStretchM[b];
-        if (increaseM <= 0.0) return;
-        bondMaxEquivalentStretchM[b] += increaseM;
-        const bool rateDependent = stiffness.strengthRateLaw != StrengthRateLaw::None;
-        bondDamageDriverM[b] += rateDependent ? increaseM / dynamicIncreaseFactor(stiffness.strengthRateLaw, strainRatePerS(b)) : increaseM;
+        BondHistory& history = bondHistory[b];
+        const double increaseM = equivalentStretchM(b) - history.maxEquivalentStretchM;
+        if (increaseM > 0.0) {
+            history.maxEquivalentStretchM += increaseM;
+            const bool rateDependent = stiffness.strengthRateLaw != StrengthRateLaw::None;
+            history.damageDriverM += rateDependent ? increaseM / dynamicIncreaseFactor(stiffness.strengthRateLaw, strainRatePerS(b)) : increaseM;
+        }
+        if (damageLaw == LatticeDamageLaw::DavisonStevens) history.rateDamage = rateDamageAfter(b, dtS);
     });
+}
+
+double Lattice::rateDamageAfter(size_t b, double dtS) const
+{
+    const BondHistory& history = bondHistory[b];
+    const double onLine = softeningDamage(b);
+    // Past the softening line's end the crack is open: broken, as in the crack band.
+    if (onLine >= 1.0) return 1.0;
+    const LatticeStiffness& k = stiffness;
+    // Stresses in tension's terms: the bond's (its equivalent stretch on its damaged spring) and
+    // what the softening line allows at its damage driver.
+    const double toStressPa = k.youngsModulusPa / voxelSizeM, peakM = history.strengthScale * k.peakStretchM;
+    const double stressPa = (1.0 - history.rateDamage) * toStressPa * equivalentStretchM(b);
+    const double allowedPa = toStressPa * (history.damageDriverM <= peakM ? peakM : (1.0 - onLine) * history.damageDriverM);
+    const double excessPa = stressPa - allowedPa;
+    if (excessPa <= 0.0) return history.rateDamage;
+    // exp(C σx) − 1 by expm1; past exp(50) the step breaks the bond anyway.
+    const double rate = k.damageRatePerS * std::expm1(std::min(k.damageStressScalePerPa * excessPa, 50.0));
+    return std::min(1.0, history.rateDamage + rate * dtS);
 }
 
 void Lattice::refreshForces()
@@ -357,7 +385,7 @@ void Lattice::step(double dtS)
         });
     // Damage first, from the new positions (and the velocities half-way through the step, for
     // the strain rate), then the forces from the state.
-    updateBondDamage();
+    updateBondDamage(dtS);
     refreshForces();
     forEach(particleCount(), kick);
 }

@@ -127,9 +127,12 @@ void transferDeformable(Archive& a, D& d)
     a.sequence(lattice.orientation, "particle orientations", [&](auto& q) { a.doubles(q.coeffs().data(), 4, "particle orientation"); });
     a.sequence(lattice.bondForceN, "particle bond forces", [&](auto& v) { a.vec(v, "particle bond force"); });
     a.sequence(lattice.bondMomentNm, "particle bond moments", [&](auto& v) { a.vec(v, "particle bond moment"); });
-    a.sequence(lattice.bondMaxEquivalentStretchM, "bond stretches", [&](auto& x) { a.pod(x, "bond stretch"); });
-    a.sequence(lattice.bondDamageDriverM, "bond damage drivers", [&](auto& x) { a.pod(x, "bond damage driver"); });
-    a.sequence(lattice.bondStrengthScale, "bond strengths", [&](auto& x) { a.pod(x, "bond strength"); });
+    a.sequence(lattice.bondHistory, "bond histories", [&](auto& h) {
+        a.pod(h.strengthScale, "bond strength");
+        a.pod(h.maxEquivalentStretchM, "bond stretch");
+        a.pod(h.damageDriverM, "bond damage driver");
+        a.pod(h.rateDamage, "bond damage");
+    });
 }
 
 template <typename Archive, typename H>

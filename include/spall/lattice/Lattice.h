@@ -11,6 +11,7 @@
 #pragma once
 
 #include <spall/fracture/Material.h>
+#include <spall/lattice/Settings.h>
 #include <spall/voxel/Body.h>
 
 #include <Eigen/Core>
@@ -48,10 +49,29 @@ struct LatticeStiffness {
     /// cut-off in uniaxial strain at ν = 0.2.)
     double shearStrengthPa = 0.0;
     double frictionCoefficient = 0.0;
+    double youngsModulusPa = 0.0;
     StrengthRateLaw strengthRateLaw = StrengthRateLaw::None;
+    /// Davison–Stevens B (unit: 1/s) and C (unit: 1/Pa; the material's 0 becomes 1/ft).
+    double damageRatePerS = 0.0;
+    double damageStressScalePerPa = 0.0;
 };
 /// From the material's density, E, ν, tensile strength and Gf (fracture/Material.h).
 LatticeStiffness calibrateLattice(const Material& material, double voxelSizeM);
+
+/// What a bond remembers (all of it saved with a checkpoint).
+struct BondHistory {
+    /// Its strength as a fraction of the material's (1 by default; a notch, a weak joint).
+    double strengthScale = 1.0;
+    /// The largest equivalent stretch it has seen (Lattice::equivalentStretchM; unit: m).
+    double maxEquivalentStretchM = 0.0;
+    /// What drives its damage: the same with each increase divided by the rate law's dynamic
+    /// increase factor at the strain rate of that moment (unit: m). Weighting by increase, not
+    /// by the moment, keeps a bond loaded steadily at a rate as strong as the law says, though
+    /// ringing makes its instantaneous strain rate swing through zero.
+    double damageDriverM = 0.0;
+    /// Davison–Stevens damage (that law only) (unit: 1).
+    double rateDamage = 0.0;
+};
 
 /// A bond joins particle `low` to its +axis neighbour `high`.
 struct LatticeBond {
@@ -127,13 +147,7 @@ public:
     std::vector<Eigen::Vector3d> bondForceN, bondMomentNm;
     std::vector<uint8_t> held;  ///< 1: fixed to the world (an anchored voxel)
     std::vector<LatticeBond> bonds;
-    /// Per bond: its strength as a fraction of the material's (1 by default; a notch, a weak
-    /// joint); the largest equivalent stretch it has seen (equivalentStretchM; unit: m); and
-    /// what drives its damage, the same with each increase divided by the rate law's dynamic
-    /// increase factor at the strain rate of that moment (unit: m). Weighting by increase, not
-    /// by the moment, keeps a bond loaded steadily at a rate as strong as the law says, though
-    /// ringing makes its instantaneous strain rate swing through zero.
-    std::vector<double> bondStrengthScale, bondMaxEquivalentStretchM, bondDamageDriverM;
+    std::vector<BondHistory> bondHistory;
     /// How close a bond is to failing, as a stretch: the normal stretch that would load it as
     /// much in pure tension, u0 × f with f its failure index (1 on the failure surface).
     /// Tension: f² = (stretch/u0)² + (τ/c)² (the tension cut-off joined to pure shear by an
@@ -152,6 +166,7 @@ public:
     /// free face's reflection puts spurious tension a few voxels deep (docs/accuracy.md). 0 turns
     /// it off.
     double bulkViscosity = 0.1;
+    LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;
     LatticeGround ground;
 
     double voxelSizeM = 0.0;
@@ -180,8 +195,13 @@ private:
 
     /// Each particle's tr ε: per axis, the mean stretch (length change / h) of its bonds along it.
     void computeVolumetricStrain();
-    /// Damage grows with the damage driver; what it takes away stays away.
-    void updateBondDamage();
+    /// Damage grows with the damage driver (and under Davison–Stevens, over the step's
+    /// duration); what it takes away stays away.
+    void updateBondDamage(double dtS);
+    /// 0 intact … 1 broken on the softening line, from the damage driver.
+    double softeningDamage(size_t b) const;
+    /// Davison–Stevens: a bond's damage after dtS.
+    double rateDamageAfter(size_t b, double dtS) const;
     /// A bond's normal strain rate (unit: 1/s).
     double strainRatePerS(size_t b) const;
     // Building (fromBody).

@@ -2,9 +2,26 @@
 // field.
 #pragma once
 
+#include <spall/core/EnumNames.h>
 #include <spall/core/Fields.h>
 
 namespace spall {
+
+/// How a bond's damage grows.
+enum class LatticeDamageLaw {
+    /// Crack band: damage follows the largest failure index reached, on the softening line.
+    Softening,
+    /// Davison–Stevens in rate form, on real stresses: dD/dt = B [exp(C σx) − 1] with σx the
+    /// bond's stress in excess of what the softening line allows at its largest failure index,
+    /// so loaded slowly it follows the softening line (and dissipates Gf); loaded fast it
+    /// carries more for a while (paper eq. 2.2 and 3.2, D* = 1 per bond).
+    DavisonStevens,
+};
+template <>
+struct EnumNames<LatticeDamageLaw> {
+    static constexpr std::pair<LatticeDamageLaw, const char*> kNames[] = {{LatticeDamageLaw::Softening, "softening"},
+                                                                          {LatticeDamageLaw::DavisonStevens, "davison-stevens"}};
+};
 
 struct LatticeSettings {
     /// Linear bulk viscosity ζ: a dashpot of ζ ρ c h² along each bond (Lattice::bulkViscosity)
@@ -20,6 +37,9 @@ struct LatticeSettings {
     /// once (a 2.5 m brick cantilever 0.3 m thick: 80 ms), since that swing is what breaks a
     /// wall at its base; vibration that outlasts it is rigid-body motion's loss (unit: s).
     double maxVibrationS = 0.1;
+    /// How bonds' damage grows: the crack band's softening line, or Davison–Stevens in rate form
+    /// above it, with the material's B and C.
+    LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;
 };
 
 // Keys and ranges (src/lattice/Settings.cpp).
