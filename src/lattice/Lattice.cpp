@@ -45,6 +45,20 @@ Eigen::Quaterniond rotationOf(const Eigen::Vector3d& turn)
     return Eigen::Quaterniond(Eigen::AngleAxisd(a, turn / a));
 }
 
+/// Column `axis` of a unit quaternion's rotation matrix: where it turns that coordinate axis.
+Eigen::Vector3d rotatedAxis(const Eigen::Quaterniond& q, int axis)
+{
+    const double w = q.w(), x = q.x(), y = q.y(), z = q.z();
+    switch (axis) {
+    case 0:
+        return {1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)};
+    case 1:
+        return {2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z + w * x)};
+    default:
+        return {2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y)};
+    }
+}
+
 }  // namespace
 
 LatticeStiffness calibrateLattice(const Material& m, double h)
@@ -254,7 +268,7 @@ double Lattice::effectiveStretchM(size_t b) const
 {
     const LatticeBond& bond = bonds[b];
     const double stretch = (positionM[bond.high] - positionM[bond.low]).norm() - voxelSizeM;
-    return stretch > 0.0 ? std::sqrt(1.0 - bondDamage(b)) * stretch : stretch;
+    return stretch > 0.0 ? mBondSqrtIntact[b] * stretch : stretch;
 }
 
 void Lattice::addBondForces(size_t b)
@@ -263,7 +277,7 @@ void Lattice::addBondForces(size_t b)
     const LatticeStiffness& k = stiffness;
     const BondStrain s = strainOf(bond);
     const int a = bond.axis;
-    const double intact = 1.0 - bondDamage(b);
+    const double intact = mBondSqrtIntact[b] * mBondSqrtIntact[b];
     Eigen::Vector3d local = -intact * k.shearNPerM * s.displacementM;
     local[a] = -(s.displacementM[a] > 0.0 ? intact : 1.0) * k.normalNPerM * s.displacementM[a];
     const Eigen::Vector3d arm = positionM[bond.high] - positionM[bond.low];
@@ -295,12 +309,10 @@ double Lattice::equivalentStretchM(size_t b) const
     const LatticeStiffness& k = stiffness;
     const Eigen::Vector3d arm = positionM[bond.high] - positionM[bond.low];
     const double stretch = arm.norm() - voxelSizeM;
-    // The shear displacement: the arm across the bond's axis, in its half-way frame.
-    const Eigen::Quaterniond& qa = orientation[bond.low];
-    const Eigen::Quaterniond& qb = orientation[bond.high];
-    Eigen::Quaterniond half;
-    half.coeffs() = qa.coeffs() + (qa.coeffs().dot(qb.coeffs()) >= 0.0 ? 1.0 : -1.0) * qb.coeffs();
-    const Eigen::Vector3d axis = half.normalized() * Eigen::Vector3d::Unit(bond.axis);
+    // The shear displacement: the arm across the bond's axis, half-way between where the two
+    // particles turn it (the mean of the two directions: the half-way rotation's to second
+    // order in the bonds' small relative turn).
+    const Eigen::Vector3d axis = (rotatedAxis(orientation[bond.low], bond.axis) + rotatedAxis(orientation[bond.high], bond.axis)).normalized();
     const double shearTractionPa = k.shearNPerM * (arm - arm.dot(axis) * axis).norm() / (voxelSizeM * voxelSizeM);
     const double shearIndex = shearTractionPa / k.shearStrengthPa;
     double index = 0.0;
@@ -358,6 +370,8 @@ double Lattice::rateDamageAfter(size_t b, double dtS) const
 
 void Lattice::refreshForces()
 {
+    mBondSqrtIntact.resize(bondCount());
+    forEach(bondCount(), [&](size_t b) { mBondSqrtIntact[b] = std::sqrt(1.0 - bondDamage(b)); });
     computeVolumetricStrain();
     bondForceN.assign(particleCount(), Eigen::Vector3d::Zero());
     bondMomentNm.assign(particleCount(), Eigen::Vector3d::Zero());

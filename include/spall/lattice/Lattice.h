@@ -192,6 +192,9 @@ private:
     std::vector<double> mVolumetricStrain;
     std::vector<Eigen::Vector3d> mVolumetricStressShare;
     double mDashpotPerViscosity = 0.0;  ///< ρ c h² (unit: N s/m)
+    /// Per bond, √(1 − D) as the last force pass found it (the forces and the volumetric
+    /// strain read it twice per bond).
+    std::vector<double> mBondSqrtIntact;
 
     /// Each particle's tr ε: per axis, the mean stretch (length change / h) of its bonds along it.
     void computeVolumetricStrain();
