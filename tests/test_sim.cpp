@@ -101,8 +101,8 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"damage_law": "paper"}})").find("lattice.damage_law"), std::string::npos);
     const std::string stone = R"(}], "materials": {"stone": {)";
-    for (const std::string& bad : {R"("youngs_modulus_Pa": 0)", R"("poisson_ratio": 0.5)", R"("tensile_strength_Pa": -1)",
-                                   R"("fracture_energy_J_per_m2": 0)", R"("shear_strength_Pa": 0)", R"("friction_coefficient": -0.2)"}) {
+    for (const std::string bad : {R"("youngs_modulus_Pa": 0)", R"("poisson_ratio": 0.5)", R"("tensile_strength_Pa": -1)",
+                                  R"("fracture_energy_J_per_m2": 0)", R"("shear_strength_Pa": 0)", R"("friction_coefficient": -0.2)"}) {
         const std::string key = bad.substr(1, bad.find('"', 1) - 1);
         EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + bad + "}}}").find("materials.stone." + key + ": must be"), std::string::npos) << bad;
     }
