@@ -284,7 +284,7 @@ void Lattice::addBondForces(size_t b)
     // The bond's force on `high` (its negative acts on `low`), at the face between them: the
     // pair's moment about either centre is the same, -(arm / 2) × force.
     // The volumetric energy's force along the bond: d(Σ ½ λ h³ (tr ε)²) / d(length) (unit: N).
-    const double stretchFactor = arm.norm() > voxelSizeM ? std::sqrt(intact) : 1.0;
+    const double stretchFactor = arm.norm() > voxelSizeM ? mBondSqrtIntact[b] : 1.0;
     const double volumetric = stretchFactor * voxelSizeM * voxelSizeM * (mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a]);
     Eigen::Vector3d force = s.frame * local - volumetric / arm.norm() * arm;
     if (bulkViscosity > 0.0) {
@@ -337,19 +337,19 @@ double Lattice::strainRatePerS(size_t b) const
 
 void Lattice::updateBondDamage(double dtS)
 {
+    const bool rateDependent = stiffness.strengthRateLaw != StrengthRateLaw::None;
     forEach(bondCount(), [&](size_t b) {
         BondHistory& history = bondHistory[b];
-        const double increaseM = equivalentStretchM(b) - history.maxEquivalentStretchM;
+        const double equivalentM = equivalentStretchM(b), increaseM = equivalentM - history.maxEquivalentStretchM;
         if (increaseM > 0.0) {
             history.maxEquivalentStretchM += increaseM;
-            const bool rateDependent = stiffness.strengthRateLaw != StrengthRateLaw::None;
             history.damageDriverM += rateDependent ? increaseM / dynamicIncreaseFactor(stiffness.strengthRateLaw, strainRatePerS(b)) : increaseM;
         }
-        if (damageLaw == LatticeDamageLaw::DavisonStevens) history.rateDamage = rateDamageAfter(b, dtS);
+        if (damageLaw == LatticeDamageLaw::DavisonStevens) history.rateDamage = rateDamageAfter(b, equivalentM, dtS);
     });
 }
 
-double Lattice::rateDamageAfter(size_t b, double dtS) const
+double Lattice::rateDamageAfter(size_t b, double equivalentStretchNowM, double dtS) const
 {
     const BondHistory& history = bondHistory[b];
     const double onLine = softeningDamage(b);
@@ -359,7 +359,7 @@ double Lattice::rateDamageAfter(size_t b, double dtS) const
     // Stresses in tension's terms: the bond's (its equivalent stretch on its damaged spring) and
     // what the softening line allows at its damage driver.
     const double toStressPa = k.youngsModulusPa / voxelSizeM, peakM = history.strengthScale * k.peakStretchM;
-    const double stressPa = (1.0 - history.rateDamage) * toStressPa * equivalentStretchM(b);
+    const double stressPa = (1.0 - history.rateDamage) * toStressPa * equivalentStretchNowM;
     const double allowedPa = toStressPa * (history.damageDriverM <= peakM ? peakM : (1.0 - onLine) * history.damageDriverM);
     const double excessPa = stressPa - allowedPa;
     if (excessPa <= 0.0) return history.rateDamage;

@@ -203,8 +203,8 @@ private:
     void updateBondDamage(double dtS);
     /// 0 intact … 1 broken on the softening line, from the damage driver.
     double softeningDamage(size_t b) const;
-    /// Davison–Stevens: a bond's damage after dtS.
-    double rateDamageAfter(size_t b, double dtS) const;
+    /// Davison–Stevens: a bond's damage after dtS, at its equivalent stretch now.
+    double rateDamageAfter(size_t b, double equivalentStretchNowM, double dtS) const;
     /// A bond's normal strain rate (unit: 1/s).
     double strainRatePerS(size_t b) const;
     // Building (fromBody).
