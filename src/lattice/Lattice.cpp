@@ -12,7 +12,7 @@ namespace {
 
 /// Below this many particles a lattice steps on one thread: dispatching a parallel loop costs
 /// more than its work (the 1 296-particle cantilever test took 8.5 s in parallel).
-constexpr size_t kParallelParticles = 8192;
+constexpr size_t kParallelParticles = 2048;
 
 /// Torsion constant of a square section of side a is 0.1406 a⁴ (Roark's Formulas for Stress and
 /// Strain, table 10.7).
@@ -25,8 +25,8 @@ Eigen::Vector3d rotationVector(Eigen::Quaterniond q)
     if (q.w() < 0.0) q.coeffs() = -q.coeffs();
     const double s2 = q.vec().squaredNorm(), w = q.w();
     if (s2 < 1e-6 * w * w) {
-        const double r2 = s2 / (w * w);
-        return (2.0 / w * (1.0 - r2 / 3.0 + r2 * r2 / 5.0)) * q.vec();
+        const double inverseW = 1.0 / w, r2 = s2 * inverseW * inverseW;
+        return (2.0 * inverseW * (1.0 - r2 / 3.0 + r2 * r2 / 5.0)) * q.vec();
     }
     const double s = std::sqrt(s2);
     return (2.0 * std::atan2(s, w) / s) * q.vec();
@@ -45,18 +45,19 @@ Eigen::Quaterniond rotationOf(const Eigen::Vector3d& turn)
     return Eigen::Quaterniond(Eigen::AngleAxisd(a, turn / a));
 }
 
-/// Column `axis` of a unit quaternion's rotation matrix: where it turns that coordinate axis.
-Eigen::Vector3d rotatedAxis(const Eigen::Quaterniond& q, int axis)
+/// The rotation matrix of a quaternion of any length (its own normalised): one division, where
+/// normalising first takes a root and four.
+Eigen::Matrix3d rotationMatrixOf(const Eigen::Quaterniond& q)
 {
     const double w = q.w(), x = q.x(), y = q.y(), z = q.z();
-    switch (axis) {
-    case 0:
-        return {1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)};
-    case 1:
-        return {2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z + w * x)};
-    default:
-        return {2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y)};
-    }
+    const double s = 2.0 / (w * w + x * x + y * y + z * z);
+    const double xx = s * x * x, yy = s * y * y, zz = s * z * z, xy = s * x * y, xz = s * x * z, yz = s * y * z;
+    const double wx = s * w * x, wy = s * w * y, wz = s * w * z;
+    Eigen::Matrix3d r;
+    r << 1.0 - yy - zz, xy - wz, xz + wy,
+         xy + wz, 1.0 - xx - zz, yz - wx,
+         xz - wy, yz + wx, 1.0 - xx - yy;
+    return r;
 }
 
 }  // namespace
@@ -137,7 +138,6 @@ void Lattice::addVoxelParticles(const Body& body)
 void Lattice::addBond(uint32_t low, uint32_t high, int axis)
 {
     mBondAcross[low][2 * axis + 1] = mBondAcross[high][2 * axis] = int32_t(bonds.size());
-    mBatches[2 * axis + (voxel[low][axis] & 1)].push_back(uint32_t(bonds.size()));
     bonds.push_back({low, high, axis});
 }
 
@@ -208,7 +208,7 @@ BondStrain Lattice::strainOf(const LatticeBond& bond) const
     const double sameHemisphere = qa.coeffs().dot(qb.coeffs()) >= 0.0 ? 1.0 : -1.0;
     Eigen::Quaterniond half;
     half.coeffs() = qa.coeffs() + sameHemisphere * qb.coeffs();
-    s.frame = half.normalized().toRotationMatrix();
+    s.frame = rotationMatrixOf(half);
     s.displacementM = s.frame.transpose() * (positionM[bond.high] - positionM[bond.low]);
     s.displacementM[bond.axis] -= voxelSizeM;
     s.rotationRad = s.frame.transpose() * rotationVector(qb * qa.conjugate());
@@ -238,7 +238,7 @@ void Lattice::computeVolumetricStrain()
                 double sum = 0.0;
                 for (const int face : {2 * axis, 2 * axis + 1}) {
                     const int32_t b = mBondAcross[p][face];
-                    if (b >= 0) sum += effectiveStretchM(size_t(b)) * inverseH;
+                    if (b >= 0) sum += mBondTerms[size_t(b)].effectiveStretchM * inverseH;
                 }
                 trace += sum * mInverseBondCount[p][axis];
             }
@@ -264,89 +264,99 @@ double Lattice::softeningDamage(size_t b) const
     return 1.0 - (u0 / kappa) * (uf - kappa) / (uf - u0);
 }
 
-double Lattice::effectiveStretchM(size_t b) const
-{
-    const LatticeBond& bond = bonds[b];
-    const double stretch = (positionM[bond.high] - positionM[bond.low]).norm() - voxelSizeM;
-    return stretch > 0.0 ? mBondSqrtIntact[b] * stretch : stretch;
-}
-
-void Lattice::addBondForces(size_t b)
+void Lattice::measureBond(size_t b, double dtS, bool growDamage)
 {
     const LatticeBond& bond = bonds[b];
     const LatticeStiffness& k = stiffness;
     const BondStrain s = strainOf(bond);
     const int a = bond.axis;
-    const double intact = mBondSqrtIntact[b] * mBondSqrtIntact[b];
+    BondForceTerms& terms = mBondTerms[b];
+    terms.armM = positionM[bond.high] - positionM[bond.low];
+    const double lengthM = terms.armM.norm();
+    const Eigen::Vector3d along = terms.armM / lengthM;
+    const double openingRateMS = (velocityMS[bond.high] - velocityMS[bond.low]).dot(along);
+    if (growDamage) growBondDamage(b, equivalentStretchM(bond, s, lengthM), std::abs(openingRateMS) / voxelSizeM, dtS);
+    const double intact = 1.0 - bondDamage(b), sqrtIntact = std::sqrt(intact);
+    const bool opening = lengthM > voxelSizeM;
     Eigen::Vector3d local = -intact * k.shearNPerM * s.displacementM;
     local[a] = -(s.displacementM[a] > 0.0 ? intact : 1.0) * k.normalNPerM * s.displacementM[a];
-    const Eigen::Vector3d arm = positionM[bond.high] - positionM[bond.low];
-    // The bond's force on `high` (its negative acts on `low`), at the face between them: the
-    // pair's moment about either centre is the same, -(arm / 2) × force.
-    // The volumetric energy's force along the bond: d(Σ ½ λ h³ (tr ε)²) / d(length) (unit: N).
-    const double stretchFactor = arm.norm() > voxelSizeM ? mBondSqrtIntact[b] : 1.0;
-    const double volumetric = stretchFactor * voxelSizeM * voxelSizeM * (mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a]);
-    Eigen::Vector3d force = s.frame * local - volumetric / arm.norm() * arm;
-    if (bulkViscosity > 0.0) {
-        // A crack opening carries no viscous stress either: the dashpot softens with the spring.
-        const Eigen::Vector3d along = arm / arm.norm();
-        const double opening = arm.norm() > voxelSizeM ? intact : 1.0;
-        force -= opening * bulkViscosity * mDashpotPerViscosity * (velocityMS[bond.high] - velocityMS[bond.low]).dot(along) * along;
-    }
-    const Eigen::Vector3d pairMoment = -0.5 * arm.cross(force);
+    terms.elasticForceN = s.frame * local;
+    // A crack opening carries no viscous stress either: the dashpot softens with the spring.
+    if (bulkViscosity > 0.0) terms.elasticForceN -= (opening ? intact : 1.0) * bulkViscosity * mDashpotPerViscosity * openingRateMS * along;
     Eigen::Vector3d bending = -intact * k.bendingNmPerRad * s.rotationRad;
     bending[a] = -intact * k.twistingNmPerRad * s.rotationRad[a];
-    const Eigen::Vector3d bendingOnHigh = s.frame * bending;
-    bondForceN[bond.high] += force;
-    bondForceN[bond.low] -= force;
-    bondMomentNm[bond.high] += pairMoment + bendingOnHigh;
-    bondMomentNm[bond.low] += pairMoment - bendingOnHigh;
+    terms.bendingMomentNm = s.frame * bending;
+    terms.effectiveStretchM = opening ? sqrtIntact * (lengthM - voxelSizeM) : lengthM - voxelSizeM;
+    terms.volumetricAreaPerArmM = (opening ? sqrtIntact : 1.0) * voxelSizeM * voxelSizeM / lengthM;
+}
+
+Eigen::Vector3d Lattice::bondForceOnHighN(size_t b) const
+{
+    // The volumetric energy's force along the bond: d(Σ ½ λ h³ (tr ε)²) / d(length).
+    const LatticeBond& bond = bonds[b];
+    const BondForceTerms& terms = mBondTerms[b];
+    const double sharesPa = mVolumetricStressShare[bond.low][bond.axis] + mVolumetricStressShare[bond.high][bond.axis];
+    return terms.elasticForceN - (terms.volumetricAreaPerArmM * sharesPa) * terms.armM;
+}
+
+void Lattice::gatherBondForces(size_t p)
+{
+    Eigen::Vector3d force = Eigen::Vector3d::Zero(), moment = Eigen::Vector3d::Zero();
+    for (int face = 0; face < 6; ++face) {
+        const int32_t b = mBondAcross[p][face];
+        if (b < 0) continue;
+        const BondForceTerms& terms = mBondTerms[size_t(b)];
+        // The bond acts at the face between its particles: the pair's moment about either
+        // centre is the same, -(arm / 2) × force.
+        const Eigen::Vector3d onHigh = bondForceOnHighN(size_t(b));
+        const Eigen::Vector3d pairMoment = -0.5 * terms.armM.cross(onHigh);
+        const bool isLow = (face & 1) != 0;  // the bond across p's +axis face
+        force += isLow ? Eigen::Vector3d(-onHigh) : onHigh;
+        moment += pairMoment + (isLow ? Eigen::Vector3d(-terms.bendingMomentNm) : terms.bendingMomentNm);
+    }
+    bondForceN[p] = force;
+    bondMomentNm[p] = moment;
 }
 
 double Lattice::equivalentStretchM(size_t b) const
 {
     const LatticeBond& bond = bonds[b];
+    return equivalentStretchM(bond, strainOf(bond), (positionM[bond.high] - positionM[bond.low]).norm());
+}
+
+double Lattice::equivalentStretchM(const LatticeBond& bond, const BondStrain& strain, double lengthM) const
+{
     const LatticeStiffness& k = stiffness;
-    const Eigen::Vector3d arm = positionM[bond.high] - positionM[bond.low];
-    const double stretch = arm.norm() - voxelSizeM;
-    // The shear displacement: the arm across the bond's axis, half-way between where the two
-    // particles turn it (the mean of the two directions: the half-way rotation's to second
-    // order in the bonds' small relative turn).
-    const Eigen::Vector3d axis = (rotatedAxis(orientation[bond.low], bond.axis) + rotatedAxis(orientation[bond.high], bond.axis)).normalized();
-    const double shearTractionPa = k.shearNPerM * (arm - arm.dot(axis) * axis).norm() / (voxelSizeM * voxelSizeM);
+    const int a = bond.axis;
+    // The shear displacement: across the bond's axis in its half-way frame.
+    const double normalM = strain.displacementM[a];
+    const double shearTractionPa = k.shearNPerM * std::sqrt(std::max(0.0, strain.displacementM.squaredNorm() - normalM * normalM)) / (voxelSizeM * voxelSizeM);
     const double shearIndex = shearTractionPa / k.shearStrengthPa;
+    const double stretchM = lengthM - voxelSizeM;
     double index = 0.0;
-    if (stretch >= 0.0) {
-        const double tensionIndex = stretch / k.peakStretchM;
+    if (stretchM >= 0.0) {
+        const double tensionIndex = stretchM / k.peakStretchM;
         index = std::sqrt(tensionIndex * tensionIndex + shearIndex * shearIndex);
     } else {
         // The compression across the bond: its spring's and its particles' volumetric share, as
         // the last force pass left them (a substep behind; a function of the saved state).
-        const double normalTractionPa = k.normalNPerM * (arm.dot(axis) - voxelSizeM) / (voxelSizeM * voxelSizeM) +
-                                        mVolumetricStressShare[bond.low][bond.axis] + mVolumetricStressShare[bond.high][bond.axis];
+        const double normalTractionPa =
+            k.normalNPerM * normalM / (voxelSizeM * voxelSizeM) + mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a];
         index = std::max(0.0, shearTractionPa - k.frictionCoefficient * std::max(0.0, -normalTractionPa)) / k.shearStrengthPa;
     }
     return index * k.peakStretchM;
 }
 
-double Lattice::strainRatePerS(size_t b) const
+void Lattice::growBondDamage(size_t b, double equivalentStretchNowM, double strainRatePerS, double dtS)
 {
-    const Eigen::Vector3d arm = positionM[bonds[b].high] - positionM[bonds[b].low];
-    return std::abs((velocityMS[bonds[b].high] - velocityMS[bonds[b].low]).dot(arm)) / (arm.norm() * voxelSizeM);
-}
-
-void Lattice::updateBondDamage(double dtS)
-{
-    const bool rateDependent = stiffness.strengthRateLaw != StrengthRateLaw::None;
-    forEach(bondCount(), [&](size_t b) {
-        BondHistory& history = bondHistory[b];
-        const double equivalentM = equivalentStretchM(b), increaseM = equivalentM - history.maxEquivalentStretchM;
-        if (increaseM > 0.0) {
-            history.maxEquivalentStretchM += increaseM;
-            history.damageDriverM += rateDependent ? increaseM / dynamicIncreaseFactor(stiffness.strengthRateLaw, strainRatePerS(b)) : increaseM;
-        }
-        if (damageLaw == LatticeDamageLaw::DavisonStevens) history.rateDamage = rateDamageAfter(b, equivalentM, dtS);
-    });
+    BondHistory& history = bondHistory[b];
+    const double increaseM = equivalentStretchNowM - history.maxEquivalentStretchM;
+    if (increaseM > 0.0) {
+        history.maxEquivalentStretchM += increaseM;
+        history.damageDriverM +=
+            stiffness.strengthRateLaw != StrengthRateLaw::None ? increaseM / dynamicIncreaseFactor(stiffness.strengthRateLaw, strainRatePerS) : increaseM;
+    }
+    if (damageLaw == LatticeDamageLaw::DavisonStevens) history.rateDamage = rateDamageAfter(b, equivalentStretchNowM, dtS);
 }
 
 double Lattice::rateDamageAfter(size_t b, double equivalentStretchNowM, double dtS) const
@@ -370,13 +380,12 @@ double Lattice::rateDamageAfter(size_t b, double equivalentStretchNowM, double d
 
 void Lattice::refreshForces()
 {
-    mBondSqrtIntact.resize(bondCount());
-    forEach(bondCount(), [&](size_t b) { mBondSqrtIntact[b] = std::sqrt(1.0 - bondDamage(b)); });
+    mBondTerms.resize(bondCount());
+    bondForceN.resize(particleCount());
+    bondMomentNm.resize(particleCount());
+    forEach(bondCount(), [&](size_t b) { measureBond(b, 0.0, false); });
     computeVolumetricStrain();
-    bondForceN.assign(particleCount(), Eigen::Vector3d::Zero());
-    bondMomentNm.assign(particleCount(), Eigen::Vector3d::Zero());
-    for (const std::vector<uint32_t>& batch : mBatches)
-        forEach(batch.size(), [&](size_t i) { addBondForces(batch[i]); });
+    forEach(particleCount(), [&](size_t p) { gatherBondForces(p); });
 }
 
 void Lattice::step(double dtS)
@@ -389,19 +398,20 @@ void Lattice::step(double dtS)
         velocityMS[p] += halfDt * invMass * (bondForceN[p] + externalForceN[p]);
         angularVelocityRadS[p] += halfDt * invInertia * bondMomentNm[p];
     };
-    forEach(
-        particleCount(),
-        [&](size_t p) {
-            kick(p);
-            positionM[p] += dtS * velocityMS[p];
-            orientation[p] = (rotationOf(dtS * angularVelocityRadS[p]) * orientation[p]).normalized();
-            if (ground.enabled && !held[p]) keepAboveGround(p);
-        });
+    forEach(particleCount(), [&](size_t p) {
+        kick(p);
+        positionM[p] += dtS * velocityMS[p];
+        orientation[p] = (rotationOf(dtS * angularVelocityRadS[p]) * orientation[p]).normalized();
+        if (ground.enabled && !held[p]) keepAboveGround(p);
+    });
     // Damage first, from the new positions (and the velocities half-way through the step, for
     // the strain rate), then the forces from the state.
-    updateBondDamage(dtS);
-    refreshForces();
-    forEach(particleCount(), kick);
+    forEach(bondCount(), [&](size_t b) { measureBond(b, dtS, true); });
+    computeVolumetricStrain();
+    forEach(particleCount(), [&](size_t p) {
+        gatherBondForces(p);
+        kick(p);
+    });
 }
 
 void Lattice::keepAboveGround(size_t p)

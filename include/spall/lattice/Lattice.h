@@ -119,8 +119,8 @@ public:
     /// breathing mode (ω² = (8μ + 12λ) h / m) added.
     double stableTimeStepS() const;
     void step(double dtS);
-    /// The bonds' forces from the state (after the state arrays were written from outside, as a
-    /// checkpoint does; each step calls it after updating the bonds' damage).
+    /// The bonds' forces from the state, leaving their damage as it is (after the state arrays
+    /// were written from outside, as a checkpoint does).
     void refreshForces();
     /// Steps over dtS in equal substeps no longer than stableTimeStepS(); returns how many.
     int64_t advance(double dtS);
@@ -182,36 +182,50 @@ private:
     std::vector<std::array<int32_t, 6>> mBondAcross;
     /// Per particle, λ for the axes it has bonds along (stress-free missing axes condensed out).
     std::vector<double> mLambdaPa;
-    /// Bonds in six batches, by axis and by the parity of the low particle's index along it: no
-    /// two bonds of a batch share a particle, so a batch adds its forces in parallel without
-    /// races, and each particle's sum has the same order whatever the thread count.
-    std::array<std::vector<uint32_t>, 6> mBatches;
     /// Per particle and axis, 1 / (its bonds along the axis), or 0 without any.
     std::vector<Eigen::Vector3d> mInverseBondCount;
     // Per particle: tr ε and λ tr ε / (bonds along each axis).
     std::vector<double> mVolumetricStrain;
     std::vector<Eigen::Vector3d> mVolumetricStressShare;
     double mDashpotPerViscosity = 0.0;  ///< ρ c h² (unit: N s/m)
-    /// Per bond, √(1 − D) as the last force pass found it (the forces and the volumetric
-    /// strain read it twice per bond).
-    std::vector<double> mBondSqrtIntact;
+    /// What the force pass takes from each bond, measured once per substep (measureBond).
+    struct BondForceTerms {
+        Eigen::Vector3d armM;             ///< high − low (unit: m)
+        Eigen::Vector3d elasticForceN;    ///< spring and dashpot, on high (unit: N)
+        Eigen::Vector3d bendingMomentNm;  ///< bending and twisting, on high (unit: N m)
+        /// Its stretch (length change) as the volumetric term counts it: in tension times
+        /// √(1 − D), so the bond's own share of the volumetric force falls with 1 − D as its
+        /// spring's does and the traction follows the softening line (unit: m).
+        double effectiveStretchM = 0.0;
+        /// The volumetric force on high per pascal of its particles' shares, along −arm:
+        /// h² √(1 − D in tension) / |arm| (unit: m).
+        double volumetricAreaPerArmM = 0.0;
+    };
+    std::vector<BondForceTerms> mBondTerms;
 
     /// Each particle's tr ε: per axis, the mean stretch (length change / h) of its bonds along it.
     void computeVolumetricStrain();
+    /// A bond's strain, damage (grown over dtS when `growDamage`) and force terms, from the
+    /// state; writes only the bond's own entries, so bonds measure in parallel.
+    void measureBond(size_t b, double dtS, bool growDamage);
+    /// The failure index as a stretch (equivalentStretchM) from a measured strain.
+    double equivalentStretchM(const LatticeBond& bond, const BondStrain& strain, double lengthM) const;
     /// Damage grows with the damage driver (and under Davison–Stevens, over the step's
     /// duration); what it takes away stays away.
-    void updateBondDamage(double dtS);
+    void growBondDamage(size_t b, double equivalentStretchNowM, double strainRatePerS, double dtS);
     /// 0 intact … 1 broken on the softening line, from the damage driver.
     double softeningDamage(size_t b) const;
     /// Davison–Stevens: a bond's damage after dtS, at its equivalent stretch now.
     double rateDamageAfter(size_t b, double equivalentStretchNowM, double dtS) const;
-    /// A bond's normal strain rate (unit: 1/s).
-    double strainRatePerS(size_t b) const;
+    /// The bond's whole force on high (spring, dashpot, volumetric), from its measured terms.
+    Eigen::Vector3d bondForceOnHighN(size_t b) const;
+    /// A particle's bond force and moment: the sum over its faces, in face order.
+    void gatherBondForces(size_t p);
     // Building (fromBody).
     void addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& placeM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
                      const Eigen::Quaterniond& q, bool isHeld);
     void addVoxelParticles(const Body& body);
-    /// A bond from `low` to its +axis neighbour `high`, in its batch.
+    /// A bond from `low` to its +axis neighbour `high`.
     void addBond(uint32_t low, uint32_t high, int axis);
     void addLinkBonds(const Body& body);
     void addGroundBonds(const Body& body);
@@ -219,13 +233,8 @@ private:
     /// f(i) for i < count: in parallel for large lattices, in order for small ones.
     template <typename F>
     void forEach(size_t count, const F& f) const;
-    void addBondForces(size_t b);
     /// Puts a particle that sank into the ground back on it (LatticeGround).
     void keepAboveGround(size_t p);
-    /// A bond's stretch (length change) as the volumetric term counts it: in tension times
-    /// √(1 − D), so the bond's own share of the volumetric force falls with 1 − D as its
-    /// spring's does and the traction follows the softening line (unit: m).
-    double effectiveStretchM(size_t b) const;
     BondStrain strainOf(const LatticeBond& bond) const;
 };
 
