@@ -102,12 +102,21 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"damage_law": "paper"}})").find("lattice.damage_law"), std::string::npos);
     const std::string stone = R"(}], "materials": {"stone": {)";
     for (const std::string bad : {R"("youngs_modulus_Pa": 0)", R"("poisson_ratio": 0.5)", R"("tensile_strength_Pa": -1)",
-                                  R"("fracture_energy_J_per_m2": 0)", R"("shear_strength_Pa": 0)", R"("friction_coefficient": -0.2)"}) {
+                                  R"("fracture_energy_J_per_m2": 0)", R"("shear_strength_Pa": 0)", R"("friction_coefficient": -0.2)",
+                                  R"("unit_length_m": -0.2)", R"("joint_thickness_m": 2)", R"("unit_tensile_strength_Pa": -1)",
+                                  R"("unit_friction_coefficient": 20)"}) {
         const std::string key = bad.substr(1, bad.find('"', 1) - 1);
         EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + bad + "}}}").find("materials.stone." + key + ": must be"), std::string::npos) << bad;
     }
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("strength_rate_law": "fast"}}})").find("materials.stone.strength_rate_law"),
               std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("unit_length_axis": "z"}}})").find("materials.stone.unit_length_axis"),
+              std::string::npos);
+    // Brick masonry (the default base) is built of units: a unit without a height is an error,
+    // and a unit length of 0 makes the material homogeneous.
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("unit_height_m": 0}}})").find("materials.stone.unit_height_m: must be above 0 when"),
+              std::string::npos);
+    EXPECT_EQ(errorOf(R"({"objects": [{)" + box + stone + R"("unit_length_m": 0, "unit_height_m": 0}}})"), "");
     EXPECT_EQ(errorOf(defaultSceneJson()), "");
 }
 
@@ -140,7 +149,10 @@ const char* kEveryKeyScene = R"({
   "materials": {"stone": {"density_kg_m3": 2500, "mean_yield_Pa": 60000, "yield_variation": 0.2, "weakening_fraction": 0.3,
                           "orientation_factor": 0.05, "damage_rate_per_s": 200, "damage_stress_scale_per_Pa": 1e-5,
                           "youngs_modulus_Pa": 2e10, "poisson_ratio": 0.25, "tensile_strength_Pa": 4e6, "fracture_energy_J_per_m2": 90,
-                          "shear_strength_Pa": 5e6, "friction_coefficient": 0.6, "strength_rate_law": "fib-mc2010"}},
+                          "shear_strength_Pa": 5e6, "friction_coefficient": 0.6, "strength_rate_law": "fib-mc2010",
+                          "unit_length_m": 0.3, "unit_width_m": 0.1, "unit_height_m": 0.1, "joint_thickness_m": 0.012,
+                          "unit_length_axis": "y", "unit_tensile_strength_Pa": 3e6, "unit_fracture_energy_J_per_m2": 60,
+                          "unit_shear_strength_Pa": 2.5e6, "unit_friction_coefficient": 0.45}},
   "objects": [{"name": "block", "primitive": {"shape": "box", "size_m": [1, 1, 1]}, "position_m": [0, 0, 0.5],
                "rotation_deg": [0, 0, 5], "material": "stone", "anchor": "ground"},
               {"name": "sheet", "mesh": "/meshes/sheet.obj", "position_m": [0, 0, 2], "rotation_deg": [0, 0, 0],

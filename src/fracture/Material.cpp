@@ -65,6 +65,24 @@ Material withShear(Material m, double shearStrengthPa, double frictionCoefficien
     return m;
 }
 
+/// `m` built of units: their size, the joint between them, their strength and fracture energy
+/// (tension; in shear Rankine linearised, c = ft and μ = 0.5, as they fail by principal tension)
+/// and the source.
+Material withUnits(Material m, double lengthM, double widthM, double heightM, double jointM, double tensileStrengthPa,
+                   double fractureEnergyJPerM2, const std::string& source)
+{
+    m.unitLengthM = lengthM;
+    m.unitWidthM = widthM;
+    m.unitHeightM = heightM;
+    m.jointThicknessM = jointM;
+    m.unitTensileStrengthPa = tensileStrengthPa;
+    m.unitFractureEnergyJPerM2 = fractureEnergyJPerM2;
+    m.unitShearStrengthPa = tensileStrengthPa;
+    m.unitFrictionCoefficient = 0.5;
+    m.source += "; units: " + source;
+    return m;
+}
+
 /// Mohr–Coulomb through a material's uniaxial compressive and tensile strengths:
 /// fc = 2c cos φ / (1 − sin φ) and ft = 2c cos φ / (1 + sin φ) give c = √(fc ft) / 2 and
 /// sin φ = (fc − ft) / (fc + ft) (Jaeger, Cook & Zimmerman, Fundamentals of Rock Mechanics, 4th
@@ -110,6 +128,10 @@ const std::vector<Material>& materialPresets()
     //     moisture); the handbook gives no friction, none assumed (μ = 0);
     //   brick masonry: EN 1996-1-1 table 3.4 (clay units, general-purpose mortar M10–M20)
     //     fvko = 0.3 MPa and eq. 3.5, fvk = fvko + 0.4 σd;
+    //   Units (issue 18): brick masonry is bricks (215 × 102.5 × 65 mm, the UK work size) in
+    //     10 mm joints, running bond; the strengths above are the joints'; the bricks crack at
+    //     2.0 MPa with 80 J/m^2 (Lourenço & Rots 1997, J. Eng. Mech. 123(7), the potential
+    //     cracks in the units of the TU Eindhoven shear walls).
     //   concrete: Mohr–Coulomb through fcm = 38 MPa and fctm (mohrCoulombThrough), strength
     //     rising with strain rate as fib Model Code 2010 5.1.11 gives for tension.
     const std::string fibC30 = "fib Model Code 2010, C30/37: E 33.6 GPa, fctm 2.9 MPa, Gf 141 J/m^2";
@@ -122,10 +144,13 @@ const std::vector<Material>& materialPresets()
         withShear(withElasticity(calibrateMaterial("wood", 500.0, 6.9e3, 13.8e3, "Clancey 1972: wood panels fail at 6.9-13.8 kPa"), 10e9,
                                  0.3, 2.5e6, 250.0, "Wood Handbook FPL-GTR-190 (E, tension across grain); Stanzl-Tschegg et al. 1995 (Gf)"),
                   7.9e6, 0.0, StrengthRateLaw::None, "Wood Handbook table 5-3b, Sitka spruce shear parallel to grain; no friction"),
-        withShear(withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
-                                                   "Clancey 1972: unreinforced brick panels 8-12 in fail at 48.2-55.1 kPa"),
-                                 5e9, 0.2, 0.3e6, 12.0, "EN 1996-1-1 (E = 1000 fk); van der Pluijm via Lourenco 1996 (bond strength, Gf)"),
-                  0.3e6, 0.4, StrengthRateLaw::None, "EN 1996-1-1 table 3.4 and eq. 3.5 (fvko 0.3 MPa, 0.4 sigma_d)"),
+        withUnits(withShear(withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
+                                                             "Clancey 1972: unreinforced brick panels 8-12 in fail at 48.2-55.1 kPa"),
+                                           5e9, 0.2, 0.3e6, 12.0, "EN 1996-1-1 (E = 1000 fk); van der Pluijm via Lourenco 1996 (bond strength, Gf)"),
+                            0.3e6, 0.4, StrengthRateLaw::None, "EN 1996-1-1 table 3.4 and eq. 3.5 (fvko 0.3 MPa, 0.4 sigma_d)"),
+                  0.215, 0.1025, 0.065, 0.01, 2.0e6, 80.0,
+                  "215 x 102.5 x 65 mm bricks, 10 mm joints, running bond; potential cracks in units ft 2.0 MPa, Gf 80 J/m^2 "
+                  "(Lourenco & Rots 1997, TU Eindhoven shear walls)"),
         withShear(withElasticity(calibrateMaterial("concrete", 2400.0, 13.8e3, 20.7e3,
                                                    "Clancey 1972: unreinforced concrete/cinder block walls shatter at 13.8-20.7 kPa"),
                                  33.6e9, 0.2, 2.9e6, 141.0, fibC30),
@@ -167,10 +192,50 @@ const std::vector<Field<Material>>& fieldTable<Material>()
         {"shear_strength_Pa", &Material::shearStrengthPa, aboveZeroUpTo(1e11)},
         {"friction_coefficient", &Material::frictionCoefficient, closed(0.0, 10.0)},
         {"strength_rate_law", choice(&Material::strengthRateLaw)},
+        {"unit_length_m", &Material::unitLengthM, closed(0.0, 100.0)},
+        {"unit_width_m", &Material::unitWidthM, closed(0.0, 100.0)},
+        {"unit_height_m", &Material::unitHeightM, closed(0.0, 100.0)},
+        {"joint_thickness_m", &Material::jointThicknessM, closed(0.0, 1.0)},
+        {"unit_length_axis", choice(&Material::unitLengthAxis)},
+        {"unit_tensile_strength_Pa", &Material::unitTensileStrengthPa, closed(0.0, 1e11)},
+        {"unit_fracture_energy_J_per_m2", &Material::unitFractureEnergyJPerM2, closed(0.0, 1e7)},
+        {"unit_shear_strength_Pa", &Material::unitShearStrengthPa, closed(0.0, 1e11)},
+        {"unit_friction_coefficient", &Material::unitFrictionCoefficient, closed(0.0, 10.0)},
     };
     return table;
 }
 
-void validateMaterial(const Material& m) { validateFields(m, "material '" + m.name + "'"); }
+std::string missingUnitField(const Material& m)
+{
+    if (!hasUnits(m)) return "";
+    const std::pair<const char*, double> needed[] = {{"unit_width_m", m.unitWidthM},
+                                                     {"unit_height_m", m.unitHeightM},
+                                                     {"unit_tensile_strength_Pa", m.unitTensileStrengthPa},
+                                                     {"unit_fracture_energy_J_per_m2", m.unitFractureEnergyJPerM2},
+                                                     {"unit_shear_strength_Pa", m.unitShearStrengthPa}};
+    for (const auto& [key, value] : needed)
+        if (!(value > 0.0)) return key;
+    return "";
+}
+
+void validateMaterial(const Material& m)
+{
+    validateFields(m, "material '" + m.name + "'");
+    if (const std::string key = missingUnitField(m); !key.empty())
+        throw InputError("material '" + m.name + "': " + key + " must be above 0 when unit_length_m is (a material built of units)");
+}
+
+std::array<int64_t, 3> masonryUnitOf(const Material& m, double xM, double yM, double zM)
+{
+    // A point exactly on a joint (common: voxel centres fall on it when h divides the pitch)
+    // goes to the unit above it whatever the rounding of its coordinate.
+    const auto index = [](double coordinateM, double pitchM) { return int64_t(std::floor(coordinateM / pitchM + 1e-9)); };
+    const double alongM = m.unitLengthAxis == UnitLengthAxis::X ? xM : yM, acrossM = m.unitLengthAxis == UnitLengthAxis::X ? yM : xM;
+    const double lengthPitchM = m.unitLengthM + m.jointThicknessM;
+    const int64_t course = index(zM, m.unitHeightM + m.jointThicknessM);
+    // Running (stretcher) bond: every other course shifted half a unit.
+    const double shiftM = (course & 1) ? 0.5 * lengthPitchM : 0.0;
+    return {index(alongM + shiftM, lengthPitchM), index(acrossM, m.unitWidthM + m.jointThicknessM), course};
+}
 
 }  // namespace spall

@@ -74,16 +74,21 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
     k.shearNPerM = 2.0 * k.shearModulusPa * h;
     k.bendingNmPerRad = e * h * h * h / 12.0;
     k.twistingNmPerRad = kSquareTorsionConstant * k.shearModulusPa * h * h * h;
-    if (!(m.tensileStrengthPa > 0.0) || !(m.fractureEnergyJPerM2 > 0.0))
-        throw std::invalid_argument("calibrateLattice: tensile strength and fracture energy must be positive");
-    k.peakStretchM = m.tensileStrengthPa * h / e;
-    // Voxels too large to soften (snap-back) break at the peak: the strength, which decides
-    // whether a body breaks, is kept, and a crack dissipates ft² h / (2E) per area, more than Gf.
-    k.zeroTractionStretchM = std::max(2.0 * m.fractureEnergyJPerM2 / m.tensileStrengthPa, k.peakStretchM);
-    if (!(m.shearStrengthPa > 0.0) || !(m.frictionCoefficient >= 0.0))
-        throw std::invalid_argument("calibrateLattice: the shear strength must be positive and the friction coefficient not negative");
-    k.shearStrengthPa = m.shearStrengthPa;
-    k.frictionCoefficient = m.frictionCoefficient;
+    if (!(m.tensileStrengthPa > 0.0) || !(m.fractureEnergyJPerM2 > 0.0) || !(m.shearStrengthPa > 0.0) || !(m.frictionCoefficient >= 0.0))
+        throw std::invalid_argument("calibrateLattice: strengths and fracture energy must be positive and the friction coefficient not negative");
+    const auto strengthOf = [&](double tensilePa, double fractureEnergyJPerM2, double shearPa, double friction) {
+        LatticeStiffness::Strength s;
+        s.peakStretchM = tensilePa * h / e;
+        // Voxels too large to soften (snap-back) break at the peak: the strength, which decides
+        // whether a body breaks, is kept, and a crack dissipates ft² h / (2E) per area, more than Gf.
+        s.zeroTractionStretchM = std::max(2.0 * fractureEnergyJPerM2 / tensilePa, s.peakStretchM);
+        s.shearStrengthPa = shearPa;
+        s.frictionCoefficient = friction;
+        return s;
+    };
+    k.strength[0] = strengthOf(m.tensileStrengthPa, m.fractureEnergyJPerM2, m.shearStrengthPa, m.frictionCoefficient);
+    k.strength[1] = hasUnits(m) ? strengthOf(m.unitTensileStrengthPa, m.unitFractureEnergyJPerM2, m.unitShearStrengthPa, m.unitFrictionCoefficient)
+                                : k.strength[0];
     k.strengthRateLaw = m.strengthRateLaw;
     k.youngsModulusPa = e;
     k.damageRatePerS = m.damageRatePerS;
@@ -103,6 +108,7 @@ Lattice Lattice::fromBody(const Body& body, const Material& material, const Latt
     lattice.addVoxelParticles(body);
     lattice.addLinkBonds(body);
     if (ground.enabled) lattice.addGroundBonds(body);
+    if (hasUnits(material)) lattice.classifyUnitBonds(material);
     lattice.bondHistory.assign(lattice.bonds.size(), BondHistory());
     const double pWaveSpeed = std::sqrt((lattice.stiffness.lameLambdaPa + 2.0 * lattice.stiffness.shearModulusPa) / material.densityKgM3);
     lattice.mDashpotPerViscosity = material.densityKgM3 * pWaveSpeed * h * h;
@@ -171,6 +177,17 @@ void Lattice::addGroundBonds(const Body& body)
         if (face & 1) addBond(p, groundPoint, axis);
         else addBond(groundPoint, p, axis);
     }
+}
+
+void Lattice::classifyUnitBonds(const Material& material)
+{
+    // A voxel's centre where the object was voxelised: its index times h (Voxelise.cpp's transform).
+    const auto unitOf = [&](const openvdb::Coord& v) {
+        return masonryUnitOf(material, voxelSizeM * v.x(), voxelSizeM * v.y(), voxelSizeM * v.z());
+    };
+    for (LatticeBond& bond : bonds)
+        if (bond.low < voxelParticleCount && bond.high < voxelParticleCount && unitOf(voxel[bond.low]) == unitOf(voxel[bond.high]))
+            bond.strengthClass = 1;
 }
 
 void Lattice::condenseVolumetricModulus()
@@ -256,7 +273,8 @@ double Lattice::bondDamage(size_t b) const
 double Lattice::softeningDamage(size_t b) const
 {
     const double scale = bondHistory[b].strengthScale;
-    const double u0 = scale * stiffness.peakStretchM, uf = stiffness.zeroTractionStretchM / scale;
+    const LatticeStiffness::Strength& strength = stiffness.strength[bonds[b].strengthClass];
+    const double u0 = scale * strength.peakStretchM, uf = strength.zeroTractionStretchM / scale;
     const double kappa = bondHistory[b].damageDriverM;
     if (kappa <= u0) return 0.0;
     if (kappa >= uf) return 1.0;
@@ -327,24 +345,25 @@ double Lattice::equivalentStretchM(size_t b) const
 double Lattice::equivalentStretchM(const LatticeBond& bond, const BondStrain& strain, double lengthM) const
 {
     const LatticeStiffness& k = stiffness;
+    const LatticeStiffness::Strength& strength = k.strength[bond.strengthClass];
     const int a = bond.axis;
     // The shear displacement: across the bond's axis in its half-way frame.
     const double normalM = strain.displacementM[a];
     const double shearTractionPa = k.shearNPerM * std::sqrt(std::max(0.0, strain.displacementM.squaredNorm() - normalM * normalM)) / (voxelSizeM * voxelSizeM);
-    const double shearIndex = shearTractionPa / k.shearStrengthPa;
+    const double shearIndex = shearTractionPa / strength.shearStrengthPa;
     const double stretchM = lengthM - voxelSizeM;
     double index = 0.0;
     if (stretchM >= 0.0) {
-        const double tensionIndex = stretchM / k.peakStretchM;
+        const double tensionIndex = stretchM / strength.peakStretchM;
         index = std::sqrt(tensionIndex * tensionIndex + shearIndex * shearIndex);
     } else {
         // The compression across the bond: its spring's and its particles' volumetric share, as
         // the last force pass left them (a substep behind; a function of the saved state).
         const double normalTractionPa =
             k.normalNPerM * normalM / (voxelSizeM * voxelSizeM) + mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a];
-        index = std::max(0.0, shearTractionPa - k.frictionCoefficient * std::max(0.0, -normalTractionPa)) / k.shearStrengthPa;
+        index = std::max(0.0, shearTractionPa - strength.frictionCoefficient * std::max(0.0, -normalTractionPa)) / strength.shearStrengthPa;
     }
-    return index * k.peakStretchM;
+    return index * strength.peakStretchM;
 }
 
 void Lattice::growBondDamage(size_t b, double equivalentStretchNowM, double strainRatePerS, double dtS)
@@ -368,7 +387,7 @@ double Lattice::rateDamageAfter(size_t b, double equivalentStretchNowM, double d
     const LatticeStiffness& k = stiffness;
     // Stresses in tension's terms: the bond's (its equivalent stretch on its damaged spring) and
     // what the softening line allows at its damage driver.
-    const double toStressPa = k.youngsModulusPa / voxelSizeM, peakM = history.strengthScale * k.peakStretchM;
+    const double toStressPa = k.youngsModulusPa / voxelSizeM, peakM = history.strengthScale * k.strength[bonds[b].strengthClass].peakStretchM;
     const double stressPa = (1.0 - history.rateDamage) * toStressPa * equivalentStretchNowM;
     const double allowedPa = toStressPa * (history.damageDriverM <= peakM ? peakM : (1.0 - onLine) * history.damageDriverM);
     const double excessPa = stressPa - allowedPa;

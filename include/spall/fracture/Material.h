@@ -4,6 +4,8 @@
 #include <spall/core/EnumNames.h>
 #include <spall/core/Fields.h>
 
+#include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -20,6 +22,13 @@ template <>
 struct EnumNames<StrengthRateLaw> {
     static constexpr std::pair<StrengthRateLaw, const char*> kNames[] = {{StrengthRateLaw::None, "none"},
                                                                          {StrengthRateLaw::FibModelCode2010, "fib-mc2010"}};
+};
+
+/// Which horizontal axis a masonry unit's length lies along (its courses are along z).
+enum class UnitLengthAxis { X, Y };
+template <>
+struct EnumNames<UnitLengthAxis> {
+    static constexpr std::pair<UnitLengthAxis, const char*> kNames[] = {{UnitLengthAxis::X, "x"}, {UnitLengthAxis::Y, "y"}};
 };
 
 /// The dynamic increase factor of strength at a strain rate (unit: 1/s); 1 below the quasi-static rate.
@@ -45,9 +54,34 @@ struct Material {
     double shearStrengthPa = 6e6;
     double frictionCoefficient = 0.5;  ///< ... and μ = tan φ (unit: 1)
     StrengthRateLaw strengthRateLaw = StrengthRateLaw::None;
+    // Masonry: an object of the material is built of units (bricks) laid in running bond, in
+    // courses along z from z = 0, each course shifted half a unit along the length axis. The
+    // strengths above are then the joints' (the unit–mortar bond), those below the units'; a
+    // bond between two voxels whose centres lie in different units crosses a joint. Elasticity
+    // stays the assembly's. A unit length of 0 means a homogeneous material.
+    double unitLengthM = 0.0;      ///< (unit: m)
+    double unitWidthM = 0.0;       ///< across the wall (unit: m)
+    double unitHeightM = 0.0;      ///< (unit: m)
+    double jointThicknessM = 0.0;  ///< mortar between units (unit: m)
+    UnitLengthAxis unitLengthAxis = UnitLengthAxis::X;
+    double unitTensileStrengthPa = 0.0;       ///< (unit: Pa)
+    double unitFractureEnergyJPerM2 = 0.0;    ///< (unit: J/m^2)
+    double unitShearStrengthPa = 0.0;         ///< (unit: Pa)
+    double unitFrictionCoefficient = 0.0;     ///< (unit: 1)
     /// Where the numbers come from.
     std::string source;
 };
+
+/// Whether a material is built of units (Material's masonry fields).
+inline bool hasUnits(const Material& m) { return m.unitLengthM > 0.0; }
+
+/// For a material built of units, the key of a unit dimension or strength it lacks (not above
+/// 0), or "" when it has them all or has no units.
+std::string missingUnitField(const Material& m);
+
+/// The unit a point lies in, as its indices (along the length axis, across it, course), for a
+/// material built of units; the point in the object's world frame at voxelisation (unit: m).
+std::array<int64_t, 3> masonryUnitOf(const Material& material, double xM, double yM, double zM);
 
 /// The named presets: glass, wood, brick-masonry, concrete, reinforced-concrete.
 const std::vector<Material>& materialPresets();

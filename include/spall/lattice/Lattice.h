@@ -36,19 +36,24 @@ struct LatticeStiffness {
     double twistingNmPerRad = 0.0;
     double lameLambdaPa = 0.0;
     double shearModulusPa = 0.0;
-    /// Linear softening in tension, crack band style (Bažant & Oh 1983): a bond's normal stretch
-    /// peaks at u0 = ft h / E and its traction falls to nothing at uf = 2 Gf / ft, so a broken
-    /// bond has dissipated Gf per unit of its face, whatever h. That needs uf > u0, h < 2 E Gf / ft²
-    /// (0.55 mm for glass, 1.1 m for brick masonry); above it uf = u0: brittle at the full
-    /// strength, dissipating ft² h / (2E) > Gf.
-    double peakStretchM = 0.0;
-    double zeroTractionStretchM = 0.0;
-    /// Mohr–Coulomb with the tension cut-off (Material): the shear strength at no normal stress
-    /// and the friction coefficient, the friction on the bond's normal traction. (The cut-off is
-    /// on the normal strain, E ε = ft, exact in uniaxial stress and 11 % stronger than a stress
-    /// cut-off in uniaxial strain at ν = 0.2.)
-    double shearStrengthPa = 0.0;
-    double frictionCoefficient = 0.0;
+    /// What a bond fails at; a material built of units (masonry) has two: [0] the material's
+    /// own, which for masonry is its joints', and [1] inside a unit.
+    struct Strength {
+        /// Linear softening in tension, crack band style (Bažant & Oh 1983): a bond's normal
+        /// stretch peaks at u0 = ft h / E and its traction falls to nothing at uf = 2 Gf / ft,
+        /// so a broken bond has dissipated Gf per unit of its face, whatever h. That needs
+        /// uf > u0, h < 2 E Gf / ft² (0.55 mm for glass, 1.1 m for brick masonry); above it
+        /// uf = u0: brittle at the full strength, dissipating ft² h / (2E) > Gf.
+        double peakStretchM = 0.0;
+        double zeroTractionStretchM = 0.0;
+        /// Mohr–Coulomb with the tension cut-off (Material): the shear strength at no normal
+        /// stress and the friction coefficient, the friction on the bond's normal traction.
+        /// (The cut-off is on the normal strain, E ε = ft, exact in uniaxial stress and 11 %
+        /// stronger than a stress cut-off in uniaxial strain at ν = 0.2.)
+        double shearStrengthPa = 0.0;
+        double frictionCoefficient = 0.0;
+    };
+    std::array<Strength, 2> strength;
     double youngsModulusPa = 0.0;
     StrengthRateLaw strengthRateLaw = StrengthRateLaw::None;
     /// Davison–Stevens B (unit: 1/s) and C (unit: 1/Pa; the material's 0 becomes 1/ft).
@@ -77,6 +82,8 @@ struct BondHistory {
 struct LatticeBond {
     uint32_t low = 0, high = 0;
     int axis = 0;
+    /// Which of LatticeStiffness::strength it fails at: 1 inside a masonry unit, else 0.
+    uint8_t strengthClass = 0;
 };
 
 /// A bond's deformation, in its frame (half-way between its particles' orientations).
@@ -229,6 +236,8 @@ private:
     void addBond(uint32_t low, uint32_t high, int axis);
     void addLinkBonds(const Body& body);
     void addGroundBonds(const Body& body);
+    /// Bonds between two voxels of the same masonry unit take the unit's strength (Material).
+    void classifyUnitBonds(const Material& material);
     void condenseVolumetricModulus();
     /// f(i) for i < count: in parallel for large lattices, in order for small ones.
     template <typename F>
