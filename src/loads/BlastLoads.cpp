@@ -144,6 +144,17 @@ std::vector<Silhouette> BlastLoads::silhouettes(const std::vector<const Body*>& 
     return outlines;
 }
 
+namespace {
+
+/// Whether an exposed face lies on the side of its body's index bounds it faces.
+bool onIndexBounds(const Body& body, const ExposedFace& face)
+{
+    const int axis = faceAxis(face.face);
+    return face.voxel[axis] == (faceSign(face.face) > 0 ? body.indexBounds.max()[axis] : body.indexBounds.min()[axis]);
+}
+
+}  // namespace
+
 template <typename F>
 void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouette>& outlines, const Exposure* exposure, size_t bodyIndex,
                                     double timeS, double dtS, size_t firstFace, size_t endFace, F&& f) const
@@ -173,9 +184,13 @@ void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouet
                 if (timeS + dtS <= direct.arrivalTimeS || timeS >= direct.arrivalTimeS + direct.positiveDurationS + direct.negativeDurationS)
                     continue;
                 // A face that looks at the charge is shadowed by anything, its own body too (a
-                // concave pocket); one that looks away only by something outside the group of
-                // bodies pressed together that is loaded as one object with it.
-                const size_t excludeGroup = cosine > 0.0 || !exposure ? Exposure::kNoBody : exposure->groupOf()[bodyIndex];
+                // concave pocket) unless the face lies on its body's bounds, which the ray leaves
+                // at once and cannot meet again (a box is convex); one that looks away only by
+                // something outside the group of bodies pressed together that is loaded as one
+                // object with it.
+                const bool ownBodyCannotShadow = exposure && exposure->alone(bodyIndex) && onIndexBounds(body, face);
+                const size_t excludeGroup =
+                    (cosine > 0.0 && !ownBodyCannotShadow) || !exposure ? Exposure::kNoBody : exposure->groupOf()[bodyIndex];
                 Eigen::Vector3d travel = rHat;
                 const PointPulse pulse = pulseOnFace(window, direct, x + 0.5 * h * normal, exposure, excludeGroup, 0.5 * h, travel);
                 const double from = timeS - pulse.arrivalTimeS;

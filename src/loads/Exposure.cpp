@@ -82,17 +82,32 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     for (size_t b = 0; b < bodies.size(); ++b)
         for (uint32_t other : touching[b]) groups.join(uint32_t(b), other);
     for (size_t b = 0; b < bodies.size(); ++b) mGroup[b] = groups.root(uint32_t(b));
+    mAlone.assign(bodies.size(), 0);
+    for (size_t b = 0; b < bodies.size(); ++b) mAlone[b] = considered[b] && touching[b].empty();
+    for (size_t b = 0; b < bodies.size(); ++b)
+        for (uint32_t other : touching[b]) mAlone[other] = 0;
     // Blocks hold their cells and those next to them: a voxel can contain points of the
     // neighbouring cells (bodies need not share the world's lattice).
     for (const Cell& c : mCells) {
         const int64_t i = std::llround(c.centre[0]), j = std::llround(c.centre[1]), k = std::llround(c.centre[2]);
         for (int corner = 0; corner < 8; ++corner) {
-            const auto [owner, added] =
-                mBlockOwners.try_emplace(blockKey(i + (corner & 1 ? 1 : -1), j + (corner & 2 ? 1 : -1), k + (corner & 4 ? 1 : -1)), mGroup[c.body]);
-            if (!added && owner->second != mGroup[c.body]) owner->second = kManyGroups;
+            const auto [block, added] =
+                mBlocks.try_emplace(blockKey(i + (corner & 1 ? 1 : -1), j + (corner & 2 ? 1 : -1), k + (corner & 4 ? 1 : -1)), Block{mGroup[c.body], {}});
+            if (!added && block->second.owner != mGroup[c.body]) block->second.owner = kManyGroups;
         }
+        const int bit = int(i & 7) + 8 * int(j & 7) + 64 * int(k & 7);
+        mBlocks[blockKey(i, j, k)].occupied[size_t(bit >> 6)] |= uint64_t(1) << (bit & 63);
     }
     boundGroups(bodies, considered);
+    if (mCells.empty()) return;
+    mCellsLo = mCellsHi = Eigen::Vector3d(mCells.front().centre[0], mCells.front().centre[1], mCells.front().centre[2]);
+    mOnlyGroup = mGroup[mCells.front().body];
+    for (const Cell& c : mCells) {
+        const Eigen::Vector3d u(c.centre[0], c.centre[1], c.centre[2]);
+        mCellsLo = mCellsLo.cwiseMin(u);
+        mCellsHi = mCellsHi.cwiseMax(u);
+        if (mGroup[c.body] != mOnlyGroup) mOnlyGroup = kManyGroups;
+    }
 }
 
 void Exposure::boundGroups(const std::vector<Body>& bodies, const std::vector<char>& considered)
@@ -118,15 +133,30 @@ void Exposure::boundGroups(const std::vector<Body>& bodies, const std::vector<ch
 int64_t Exposure::firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM, size_t excludeGroup) const
 {
     const double h = mVoxelSizeM, length = (toM - fromM).norm();
-    if (mCells.empty() || !(length > 0)) return -1;
+    if (mCells.empty() || !(length > 0) || excludeGroup == mOnlyGroup) return -1;
     const Eigen::Vector3d dir = (toM - fromM) / length;
+    // Slab test of the segment against the cells' bounds, a cell wider all round: a segment
+    // that misses them meets no voxel.
+    double enter = 0.0, leave = length;
+    const Eigen::Vector3d from = cellUnits(fromM);
+    for (int a = 0; a < 3; ++a) {
+        const double lo = mCellsLo[a] - 1.0, hi = mCellsHi[a] + 1.0, speed = dir[a] / h;  // cell units per metre
+        if (speed == 0.0) {
+            if (from[a] < lo || from[a] > hi) return -1;
+            continue;
+        }
+        const double t0 = (lo - from[a]) / speed, t1 = (hi - from[a]) / speed;
+        enter = std::max(enter, std::min(t0, t1));
+        leave = std::min(leave, std::max(t0, t1));
+    }
+    if (enter > leave) return -1;
     const double blockM = h * (1 << kBlockShift);
     for (double t = 0; t < length;) {
         const Eigen::Vector3d x = fromM + t * dir, u = cellUnits(x);
         const int64_t i = std::llround(u.x()), j = std::llround(u.y()), k = std::llround(u.z());
         // A block holding only cells of the excluded group is passed like an empty one.
-        const auto owner = mBlockOwners.find(blockKey(i, j, k));
-        if (owner != mBlockOwners.end() && owner->second != excludeGroup) {
+        const auto owner = mBlocks.find(blockKey(i, j, k));
+        if (owner != mBlocks.end() && owner->second.owner != excludeGroup) {
             if (const int64_t body = bodyAt(x, [&](size_t b) { return mGroup[b] == excludeGroup; }); body >= 0) return body;
             t += h;
             continue;
@@ -146,6 +176,24 @@ int64_t Exposure::firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector
     return -1;
 }
 
+bool Exposure::anyOccupied(const int64_t lo[3], const int64_t hi[3]) const
+{
+    uint64_t lastKey = ~uint64_t(0);
+    const Block* block = nullptr;
+    for (int64_t i = lo[0]; i <= hi[0]; ++i)
+        for (int64_t j = lo[1]; j <= hi[1]; ++j)
+            for (int64_t k = lo[2]; k <= hi[2]; ++k) {
+                if (const uint64_t key = blockKey(i, j, k); key != lastKey) {
+                    const auto it = mBlocks.find(key);
+                    block = it == mBlocks.end() ? nullptr : &it->second;
+                    lastKey = key;
+                }
+                const int bit = int(i & 7) + 8 * int(j & 7) + 64 * int(k & 7);
+                if (block && (block->occupied[size_t(bit >> 6)] >> (bit & 63) & 1)) return true;
+            }
+    return false;
+}
+
 template <typename Skip>
 int64_t Exposure::bodyAt(const Eigen::Vector3d& xM, Skip&& skip) const
 {
@@ -158,6 +206,8 @@ int64_t Exposure::bodyAt(const Eigen::Vector3d& xM, Skip&& skip) const
         range[a][0] = range[a][1] = int64_t(nearest);
         if (std::abs(v - nearest) > 0.2) (v > nearest ? range[a][1] : range[a][0]) += v > nearest ? 1 : -1;
     }
+    const int64_t lo[3] = {range[0][0], range[1][0], range[2][0]}, hi[3] = {range[0][1], range[1][1], range[2][1]};
+    if (!anyOccupied(lo, hi)) return -1;
     for (int64_t i = range[0][0]; i <= range[0][1]; ++i)
         for (int64_t j = range[1][0]; j <= range[1][1]; ++j)
             for (int64_t k = range[2][0]; k <= range[2][1]; ++k) {

@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cstdint>
 #include <unordered_map>
 #include <vector>
@@ -44,6 +45,8 @@ public:
     /// Per body: the lowest index of the group of bodies pressed together that it belongs to
     /// (itself when it touches none, or was not considered).
     const std::vector<uint32_t>& groupOf() const { return mGroup; }
+    /// Whether a body was considered and touches no other.
+    bool alone(size_t bodyIndex) const { return mAlone[bodyIndex] != 0; }
 
 private:
     struct Cell {
@@ -63,11 +66,26 @@ private:
     double mVoxelSizeM = 1.0;
     Eigen::Vector3d mOriginM = Eigen::Vector3d::Zero();  ///< a lattice point (unit: m)
     std::vector<Cell> mCells;  ///< sorted by key, then body
-    /// Every block of 8^3 cells holding a cell: the one group with cells there, or kManyGroups.
-    std::unordered_map<uint64_t, size_t> mBlockOwners;
+    /// A block of 8^3 cells: the one group with cells in or next to it, or kManyGroups; and
+    /// which of its cells hold a voxel centre (bit i + 8 j + 64 k of its cell (i, j, k)).
+    struct Block {
+        size_t owner = 0;
+        std::array<uint64_t, 8> occupied{};
+    };
+    /// Every block holding a cell or next to one.
+    std::unordered_map<uint64_t, Block> mBlocks;
+    /// Whether any cell from lattice point lo to hi (inclusive, at most one block apart) holds a
+    /// voxel centre: a test of bits before bodyAt's search of the sorted cells.
+    bool anyOccupied(const int64_t lo[3], const int64_t hi[3]) const;
     static constexpr size_t kManyGroups = kNoBody - 1;
+    /// Bounds of every cell's centre (cell units), and the group all cells belong to when they
+    /// belong to one (kManyGroups otherwise): a segment that misses the bounds, or a query that
+    /// excludes the only group, meets nothing.
+    Eigen::Vector3d mCellsLo = Eigen::Vector3d::Zero(), mCellsHi = Eigen::Vector3d::Zero();
+    size_t mOnlyGroup = kManyGroups;
     std::vector<std::vector<char>> mCovered;  ///< per considered body, per exposed face
     std::vector<uint32_t> mGroup;
+    std::vector<char> mAlone;
     std::vector<ObstacleBox> mGroupBounds;  ///< per group, at its lowest member's index
 };
 
