@@ -3,6 +3,7 @@
 #include <spall/io/Scene.h>
 #include <spall/sim/Checkpoint.h>
 #include <spall/sim/MemoryBudget.h>
+#include <spall/sim/Run.h>
 #include <spall/sim/Simulation.h>
 
 #include <gtest/gtest.h>
@@ -329,6 +330,53 @@ TEST(Checkpoint, ResumedInTheDeformablePhaseEndsBitForBitAsTheUninterruptedOne)
     ASSERT_EQ(straight.state().handOffs.size(), resumed.state().handOffs.size());
     for (size_t i = 0; i < straight.state().handOffs.size(); ++i)
         EXPECT_EQ(straight.state().handOffs[i].discardedEnergyJ, resumed.state().handOffs[i].discardedEnergyJ);
+}
+
+namespace {
+
+/// Asks to stop on its nth question, once.
+struct StopOnce : Interrupter {
+    explicit StopOnce(int n) : remaining(n) {}
+    bool wasInterrupted(int) override { return --remaining == 0; }
+    int remaining;
+};
+
+}  // namespace
+
+TEST(Checkpoint, RunStoppedWithinAFrameResumesAndEndsAsTheUninterruptedOne)
+{
+    // A frame of the deformable phase can take minutes, so a stop request (SIGTERM at a time
+    // limit) is answered between two steps, not at the frame's end: the checkpoint then holds
+    // a state within a frame, and the resumed run must end as the uninterrupted one.
+    nlohmann::json j = nlohmann::json::parse(kSmallScene);
+    j["duration_s"] = 0.125;
+    j["fracture"] = {{"algorithm", "lattice"}};
+    j["lattice"] = {{"max_vibration_s", 0.02}};
+    j["output"] = {{"checkpoint_every_s", 1000.0}};
+    const Scene scene = parseScene(j.dump(), "small", ".");
+    const std::string whole = testing::TempDir() + "/spall-whole", cut = testing::TempDir() + "/spall-cut";
+    for (const std::string& dir : {whole, cut}) std::filesystem::remove_all(dir);
+    RunOptions options;
+    options.outputDirectory = whole;
+    const RunReport straight = runScene(scene, options, {});
+    ASSERT_TRUE(straight.complete);
+
+    StopOnce stop(40);  // the first frames take hundreds of steps
+    options.outputDirectory = cut;
+    options.interrupter = &stop;
+    const RunReport first = runScene(scene, options, {});
+    ASSERT_FALSE(first.complete);
+    const Checkpoint saved = readCheckpoint(cut + "/" + kCheckpointFileName);
+    EXPECT_EQ(saved.framesDone, first.framesWritten);
+    EXPECT_LT(saved.state.timeS, saved.framesDone / scene.frameRateHz) << "the stop was meant to fall within a frame";
+    EXPECT_GT(saved.state.stepStats.steps, 0);
+
+    options.interrupter = nullptr;
+    const RunReport resumed = resumeRun(options, {});
+    ASSERT_TRUE(resumed.complete);
+    EXPECT_EQ(resumed.totalSteps, straight.totalSteps);
+    EXPECT_EQ(resumed.finalBodies, straight.finalBodies);
+    EXPECT_FALSE(std::filesystem::exists(cut + "/" + kCheckpointFileName));
 }
 
 TEST(Checkpoint, DamagedFilesAreRefusedNamingTheFile)

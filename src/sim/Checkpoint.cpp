@@ -162,6 +162,10 @@ void transferFields(Archive& a, C& c, std::vector<uint8_t>& hasDamage)
     a.pod(s.nextId, "next id");
     a.pod(s.initialVoxels, "initial voxels");
     a.pod(s.penetrationStepScale, "step scale");
+    a.pod(s.stepStats.steps, "frame steps");
+    a.pod(s.stepStats.minDtS, "frame smallest step");
+    a.pod(s.stepStats.brokenLinks, "frame broken links");
+    a.pod(s.stepStats.latticeParticleSteps, "frame lattice particle-steps");
     size_t index = 0;
     a.sequence(s.bodies, "bodies", [&](auto& b) {
         a.pod(b.id, "body id");

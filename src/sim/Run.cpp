@@ -132,7 +132,13 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
     report.totalSteps = stepsSoFar;
     for (int f = firstFrame; f < frameCount; ++f) {
         const double t = f / scene.frameRateHz;
-        sim.advanceTo(t);
+        if (!sim.advanceTo(t, options.interrupter)) {
+            // Asked to stop within the frame (a frame of the deformable phase can take minutes):
+            // the state between two steps is saved, frame f still to write.
+            if (scene.output.checkpointEveryS > 0)
+                writeCheckpoint(checkpointPath.string(), {f, frameCount, report.totalSteps, checkpointScene, sim.state()});
+            break;
+        }
         const StepStats stats = sim.takeStepStats();
         report.totalSteps += stats.steps;
         if (frames) frames->write({f, t}, sim.bodies());

@@ -93,7 +93,7 @@ Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(sc
         mState.bodies.push_back(std::move(body));
     }
     noteFragmentMemory();
-    mStats.minDtS = scene.timeStep.maxTimeStepS;
+    mState.stepStats.minDtS = scene.timeStep.maxTimeStepS;
 }
 
 std::vector<TriangleMesh> Simulation::loadMeshes()
@@ -162,7 +162,6 @@ Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene
     requireVoxelSize(mState.bodies, scene.voxelSizeM);
     initialiseOpenVdb();
     mField = makeField(scene);
-    mStats.minDtS = scene.timeStep.maxTimeStepS;
     // A saved lattice holds its state; its bonds and stiffness follow from its body again.
     for (DeformableBody& d : mState.deformable) {
         const auto body = std::find_if(mState.bodies.begin(), mState.bodies.end(), [&](const Body& b) { return b.id == d.bodyId; });
@@ -179,9 +178,9 @@ LatticeGround Simulation::latticeGround() const
 
 StepStats Simulation::takeStepStats()
 {
-    StepStats s = mStats;
-    mStats = StepStats();
-    mStats.minDtS = mScene.timeStep.maxTimeStepS;
+    StepStats s = mState.stepStats;
+    mState.stepStats = StepStats();
+    mState.stepStats.minDtS = mScene.timeStep.maxTimeStepS;
     return s;
 }
 
@@ -235,9 +234,13 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
 }
 
 
-void Simulation::advanceTo(double targetS)
+bool Simulation::advanceTo(double targetS, Interrupter* interrupter)
 {
-    while (mState.timeS < targetS) step(targetS);
+    while (mState.timeS < targetS) {
+        if (interrupter && interrupter->wasInterrupted()) return false;
+        step(targetS);
+    }
+    return true;
 }
 
 void Simulation::step(double targetS)
@@ -277,8 +280,8 @@ void Simulation::step(double targetS)
     if (mObserver) mRecord.solverContacts = contacts.solverContacts;
 
     mState.timeS = last ? targetS : mState.timeS + dt;
-    ++mStats.steps;
-    mStats.minDtS = std::min(mStats.minDtS, dt);
+    ++mState.stepStats.steps;
+    mState.stepStats.minDtS = std::min(mState.stepStats.minDtS, dt);
     if (mObserver) {
         mRecord.timeS = mState.timeS;
         mObserver(*this, mRecord);
@@ -300,7 +303,7 @@ std::vector<char> Simulation::fractureBodies(const std::vector<OpenWindow>& wind
         if (!bodyInWindows(body, *mField, windows)) continue;
         if (!pressure) pressure.emplace(*mField, mState.timeS, dt);
         const LoadResult r = loadLinks(body, mScene.materials[body.materialIndex], *pressure, dt, mScene.fracture);
-        mStats.brokenLinks += r.brokenLinks;
+        mState.stepStats.brokenLinks += r.brokenLinks;
         cracked[i] = r.brokenLinks > 0 || r.brokenAnchors > 0;
     }
     return cracked;
@@ -384,7 +387,7 @@ void Simulation::deformBodies(const FaceForces& faces, const std::vector<OpenWin
         const size_t i = indexOf.at(d.bodyId);
         Body& body = mState.bodies[i];
         setExternalForces(d.lattice, body, faces.forceN[i], mScene.world.gravityMS2);
-        mStats.latticeParticleSteps += d.lattice.advance(dtS) * static_cast<int64_t>(d.lattice.particleCount());
+        mState.stepStats.latticeParticleSteps += d.lattice.advance(dtS) * static_cast<int64_t>(d.lattice.particleCount());
         followLattice(body, d.lattice);
         if (bodyInWindows(body, *mField, windows)) d.lastLoadedS = mState.timeS + dtS;
     }
@@ -411,7 +414,7 @@ void Simulation::handOffQuietBodies()
         }
         mState.handOffs.push_back({mState.timeS, d.bodyId, int64_t(d.lattice.voxelParticleCount), out.handOff.brokenBonds,
                                    out.handOff.brokenAnchors, mState.timeS - d.enteredS, out.discardedEnergyJ, out.timedOut});
-        mStats.brokenLinks += out.handOff.brokenBonds;
+        mState.stepStats.brokenLinks += out.handOff.brokenBonds;
         if (leftParts.size() == 1) {
             leftParts.front().id = mState.bodies[i].id;
             leftParts.front().parentId = mState.bodies[i].parentId;

@@ -11,10 +11,10 @@
 namespace spall {
 
 inline constexpr const char* kCheckpointFileName = "checkpoint.spall";
-inline constexpr uint32_t kCheckpointFormatVersion = 6;
+inline constexpr uint32_t kCheckpointFormatVersion = 7;
 
 struct Checkpoint {
-    int framesDone = 0;       ///< frames 0 .. framesDone-1 are written
+    int framesDone = 0;       ///< frames 0 .. framesDone-1 are written (the state may lie within frame framesDone)
     int frameCount = 0;       ///< frames the run writes in all
     int64_t totalSteps = 0;   ///< steps taken so far
     std::string sceneJson;    ///< the simulation's scene with every default filled in

@@ -52,6 +52,9 @@ struct SimulationState {
     int64_t initialVoxels = 0;
     ContactCache contactCache;
     double penetrationStepScale = 1.0;  ///< < 1 while contacts are deeper than the tolerance
+    /// Totals since the last takeStepStats(): a frame's so far, so a run stopped within a frame
+    /// and resumed records the frame whole.
+    StepStats stepStats;
 };
 
 /// What one step did, for checks of invariants after every step (tests/stress_main.cpp).
@@ -81,8 +84,9 @@ public:
     /// The state between steps (grids are shared, not copied: save it before stepping on).
     const SimulationState& state() const { return mState; }
 
-    /// Steps (adaptively) until time t exactly.
-    void advanceTo(double timeS);
+    /// Steps (adaptively) until time t exactly; returns false, between two steps and before t,
+    /// when `interrupter` asks to stop (the state is then a whole step's, fit for a checkpoint).
+    bool advanceTo(double timeS, Interrupter* interrupter = nullptr);
 
     /// One step toward `targetS` (landing on it when it is near; by default the step is the one
     /// chosen). Its phases, in order: open windows, choose dt, fracture, split, hand off, enter
@@ -141,7 +145,6 @@ private:
     Scene mScene;
     std::unique_ptr<BlastField> mField;
     SimulationState mState;  ///< everything carried from step to step (what a checkpoint saves)
-    StepStats mStats;
     std::function<void(const Simulation&, const StepRecord&)> mObserver;
     StepRecord mRecord;  ///< filled while a step runs, for the observer
     std::vector<std::string> mNotes;
