@@ -465,4 +465,7 @@ TEST(Lattice, MasonryPulledAcrossItsBedJointsBreaksInAJointAtTheJointsStrength)
     EXPECT_NEAR(peakStressPa, material.tensileStrengthPa, 0.10 * material.tensileStrengthPa);
     EXPECT_EQ(brokenInJoints, n * n) << "one bed joint opens right through";
     EXPECT_EQ(brokenInUnits, 0);
+    // Voxels taller than a course (75 mm) do not resolve the bricks: every bond is a joint's.
+    const Lattice coarse = Lattice::fromBody(test::boxBody(6, 3, 4, 0.1, material.densityKgM3), material);
+    for (const LatticeBond& bond : coarse.bonds) EXPECT_EQ(bond.strengthClass, 0);
 }

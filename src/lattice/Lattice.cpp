@@ -181,6 +181,9 @@ void Lattice::addGroundBonds(const Body& body)
 
 void Lattice::classifyUnitBonds(const Material& material)
 {
+    // Voxels taller than a course do not resolve the units: every bond then spans a bed joint,
+    // and the material stays what its own (the joints') values make it, homogenised.
+    if (voxelSizeM > material.unitHeightM + material.jointThicknessM) return;
     // A voxel's centre where the object was voxelised: its index times h (Voxelise.cpp's transform).
     const auto unitOf = [&](const openvdb::Coord& v) {
         return masonryUnitOf(material, voxelSizeM * v.x(), voxelSizeM * v.y(), voxelSizeM * v.z());

@@ -236,7 +236,8 @@ private:
     void addBond(uint32_t low, uint32_t high, int axis);
     void addLinkBonds(const Body& body);
     void addGroundBonds(const Body& body);
-    /// Bonds between two voxels of the same masonry unit take the unit's strength (Material).
+    /// Bonds between two voxels of the same masonry unit take the unit's strength (Material),
+    /// when a voxel is no taller than a course.
     void classifyUnitBonds(const Material& material);
     void condenseVolumetricModulus();
     /// f(i) for i < count: in parallel for large lattices, in order for small ones.
