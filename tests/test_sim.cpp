@@ -9,6 +9,10 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -377,6 +381,34 @@ TEST(Checkpoint, RunStoppedWithinAFrameResumesAndEndsAsTheUninterruptedOne)
     EXPECT_EQ(resumed.totalSteps, straight.totalSteps);
     EXPECT_EQ(resumed.finalBodies, straight.finalBodies);
     EXPECT_FALSE(std::filesystem::exists(cut + "/" + kCheckpointFileName));
+}
+
+TEST(Run, ASecondRunIntoTheSameDirectoryIsRefused)
+{
+    // Two runs writing one directory would interleave their frames and history; the second is
+    // refused, naming the directory, and the first's files are left alone.
+    const std::string dir = testing::TempDir() + "/spall-locked";
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    const std::string lockPath = dir + "/" + kRunLockFileName;
+    const int held = ::open(lockPath.c_str(), O_RDWR | O_CREAT, 0644);  // as a run in another process holds it
+    ASSERT_GE(held, 0);
+    ASSERT_EQ(::flock(held, LOCK_EX | LOCK_NB), 0);
+    RunOptions options;
+    options.outputDirectory = dir;
+    const Scene scene = parseScene(kSmallScene, "small", ".");
+    try {
+        runScene(scene, options, {});
+        ADD_FAILURE() << "the second run was not refused";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find(dir + ": another spall run is writing to this directory"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(resumeRun(options, {}), IoError);
+    EXPECT_FALSE(std::filesystem::exists(dir + "/scene.json")) << "the refused run wrote into the directory";
+    ::close(held);
+    // Released (as when the first run's process ends, however it ends), a run proceeds.
+    options.maxFrames = 2;
+    EXPECT_NO_THROW(runScene(scene, options, {}));
 }
 
 TEST(Checkpoint, DamagedFilesAreRefusedNamingTheFile)

@@ -10,7 +10,13 @@
 #include <spall/sim/Checkpoint.h>
 #include <spall/sim/Simulation.h>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -169,15 +175,36 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
     return report;
 }
 
-}  // namespace
 
-RunReport runScene(const Scene& scene, const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame)
+/// Holds OUTDIR/run.lock (an exclusive flock) for a run's life, so a second run into the same
+/// directory is refused instead of interleaving its files with the first's; the kernel releases
+/// it when the process ends, however it ends.
+class OutputDirectoryLock {
+public:
+    explicit OutputDirectoryLock(const std::filesystem::path& dir)
+    {
+        const std::string path = (dir / kRunLockFileName).string();
+        mFd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+        if (mFd < 0) throw IoError(path + ": cannot open the run's lock file: " + std::strerror(errno));
+        if (::flock(mFd, LOCK_EX | LOCK_NB) != 0) {
+            ::close(mFd);
+            throw IoError(dir.string() + ": another spall run is writing to this directory (it holds " + path + ")");
+        }
+    }
+    ~OutputDirectoryLock() { ::close(mFd); }
+    OutputDirectoryLock(const OutputDirectoryLock&) = delete;
+    OutputDirectoryLock& operator=(const OutputDirectoryLock&) = delete;
+
+private:
+    int mFd = -1;
+};
+
+/// runScene once the directory exists and is locked.
+RunReport runSceneInLockedDirectory(const Scene& scene, const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame)
 {
     namespace fs = std::filesystem;
     const fs::path dir = options.outputDirectory;
     std::error_code ec;
-    fs::create_directories(dir, ec);
-    if (ec || !fs::is_directory(dir)) throw IoError(dir.string() + ": cannot create the output directory: " + ec.message());
     // A checkpoint of an earlier run in the same directory must not be resumed into this one.
     fs::remove(dir / kCheckpointFileName, ec);
     const nlohmann::json resolvedScene = sceneToJson(scene);
@@ -200,11 +227,26 @@ RunReport runScene(const Scene& scene, const RunOptions& options, const std::fun
     return runFrames(sim, 0, frameCount, 0, options, onFrame, std::move(history));
 }
 
+}  // namespace
+
+RunReport runScene(const Scene& scene, const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame)
+{
+    namespace fs = std::filesystem;
+    const fs::path dir = options.outputDirectory;
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec || !fs::is_directory(dir)) throw IoError(dir.string() + ": cannot create the output directory: " + ec.message());
+    const OutputDirectoryLock lock(dir);
+    return runSceneInLockedDirectory(scene, options, onFrame);
+}
+
 RunReport resumeRun(const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame)
 {
     namespace fs = std::filesystem;
     const fs::path dir = options.outputDirectory;
     const std::string path = (dir / kCheckpointFileName).string();
+    if (!fs::is_directory(dir)) throw IoError(dir.string() + ": nothing to resume: there is no " + path + " (no such directory)");
+    const OutputDirectoryLock lock(dir);
     if (!fs::exists(path) && fs::exists(dir / "history.h5") && readHistory((dir / "history.h5").string()).runComplete)
         throw InputError(dir.string() + ": the run is complete (history.h5 says run_complete = 1); there is nothing to resume");
     if (!fs::exists(path)) {
@@ -213,7 +255,7 @@ RunReport resumeRun(const RunOptions& options, const std::function<bool(const Ru
         if (!fs::exists(scenePath))
             throw IoError(dir.string() + ": nothing to resume: there is no " + path + " and no " + scenePath.string() +
                           " (the run had not started writing)");
-        RunReport report = runScene(loadScene(scenePath.string()), options, onFrame);
+        RunReport report = runSceneInLockedDirectory(loadScene(scenePath.string()), options, onFrame);
         report.restartedFromScene = true;
         return report;
     }

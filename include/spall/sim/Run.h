@@ -9,6 +9,9 @@
 
 namespace spall {
 
+/// The file a run holds locked in its output directory while it writes there.
+inline constexpr const char* kRunLockFileName = "run.lock";
+
 struct RunOptions {
     std::string outputDirectory = "out";
     int maxFrames = -1;  ///< stop after this many frames (-1: the scene's duration)
