@@ -82,10 +82,6 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     for (size_t b = 0; b < bodies.size(); ++b)
         for (uint32_t other : touching[b]) groups.join(uint32_t(b), other);
     for (size_t b = 0; b < bodies.size(); ++b) mGroup[b] = groups.root(uint32_t(b));
-    mAlone.assign(bodies.size(), 0);
-    for (size_t b = 0; b < bodies.size(); ++b) mAlone[b] = considered[b] && touching[b].empty();
-    for (size_t b = 0; b < bodies.size(); ++b)
-        for (uint32_t other : touching[b]) mAlone[other] = 0;
     // Blocks hold their cells and those next to them: a voxel can contain points of the
     // neighbouring cells (bodies need not share the world's lattice).
     for (const Cell& c : mCells) {
@@ -112,9 +108,10 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
 
 void Exposure::boundGroups(const std::vector<Body>& bodies, const std::vector<char>& considered)
 {
-    std::vector<uint32_t> members(bodies.size(), 0);
+    mGroupMembers.assign(bodies.size(), 0);
     for (size_t b = 0; b < bodies.size(); ++b)
-        if (considered[b]) ++members[mGroup[b]];
+        if (considered[b]) ++mGroupMembers[mGroup[b]];
+    const std::vector<uint32_t>& members = mGroupMembers;
     std::vector<Eigen::Vector3d> lo(bodies.size(), Eigen::Vector3d::Constant(1e300)), hi(bodies.size(), Eigen::Vector3d::Constant(-1e300));
     for (size_t b = 0; b < bodies.size(); ++b) {
         if (!considered[b]) continue;

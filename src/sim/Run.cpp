@@ -175,7 +175,6 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
     return report;
 }
 
-
 /// Holds OUTDIR/run.lock (an exclusive flock) for a run's life, so a second run into the same
 /// directory is refused instead of interleaving its files with the first's; the kernel releases
 /// it when the process ends, however it ends.

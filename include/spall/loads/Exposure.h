@@ -46,7 +46,7 @@ public:
     /// (itself when it touches none, or was not considered).
     const std::vector<uint32_t>& groupOf() const { return mGroup; }
     /// Whether a body was considered and touches no other.
-    bool alone(size_t bodyIndex) const { return mAlone[bodyIndex] != 0; }
+    bool alone(size_t bodyIndex) const { return mGroupMembers[mGroup[bodyIndex]] == 1; }
 
 private:
     struct Cell {
@@ -85,7 +85,7 @@ private:
     size_t mOnlyGroup = kManyGroups;
     std::vector<std::vector<char>> mCovered;  ///< per considered body, per exposed face
     std::vector<uint32_t> mGroup;
-    std::vector<char> mAlone;
+    std::vector<uint32_t> mGroupMembers;  ///< per group, at its lowest member's index: its considered bodies
     std::vector<ObstacleBox> mGroupBounds;  ///< per group, at its lowest member's index
 };
 
