@@ -127,6 +127,7 @@ std::vector<Case> cases(bool full)
         json s = baseScene(full ? 0.1 : 0.15, 2.0);
         s["gravity_m_s2"] = {0, 0, 0};
         s["ground"] = {{"enabled", false}};
+        s["solver"]["air_drag"] = "none";
         s["objects"] = json::array({box({1.5, 1.5, 1.5}, {0, 0, 0}, "concrete", false)});
         s["charges"] = json::array({charge({0, -2.5, 0.2}, 2.0, 0.0, "free-air")});
         out.push_back({"isolated block, no external forces after the blast", s, full ? 2.0 : 0.5, true});

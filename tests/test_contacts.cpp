@@ -25,6 +25,7 @@ WorldSettings emptySpace()
     WorldSettings world;
     world.gravityMS2.setZero();
     world.ground.enabled = false;
+    world.airDrag = AirDrag::None;  // no external force: the solver alone must keep momentum
     return world;
 }
 

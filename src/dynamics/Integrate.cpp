@@ -112,16 +112,19 @@ void integrateBody(Body& body, double t, double dt, Integrator integrator, const
     body.motion.angularVelocityRadS = angularVelocity(body, s.q, s.l);
 }
 
-void integrateBodies(std::vector<Body>& bodies, const std::vector<Wrench>& blast, const WorldSettings& world, Integrator integrator,
-                     double timeS, double dt)
+void integrateBodies(std::vector<Body>& bodies, const std::vector<Wrench>& blast, const WorldSettings& world, const Air& air,
+                     Integrator integrator, double timeS, double dt)
 {
     forEachIndex(bodies.size(), [&](size_t i) {
         Body& body = bodies[i];
         if (!movable(body)) return;
         const double m = body.mass.massKg;
+        const DragShape shape = dragShapeOf(body);
+        const bool airDrag = world.airDrag == AirDrag::HaiderLevenspiel;
         auto wrench = [&](double, const Eigen::Vector3d&, const Eigen::Quaterniond& q, const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
             Wrench total = blast[i];
             total.forceN += m * world.gravityMS2 - world.linearDragPerS * m * v;
+            if (airDrag) total.forceN += airDragForceN(shape, air, v);
             const Eigen::Matrix3d r = q.toRotationMatrix();
             total.torqueNm -= world.angularDragPerS * (r * body.mass.inertiaKgM2 * r.transpose() * w);
             return total;

@@ -41,6 +41,7 @@ const std::vector<Field<WorldSettings>>& fieldTable<WorldSettings>()
     // The ground and the colliders have tables of their own.
     static const std::vector<Field<WorldSettings>> table = {
         {"gravity_m_s2", &WorldSettings::gravityMS2},
+        {"solver.air_drag", choice(&WorldSettings::airDrag)},
         {"solver.linear_drag_per_s", &WorldSettings::linearDragPerS, closed(0, 1e6)},
         {"solver.angular_drag_per_s", &WorldSettings::angularDragPerS, closed(0, 1e6)},
     };

@@ -269,7 +269,7 @@ void Simulation::step(double targetS)
     FaceForces faces;
     for (const Body& body : mState.bodies) faces.wanted.push_back(body.motion.deformable);
     const std::vector<Wrench> blastWrenches = blast.stepWrenches(mState.bodies, loaded, mState.timeS, dt, &faces);
-    integrateBodies(mState.bodies, blastWrenches, mScene.world, mScene.timeStep.integrator, mState.timeS, dt);
+    integrateBodies(mState.bodies, blastWrenches, mScene.world, airOf(mScene.blast.atmosphere), mScene.timeStep.integrator, mState.timeS, dt);
     deformBodies(faces, windows, dt);
 
     const ContactSet contacts = detectContacts(mState.bodies, mScene.world, mScene.collisions, mScene.sleep);

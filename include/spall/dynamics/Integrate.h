@@ -2,6 +2,7 @@
 // gravity and drag, and the body quantities the other phases read (speed, energy, momentum).
 #pragma once
 
+#include <spall/dynamics/AirDrag.h>
 #include <spall/dynamics/Settings.h>
 #include <spall/loads/BlastLoads.h>
 #include <spall/voxel/Body.h>
@@ -30,12 +31,12 @@ using WrenchFunction = std::function<Wrench(double timeS, const Eigen::Vector3d&
 /// Advances position, orientation and momenta of one body over dt. Quaternions stay unit.
 void integrateBody(Body& body, double timeS, double dtS, Integrator integrator, const WrenchFunction& wrench);
 
-/// The integrate phase: every awake, unanchored body under gravity, drag and its blast load
+/// The integrate phase: every awake, unanchored body under gravity, the drag of still `air` and its blast load
 /// (`blast[i]`, the step's mean force and torque from the loads phase; held through the step, so
 /// the blast's impulse is exactly what the loads stage integrated). In parallel: each task
 /// writes only its own body.
-void integrateBodies(std::vector<Body>& bodies, const std::vector<Wrench>& blast, const WorldSettings& world, Integrator integrator,
-                     double timeS, double dtS);
+void integrateBodies(std::vector<Body>& bodies, const std::vector<Wrench>& blast, const WorldSettings& world, const Air& air,
+                     Integrator integrator, double timeS, double dtS);
 
 /// Kinetic energy (J), linear momentum (kg m/s) and angular momentum about the origin (kg m^2/s).
 double kineticEnergyJ(const Body& body);

@@ -19,6 +19,13 @@ struct EnumNames<Integrator> {
         {Integrator::ExplicitEuler, "explicit-euler"}, {Integrator::SemiImplicitEuler, "semi-implicit-euler"}, {Integrator::RungeKutta4, "rk4"}};
 };
 
+/// Drag of the air on bodies in flight (dynamics/AirDrag.h).
+enum class AirDrag { None, HaiderLevenspiel };
+template <>
+struct EnumNames<AirDrag> {
+    static constexpr std::pair<AirDrag, const char*> kNames[] = {{AirDrag::None, "none"}, {AirDrag::HaiderLevenspiel, "haider-levenspiel"}};
+};
+
 struct GroundPlane {
     bool enabled = true;
     Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< pointing out of the ground (unit: 1, normalised)
@@ -39,7 +46,9 @@ struct StaticBox {
 
 struct WorldSettings {
     Eigen::Vector3d gravityMS2 = Eigen::Vector3d(0, 0, -9.81);  ///< (unit: m/s^2)
-    double linearDragPerS = 0.0;   ///< F = -k m v (unit: 1/s)
+    /// The still air's drag on every rigid body in flight; the blast wind is the loads stage's.
+    AirDrag airDrag = AirDrag::HaiderLevenspiel;
+    double linearDragPerS = 0.0;   ///< an artist's extra damping, F = -k m v (unit: 1/s)
     double angularDragPerS = 0.0;  ///< tau = -k I w (unit: 1/s)
     GroundPlane ground;
     std::vector<StaticBox> colliders;
