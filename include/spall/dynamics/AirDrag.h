@@ -20,8 +20,8 @@ struct Air {
 };
 Air airOf(const Atmosphere& atmosphere);
 
-/// Largest Reynolds number of the correlation's data (sub-critical flow); above it C_d is held at
-/// its value there, the Newton regime's constant drag.
+/// Above this Reynolds number (the upper end of the sphere data the paper reviews) C_d is held at
+/// its value there: a sharp-edged block has no drag crisis, its drag stays near constant.
 constexpr double kHaiderLevenspielMaxReynolds = 2.6e5;
 
 /// Haider and Levenspiel's eq. 10: C_d on the projected area of the volume-equivalent sphere,
