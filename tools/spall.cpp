@@ -62,6 +62,7 @@ int main(int argc, char** argv)
     addBenchCommands(app, action);
     addExportCommand(app, action);
     addViewCommand(app, action);
+    addDebrisCommand(app, action);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -512,6 +512,8 @@ History readHistory(const std::string& path)
     h.eventTimeS = r.read<double>("/events/fracture/time_s", d);
     h.eventParentId = r.read<int64_t>("/events/fracture/parent_id", i64);
     h.eventChildOffset = r.read<int64_t>("/events/fracture/child_offset", i64);
+    h.chargePositionM = r.readVec3("/charges/position_m");
+    h.chargeTntKg = r.read<double>("/charges/tnt_kg", d);
     // A run killed mid-frame may hold body rows past the last complete frame: keep what the
     // frame rows describe.
     const size_t frames = std::min(h.timeS.size(), h.bodyOffset.size() - 1);

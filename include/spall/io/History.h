@@ -105,6 +105,8 @@ struct History {
     std::vector<int8_t> bodyAsleep, bodyAnchored;
     std::vector<double> eventTimeS;
     std::vector<int64_t> eventParentId, eventChildOffset;
+    std::vector<Eigen::Vector3d> chargePositionM;
+    std::vector<double> chargeTntKg;
     size_t frameCount() const { return timeS.size(); }
 };
 

@@ -1,0 +1,271 @@
+// debris.h5, debris.csv and the debris plots (layout: docs/debris.md).
+#include <spall/analysis/Debris.h>
+
+#include <spall/core/AtomicFile.h>
+#include <spall/core/Error.h>
+#include <spall/io/Png.h>
+
+#include <hdf5.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <unistd.h>
+
+namespace spall {
+
+namespace {
+
+class H5Out {
+public:
+    explicit H5Out(const std::string& path) : mPath(path)
+    {
+        H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+        mFile = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+        if (mFile < 0) throw IoError(path + ": cannot create");
+    }
+    ~H5Out()
+    {
+        for (auto it = mGroups.rbegin(); it != mGroups.rend(); ++it) H5Gclose(*it);
+        if (mFile >= 0) H5Fclose(mFile);
+    }
+    void group(const char* name) { mGroups.push_back(checked(H5Gcreate2(mFile, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name)); }
+    void write(const char* name, const std::vector<double>& v, size_t cols = 1) { dataset(name, H5T_NATIVE_DOUBLE, v.data(), v.size(), cols); }
+    void write(const char* name, const std::vector<int64_t>& v, size_t cols = 1) { dataset(name, H5T_NATIVE_INT64, v.data(), v.size(), cols); }
+    void attribute(const char* name, double value) { scalar(name, H5T_NATIVE_DOUBLE, &value); }
+    void attribute(const char* name, int64_t value) { scalar(name, H5T_NATIVE_INT64, &value); }
+    void close()
+    {
+        for (auto it = mGroups.rbegin(); it != mGroups.rend(); ++it) H5Gclose(*it);
+        mGroups.clear();
+        if (H5Fclose(mFile) < 0) throw IoError(mPath + ": cannot close");
+        mFile = -1;
+    }
+
+private:
+    hid_t checked(hid_t id, const std::string& what) const
+    {
+        if (id < 0) throw IoError(mPath + ": writing " + what + " failed");
+        return id;
+    }
+    void dataset(const char* name, hid_t type, const void* data, size_t count, size_t cols)
+    {
+        const hsize_t dims[2] = {count / cols, cols};
+        const hid_t space = checked(H5Screate_simple(cols > 1 ? 2 : 1, dims, nullptr), name);
+        const hid_t set = checked(H5Dcreate2(mFile, name, type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name);
+        const herr_t status = count ? H5Dwrite(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) : 0;
+        H5Dclose(set);
+        H5Sclose(space);
+        checked(status, name);
+    }
+    void scalar(const char* name, hid_t type, const void* value)
+    {
+        const hid_t space = H5Screate(H5S_SCALAR);
+        const hid_t attr = checked(H5Acreate2(mFile, name, type, space, H5P_DEFAULT, H5P_DEFAULT), name);
+        const herr_t status = H5Awrite(attr, type, value);
+        H5Aclose(attr);
+        H5Sclose(space);
+        checked(status, name);
+    }
+
+    std::string mPath;
+    hid_t mFile = -1;
+    std::vector<hid_t> mGroups;
+};
+
+template <typename T, typename Get>
+std::vector<T> column(const std::vector<FragmentFlight>& fragments, Get get)
+{
+    std::vector<T> out;
+    for (const FragmentFlight& f : fragments) out.push_back(static_cast<T>(get(f)));
+    return out;
+}
+
+template <typename Get>
+std::vector<double> vectors(const std::vector<FragmentFlight>& fragments, Get get)
+{
+    std::vector<double> out;
+    for (const FragmentFlight& f : fragments) {
+        const Eigen::Vector3d v = get(f);
+        out.insert(out.end(), {v.x(), v.y(), v.z()});
+    }
+    return out;
+}
+
+void writeFragments(H5Out& h5, const std::vector<FragmentFlight>& fr)
+{
+    h5.group("/fragments");
+    h5.write("/fragments/id", column<int64_t>(fr, [](auto& f) { return f.id; }));
+    h5.write("/fragments/mass_kg", column<double>(fr, [](auto& f) { return f.massKg; }));
+    h5.write("/fragments/anchored", column<int64_t>(fr, [](auto& f) { return f.anchored; }));
+    h5.write("/fragments/launched", column<int64_t>(fr, [](auto& f) { return f.launched; }));
+    h5.write("/fragments/launch_time_s", column<double>(fr, [](auto& f) { return f.launchTimeS; }));
+    h5.write("/fragments/launch_position_m", vectors(fr, [](auto& f) { return f.launchPositionM; }), 3);
+    h5.write("/fragments/launch_velocity_m_s", vectors(fr, [](auto& f) { return f.launchVelocityMS; }), 3);
+    h5.write("/fragments/peak_kinetic_energy_J", column<double>(fr, [](auto& f) { return f.peakKineticEnergyJ; }));
+    h5.write("/fragments/impacted", column<int64_t>(fr, [](auto& f) { return f.impacted; }));
+    h5.write("/fragments/impact_time_s", column<double>(fr, [](auto& f) { return f.impactTimeS; }));
+    h5.write("/fragments/impact_position_m", vectors(fr, [](auto& f) { return f.impactPositionM; }), 3);
+    h5.write("/fragments/impact_kinetic_energy_J", column<double>(fr, [](auto& f) { return f.impactKineticEnergyJ; }));
+    h5.write("/fragments/rest_position_m", vectors(fr, [](auto& f) { return f.restPositionM; }), 3);
+    h5.write("/fragments/throw_distance_m", column<double>(fr, [](auto& f) { return f.throwDistanceM; }));
+    h5.write("/fragments/hazardous", column<int64_t>(fr, [](auto& f) { return f.hazardous; }));
+}
+
+void writeRings(H5Out& h5, const std::vector<DebrisRing>& rings)
+{
+    h5.group("/rings");
+    std::vector<double> inner, outer, mass, density, hazardousDensity;
+    std::vector<int64_t> count, hazardous, sectorCount, sectorHazardous;
+    for (const DebrisRing& r : rings) {
+        inner.push_back(r.innerM);
+        outer.push_back(r.outerM);
+        count.push_back(r.fragments);
+        mass.push_back(r.massKg);
+        hazardous.push_back(r.hazardous);
+        density.push_back(r.fragmentDensityPerM2());
+        hazardousDensity.push_back(r.hazardousDensityPerM2());
+        sectorCount.insert(sectorCount.end(), r.sectorFragments.begin(), r.sectorFragments.end());
+        sectorHazardous.insert(sectorHazardous.end(), r.sectorHazardous.begin(), r.sectorHazardous.end());
+    }
+    const size_t sectors = rings.empty() ? 1 : rings.front().sectorFragments.size();
+    h5.write("/rings/inner_radius_m", inner);
+    h5.write("/rings/outer_radius_m", outer);
+    h5.write("/rings/fragments", count);
+    h5.write("/rings/mass_kg", mass);
+    h5.write("/rings/hazardous", hazardous);
+    h5.write("/rings/fragment_density_per_m2", density);
+    h5.write("/rings/hazardous_density_per_m2", hazardousDensity);
+    h5.write("/rings/sector_fragments", sectorCount, sectors);
+    h5.write("/rings/sector_hazardous", sectorHazardous, sectors);
+}
+
+void writeH5(const std::string& path, const DebrisReport& report)
+{
+    H5Out h5(path);
+    h5.attribute("format_version", int64_t{1});
+    h5.attribute("origin_x_m", report.originM.x());
+    h5.attribute("origin_y_m", report.originM.y());
+    h5.attribute("origin_z_m", report.originM.z());
+    h5.attribute("hazardous_energy_J", report.settings.hazardousEnergyJ);
+    h5.attribute("hazardous_area_m2", report.settings.hazardousAreaM2);
+    h5.attribute("launch_speed_m_s", report.settings.launchSpeedMS);
+    h5.attribute("max_throw_distance_m", report.maxThrowDistanceM);
+    h5.attribute("median_throw_distance_m", report.medianThrowDistanceM);
+    h5.attribute("mass_median_throw_distance_m", report.massMedianThrowDistanceM);
+    h5.attribute("hazardous_fragment_distance_m", report.hazardousFragmentDistanceM);
+    h5.attribute("worst_sector_hazardous_fragment_distance_m", report.worstSectorHazardousFragmentDistanceM);
+    h5.attribute("weibull_fragments", report.massFit.fragments);
+    h5.attribute("weibull_shape", report.massFit.shape);
+    h5.attribute("weibull_scale_kg", report.massFit.scaleKg);
+    h5.attribute("weibull_r_squared", report.massFit.rSquared);
+    writeFragments(h5, report.fragments);
+    writeRings(h5, report.rings);
+    h5.close();
+}
+
+void writeCsv(std::ostream& out, const DebrisReport& report)
+{
+    out << "id,mass_kg,anchored,launched,launch_time_s,launch_speed_m_s,peak_kinetic_energy_J,impacted,impact_time_s,"
+           "impact_kinetic_energy_J,impact_x_m,impact_y_m,rest_x_m,rest_y_m,rest_z_m,throw_distance_m,hazardous\n";
+    char line[512];
+    for (const FragmentFlight& f : report.fragments) {
+        std::snprintf(line, sizeof line, "%lld,%.9g,%d,%d,%.9g,%.9g,%.9g,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%d\n",
+                      static_cast<long long>(f.id), f.massKg, f.anchored, f.launched, f.launchTimeS, f.launchVelocityMS.norm(),
+                      f.peakKineticEnergyJ, f.impacted, f.impactTimeS, f.impactKineticEnergyJ, f.impactPositionM.x(), f.impactPositionM.y(),
+                      f.restPositionM.x(), f.restPositionM.y(), f.restPositionM.z(), f.throwDistanceM, f.hazardous);
+        out << line;
+    }
+}
+
+std::string fixed(double value, int digits = 1)
+{
+    char s[64];
+    std::snprintf(s, sizeof s, "%.*f", digits, value);
+    return s;
+}
+
+Image throwPlot(const DebrisReport& report)
+{
+    std::vector<std::pair<double, double>> pieces;
+    double totalMass = 0;
+    for (const FragmentFlight& f : report.fragments)
+        if (!f.anchored) {
+            pieces.push_back({f.throwDistanceM, f.massKg});
+            totalMass += f.massKg;
+        }
+    std::sort(pieces.begin(), pieces.end());
+    PlotSeries count{"fragments", {}, {}}, mass{"mass", {}, {}};
+    double massBeyond = totalMass;
+    for (size_t i = 0; i < pieces.size(); ++i) {
+        count.x.push_back(pieces[i].first);
+        count.y.push_back(double(pieces.size() - i) / pieces.size());
+        mass.x.push_back(pieces[i].first);
+        mass.y.push_back(massBeyond / totalMass);
+        massBeyond -= pieces[i].second;
+    }
+    const std::string title = "max " + fixed(report.maxThrowDistanceM) + " m  median " + fixed(report.medianThrowDistanceM) + " m  by mass " +
+                              fixed(report.massMedianThrowDistanceM) + " m";
+    return plotSeries({count, mass}, "resting distance from the charges (m)", "fraction beyond", title, false);
+}
+
+Image densityPlot(const DebrisReport& report)
+{
+    PlotSeries all{"all per m2", {}, {}}, hazardous{"hazardous per m2", {}, {}}, worst{"hazardous worst sector", {}, {}},
+        limit{"1 per " + fixed(report.settings.hazardousAreaM2) + " m2", {}, {}};
+    for (const DebrisRing& r : report.rings) {
+        const double mid = 0.5 * (r.innerM + r.outerM);
+        all.x.push_back(mid);
+        all.y.push_back(r.fragmentDensityPerM2());
+        hazardous.x.push_back(mid);
+        hazardous.y.push_back(r.hazardousDensityPerM2());
+        worst.x.push_back(mid);
+        worst.y.push_back(r.worstSectorHazardousDensityPerM2());
+    }
+    if (!report.rings.empty()) limit = {limit.name, {0.0, report.rings.back().outerM}, {1 / report.settings.hazardousAreaM2, 1 / report.settings.hazardousAreaM2}};
+    const std::string title = "hazardous fragment distance " + fixed(report.hazardousFragmentDistanceM) + " m  (sector " +
+                              fixed(report.worstSectorHazardousFragmentDistanceM) + " m)";
+    return plotSeries({all, hazardous, worst, limit}, "ring (m)", "per m2", title, false);
+}
+
+Image massPlot(const DebrisReport& report)
+{
+    std::vector<double> masses;
+    for (const FragmentFlight& f : report.fragments)
+        if (!f.anchored) masses.push_back(f.massKg);
+    std::sort(masses.begin(), masses.end(), std::greater<>());
+    PlotSeries counted{"fragments this heavy or more", {}, {}}, fitted{"weibull fit", {}, {}};
+    for (size_t i = 0; i < masses.size(); ++i) {
+        counted.x.push_back(masses[i]);
+        counted.y.push_back(double(i + 1));
+    }
+    const WeibullMassFit& fit = report.massFit;
+    if (fit.fragments > 0)
+        for (double m : masses) {
+            fitted.x.push_back(m);
+            fitted.y.push_back(fit.fragments * std::exp(-std::pow(m / fit.scaleKg, fit.shape)));
+        }
+    const std::string title = "weibull shape " + fixed(fit.shape, 2) + " (mott 0.5)  scale " + fixed(fit.scaleKg, 3) + " kg  r2 " +
+                              fixed(fit.rSquared, 3);
+    return plotSeries({counted, fitted}, "mass (kg)", "count", title, true);
+}
+
+}  // namespace
+
+void writeDebrisReport(const std::string& outDir, const DebrisReport& report)
+{
+    const std::string h5 = outDir + "/debris.h5", partial = h5 + ".partial." + std::to_string(getpid());
+    try {
+        writeH5(partial, report);
+        std::filesystem::rename(partial, h5);
+    } catch (...) {
+        std::error_code ignored;
+        std::filesystem::remove(partial, ignored);
+        throw;
+    }
+    writeFileAtomically(outDir + "/debris.csv", [&](std::ostream& out) { writeCsv(out, report); });
+    writePng(outDir + "/debris_throw.png", throwPlot(report));
+    writePng(outDir + "/debris_density.png", densityPlot(report));
+    writePng(outDir + "/debris_mass.png", massPlot(report));
+}
+
+}  // namespace spall
