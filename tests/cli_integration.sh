@@ -418,6 +418,31 @@ assert n >= 10 and abs(n - len(frames)) <= 1, (n, len(frames))
 assert len(h["frames/body_offset"]) >= n + 1
 PY
 done
+# spall debris: a wall blown down by a lattice run; every figure recomputed from history.h5 with
+# numpy (tests/check_debris.py); an unfinished run is refused and leaves no report behind
+cat > "$dir/debris.json" <<'JSON'
+{"voxel_size_m": 0.1, "duration_s": 4.0, "frame_rate_hz": 24, "seed": 5,
+ "objects": [{"name": "wall", "primitive": {"shape": "box", "size_m": [1.2, 0.2, 0.8]},
+              "position_m": [0, 0, 0.4], "material": "brick-masonry", "anchor": "ground"}],
+ "charges": [{"position_m": [0, -0.8, 0.2], "tnt_kg": 4.0}],
+ "fracture": {"algorithm": "lattice"}}
+JSON
+"$spall" run "$dir/debris.json" -o "$dir/debris" --quiet --no-preview > /dev/null
+"$spall" debris "$dir/debris" > "$dir/debris.txt" || fail "spall debris failed"
+grep -q "hazardous fragment distance" "$dir/debris.txt" || fail "spall debris printed no summary"
+$py "$(dirname "$0")/check_debris.py" "$dir/debris" || fail "debris figures differ from the recomputation"
+$py - "$dir/debris" <<'PY'
+import csv, sys, h5py
+from PIL import Image
+out = sys.argv[1]
+rows = list(csv.DictReader(open(out + "/debris.csv")))
+assert len(rows) == len(h5py.File(out + "/debris.h5")["fragments/id"]) > 10, len(rows)
+for name in ("throw", "density", "mass"):
+    Image.open(f"{out}/debris_{name}.png").load()
+PY
+if "$spall" debris "$dir/long_INT" 2> "$dir/debris.err"; then fail "spall debris accepted an unfinished run"; fi
+grep -q "history.h5: the run is not complete" "$dir/debris.err" || fail "unclear refusal: $(cat "$dir/debris.err")"
+[[ ! -e "$dir/long_INT/debris.h5" ]] || fail "a refused debris analysis left debris.h5"
 # collision benchmark, smallest sizes: one JSON row per method and size, every method present
 if "$spall" bench collisions --max-boundary-voxels 0 2> "$dir/bench.err"; then echo "bench accepted a size of 0"; exit 1; fi
 grep -q "max-boundary-voxels" "$dir/bench.err"
