@@ -63,6 +63,7 @@ int main(int argc, char** argv)
     addExportCommand(app, action);
     addViewCommand(app, action);
     addDebrisCommand(app, action);
+    addSweepCommands(app, action);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -3,74 +3,14 @@
 
 #include <spall/core/AtomicFile.h>
 #include <spall/core/Error.h>
+#include <spall/io/H5Out.h>
 #include <spall/io/Png.h>
 
-#include <hdf5.h>
-
 #include <cstdio>
-#include <filesystem>
-#include <unistd.h>
 
 namespace spall {
 
 namespace {
-
-class H5Out {
-public:
-    explicit H5Out(const std::string& path) : mPath(path)
-    {
-        H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-        mFile = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-        if (mFile < 0) throw IoError(path + ": cannot create");
-    }
-    ~H5Out()
-    {
-        for (auto it = mGroups.rbegin(); it != mGroups.rend(); ++it) H5Gclose(*it);
-        if (mFile >= 0) H5Fclose(mFile);
-    }
-    void group(const char* name) { mGroups.push_back(checked(H5Gcreate2(mFile, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name)); }
-    void write(const char* name, const std::vector<double>& v, size_t cols = 1) { dataset(name, H5T_NATIVE_DOUBLE, v.data(), v.size(), cols); }
-    void write(const char* name, const std::vector<int64_t>& v, size_t cols = 1) { dataset(name, H5T_NATIVE_INT64, v.data(), v.size(), cols); }
-    void attribute(const char* name, double value) { scalar(name, H5T_NATIVE_DOUBLE, &value); }
-    void attribute(const char* name, int64_t value) { scalar(name, H5T_NATIVE_INT64, &value); }
-    void close()
-    {
-        for (auto it = mGroups.rbegin(); it != mGroups.rend(); ++it) H5Gclose(*it);
-        mGroups.clear();
-        if (H5Fclose(mFile) < 0) throw IoError(mPath + ": cannot close");
-        mFile = -1;
-    }
-
-private:
-    hid_t checked(hid_t id, const std::string& what) const
-    {
-        if (id < 0) throw IoError(mPath + ": writing " + what + " failed");
-        return id;
-    }
-    void dataset(const char* name, hid_t type, const void* data, size_t count, size_t cols)
-    {
-        const hsize_t dims[2] = {count / cols, cols};
-        const hid_t space = checked(H5Screate_simple(cols > 1 ? 2 : 1, dims, nullptr), name);
-        const hid_t set = checked(H5Dcreate2(mFile, name, type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name);
-        const herr_t status = count ? H5Dwrite(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) : 0;
-        H5Dclose(set);
-        H5Sclose(space);
-        checked(status, name);
-    }
-    void scalar(const char* name, hid_t type, const void* value)
-    {
-        const hid_t space = H5Screate(H5S_SCALAR);
-        const hid_t attr = checked(H5Acreate2(mFile, name, type, space, H5P_DEFAULT, H5P_DEFAULT), name);
-        const herr_t status = H5Awrite(attr, type, value);
-        H5Aclose(attr);
-        H5Sclose(space);
-        checked(status, name);
-    }
-
-    std::string mPath;
-    hid_t mFile = -1;
-    std::vector<hid_t> mGroups;
-};
 
 template <typename T, typename Get>
 std::vector<T> column(const std::vector<FragmentFlight>& fragments, Get get)
@@ -139,9 +79,8 @@ void writeRings(H5Out& h5, const std::vector<DebrisRing>& rings)
     h5.write("/rings/sector_hazardous", sectorHazardous, sectors);
 }
 
-void writeH5(const std::string& path, const DebrisReport& report)
+void writeH5(H5Out& h5, const DebrisReport& report)
 {
-    H5Out h5(path);
     h5.attribute("format_version", int64_t{1});
     h5.attribute("origin_x_m", report.originM.x());
     h5.attribute("origin_y_m", report.originM.y());
@@ -160,7 +99,6 @@ void writeH5(const std::string& path, const DebrisReport& report)
     h5.attribute("weibull_r_squared", report.massFit.rSquared);
     writeFragments(h5, report.fragments);
     writeRings(h5, report.rings);
-    h5.close();
 }
 
 void writeCsv(std::ostream& out, const DebrisReport& report)
@@ -253,15 +191,7 @@ Image massPlot(const DebrisReport& report)
 
 void writeDebrisReport(const std::string& outDir, const DebrisReport& report)
 {
-    const std::string h5 = outDir + "/debris.h5", partial = h5 + ".partial." + std::to_string(getpid());
-    try {
-        writeH5(partial, report);
-        std::filesystem::rename(partial, h5);
-    } catch (...) {
-        std::error_code ignored;
-        std::filesystem::remove(partial, ignored);
-        throw;
-    }
+    writeH5FileAtomically(outDir + "/debris.h5", [&](H5Out& h5) { writeH5(h5, report); });
     writeFileAtomically(outDir + "/debris.csv", [&](std::ostream& out) { writeCsv(out, report); });
     writePng(outDir + "/debris_throw.png", throwPlot(report));
     writePng(outDir + "/debris_density.png", densityPlot(report));
