@@ -3,6 +3,7 @@
 //   build/spall_bench                          all
 //   build/spall_bench --benchmark_filter=Label  one group
 #include <spall/blast/Blast.h>
+#include <spall/dynamics/Integrate.h>
 #include <spall/fracture/Fracture.h>
 #include <spall/io/VdbIo.h>
 #include <spall/lattice/Lattice.h>
@@ -313,6 +314,27 @@ void BM_Lattice_Step(benchmark::State& state)
 }
 BENCHMARK(BM_Lattice_Step)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+/// 3000 single-voxel bodies in flight, one integrate phase: without and with the air's drag.
+void integrateFlyingVoxels(benchmark::State& state, AirDrag drag)
+{
+    initialiseOpenVdb();
+    std::vector<Body> bodies;
+    for (int i = 0; i < 3000; ++i) {
+        bodies.push_back(makeBody(block(1), 0.05, 1800.0));
+        bodies.back().motion.positionM = Eigen::Vector3d(0.1 * (i % 50), 0.1 * (i / 50), 2.0);
+        bodies.back().motion.linearVelocityMS = Eigen::Vector3d(20.0 + i % 7, 3.0, 10.0);
+    }
+    const std::vector<Wrench> blast(bodies.size());
+    WorldSettings world;
+    world.airDrag = drag;
+    const Air air = airOf(Atmosphere{});
+    for (auto _ : state) integrateBodies(bodies, blast, world, air, Integrator::SemiImplicitEuler, 0.0, 1e-4);
+}
+void BM_Integrate_Flight(benchmark::State& state) { integrateFlyingVoxels(state, AirDrag::None); }
+BENCHMARK(BM_Integrate_Flight)->Unit(benchmark::kMicrosecond)->UseRealTime();
+void BM_Integrate_FlightWithAirDrag(benchmark::State& state) { integrateFlyingVoxels(state, AirDrag::HaiderLevenspiel); }
+BENCHMARK(BM_Integrate_FlightWithAirDrag)->Unit(benchmark::kMicrosecond)->UseRealTime();
+
 /// Console output plus, at the end, each benchmark's time relative to its baseline.
 class RatioReporter : public benchmark::ConsoleReporter {
 public:
@@ -345,6 +367,7 @@ public:
             {"BM_Loads_BlastEngineeringBehindABarrier", "BM_Loads_PaperReflected"},
             {"BM_Voxelise_TorusWindingNumber", "BM_Voxelise_TorusLevelSet"},
             {"BM_Lattice_Step", "BM_Lattice_TrivialPass"},
+            {"BM_Integrate_FlightWithAirDrag", "BM_Integrate_Flight"},
         };
         std::printf("\nRatios to the baseline in this run (time / baseline time):\n");
         for (auto [name, base] : pairs) {

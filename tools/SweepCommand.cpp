@@ -66,7 +66,7 @@ int summarise(const std::string& dir, const spall::SweepPlan& plan)
                     plan.variants[group.front()].overridesText().c_str(), m.mean, m.halfWidth, static_cast<long long>(m.n), m.min, m.max);
     }
     std::printf("summary: %s/summary.csv, summary_groups.csv, summary.h5, summary_hfd.png\n", dir.c_str());
-    if (unfinished) std::fprintf(stderr, "spall sweep: %d of %zu variants did not finish (see above and %s/logs)\n", unfinished, plan.variants.size(), dir.c_str());
+    if (unfinished) std::fprintf(stderr, "spall sweep: %d of %zu variants failed or did not finish (see above and %s/logs)\n", unfinished, plan.variants.size(), dir.c_str());
     return unfinished ? 1 : 0;
 }
 

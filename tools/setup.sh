@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs what spall needs, only what is missing: Debian packages (one dpkg query when all are
-# present), Node.js when there is none, and tools/js from its lock file (the viewer's three.js and
+# present; Slurm and munge for the sweep tests), Node.js when there is none, and tools/js from its lock file (the viewer's three.js and
 # esbuild, which the build needs; the glTF validator and playwright-core, which the tests use).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -11,6 +11,7 @@ packages=(
   libassimp-dev libcli11-dev nlohmann-json3-dev libpng-dev libtinygltf-dev
   python3-openvdb python3-h5py python3-numpy python3-matplotlib python3-pil libopenvdb-tools hdf5-tools
   blender chromium
+  slurm-wlm munge
 )
 missing=()
 for p in "${packages[@]}"; do
