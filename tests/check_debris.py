@@ -21,6 +21,11 @@ frag = d["fragments"]
 assert sorted(last) == frag["id"][:].tolist()
 mass = h["bodies/mass_kg"][:]
 anchored = h["bodies/anchored"][:]
+birth = {}
+for r in rows:
+    for b, row in r.items():
+        birth.setdefault(b, row)
+stayed = {f: bool(anchored[last[f]]) or np.hypot(*(pos[last[f]] - pos[birth[f]])[:2]) < d.attrs["stay_distance_m"] for f in last}
 
 
 def flight(fid):
@@ -47,6 +52,7 @@ def flight(fid):
 hazardous_at = []
 for i, fid in enumerate(frag["id"][:]):
     assert frag["anchored"][i] == anchored[last[fid]]
+    assert frag["stayed"][i] == stayed[fid], fid
     result = None if anchored[last[fid]] else flight(fid)
     assert frag["launched"][i] == (result is not None), fid
     if result is None:
@@ -57,11 +63,11 @@ for i, fid in enumerate(frag["id"][:]):
     assert frag["impacted"][i] == (impact is not None), fid
     if impact is not None:
         assert math.isclose(frag["impact_time_s"][i], impact[0]) and math.isclose(frag["impact_kinetic_energy_J"][i], impact[1], rel_tol=1e-9)
-        if impact[1] >= d.attrs["hazardous_energy_J"]:
+        if impact[1] >= d.attrs["hazardous_energy_J"] and not stayed[fid]:
             hazardous_at.append(impact[2])
 assert frag["hazardous"][:].sum() == len(hazardous_at)
 
-debris = np.array([last[f] for f in frag["id"][:] if not anchored[last[f]]])
+debris = np.array([last[f] for f in frag["id"][:] if not stayed[f]])
 rest = pos[debris] - origin
 throw = np.hypot(rest[:, 0], rest[:, 1])
 assert np.isclose(d.attrs["max_throw_distance_m"], throw.max())

@@ -105,7 +105,8 @@ TEST(Debris, HazardousFragmentDistanceFollowsTheDensityLimitOverRingsAndSectors)
     for (int frame = 0; frame < 2; ++frame) {
         for (size_t i = 0; i < at.size(); ++i) {
             const Eigen::Vector3d v = i + 1 == at.size() ? Eigen::Vector3d(0, 0, -1) : falling;
-            b.body(static_cast<int64_t>(i), -1, 1.0, at[i], frame == 0 ? v : stopped);
+            // Each falls from 2 m above the charge onto its spot.
+            b.body(static_cast<int64_t>(i), -1, 1.0, frame == 0 ? Eigen::Vector3d(0, 0, 2) : at[i], frame == 0 ? v : stopped);
         }
         b.endFrame(frame / 24.0);
     }
@@ -129,11 +130,13 @@ TEST(Debris, WeibullFitRecoversTheLawOfMassesAtItsQuantiles)
     // Masses at the exact plotting positions of N(>m) = N exp(-(m/0.7 kg)^0.5), Mott's law.
     HistoryBuilder b;
     const int n = 200;
-    for (int i = 0; i < n; ++i) {
-        const double m = 0.7 * std::pow(-std::log((i + 0.5) / n), 1 / 0.5);
-        b.body(i, -1, m, Eigen::Vector3d(3, 0, 0), Eigen::Vector3d::Zero());
+    for (int frame = 0; frame < 2; ++frame) {
+        for (int i = 0; i < n; ++i) {
+            const double m = 0.7 * std::pow(-std::log((i + 0.5) / n), 1 / 0.5);
+            b.body(i, -1, m, Eigen::Vector3d(frame == 0 ? 0 : 3, 0, 0), Eigen::Vector3d::Zero());
+        }
+        b.endFrame(frame);
     }
-    b.endFrame(0);
     const DebrisReport r = analyseDebris(b.h);
     EXPECT_EQ(r.massFit.fragments, n);
     EXPECT_NEAR(r.massFit.shape, 0.5, 1e-9);
@@ -141,14 +144,22 @@ TEST(Debris, WeibullFitRecoversTheLawOfMassesAtItsQuantiles)
     EXPECT_NEAR(r.massFit.rSquared, 1.0, 1e-12);
 }
 
-TEST(Debris, StumpsAreNotDebrisAndAHistoryWithoutChargesIsRefused)
+TEST(Debris, WhatStaysWhereItStoodIsNotDebrisAndAHistoryWithoutChargesIsRefused)
 {
+    // An anchored stump, a piece that broke off it but stands 5 cm from where it came to be, and a
+    // piece thrown from 4.5 m to 9 m.
     HistoryBuilder b;
-    b.body(1, -1, 500, Eigen::Vector3d(4, 0, 0.5), Eigen::Vector3d::Zero(), true);
-    b.body(2, 1, 3, Eigen::Vector3d(9, 0, 0), Eigen::Vector3d::Zero());
-    b.endFrame(0);
+    for (int frame = 0; frame < 2; ++frame) {
+        b.body(1, -1, 500, Eigen::Vector3d(4, 0, 0.5), Eigen::Vector3d::Zero(), true);
+        b.body(2, 1, 40, Eigen::Vector3d(4.5 + 0.05 * frame, 0, 0.5), Eigen::Vector3d::Zero());
+        b.body(3, 1, 3, frame == 0 ? Eigen::Vector3d(4.5, 0, 1) : Eigen::Vector3d(9, 0, 0), Eigen::Vector3d::Zero());
+        b.endFrame(frame / 24.0);
+    }
     const DebrisReport r = analyseDebris(b.h);
     EXPECT_EQ(r.debrisCount(), 1);
+    EXPECT_TRUE(fragment(r, 1).stayed);
+    EXPECT_TRUE(fragment(r, 2).stayed);
+    EXPECT_FALSE(fragment(r, 3).stayed);
     EXPECT_NEAR(r.maxThrowDistanceM, 9.0, 1e-12);
     b.h.chargeTntKg.clear();
     b.h.chargePositionM.clear();

@@ -301,3 +301,33 @@ TEST(Deformable, BrickWallBreaksAlongItsMortarJointsIntoBricks) { expectBrickWal
 /// The same at 1.25 cm (16 times the work: several minutes; run with
 /// --gtest_also_run_disabled_tests, docs/accuracy.md has its figures).
 TEST(Deformable, DISABLED_BrickWallBreaksAlongItsMortarJointsIntoBricksAtHalfTheVoxelSize) { expectBrickWallBreaksAlongItsJoints(0.0125); }
+
+TEST(DefaultScene, BrickWallEndsInBricksClustersAndAStandingStump)
+{
+    // Issue 18's default scene: a one-brick wall of bricks in mortar at 2.5 cm, breached by 0.5 kg
+    // of TNT 0.4 m in front. Sizes are counted in bricks with their share of joints
+    // (0.225 x 0.1125 x 0.075 m: 121.5 voxels).
+    const Scene scene = parseScene(defaultSceneJson(), "default scene", ".");
+    Simulation sim(scene);
+    sim.advanceTo(scene.durationS);
+    const double h = scene.voxelSizeM, brickVoxels = 0.225 * 0.1125 * 0.075 / (h * h * h);
+    int64_t wallVoxels = 0, stumpVoxels = 0;
+    int singles = 0, clusters = 0;
+    for (const Body& b : sim.bodies()) {
+        const double bricks = b.mass.voxelCount / brickVoxels;
+        wallVoxels += b.mass.voxelCount;
+        const Eigen::Vector3d& x = b.motion.positionM;
+        const bool upright = Eigen::AngleAxisd(b.motion.orientation).angle() < 5.0 * M_PI / 180;
+        const bool inPlace = std::abs(x.x()) < 0.6 && std::abs(x.y()) < 0.15 && b.motion.linearVelocityMS.norm() < 0.1;
+        if (bricks >= 10 && upright && inPlace) stumpVoxels += b.mass.voxelCount;
+        else if (bricks >= 0.5 && bricks < 1.5) ++singles;
+        else if (bricks >= 1.5) ++clusters;
+    }
+    const double stumpFraction = double(stumpVoxels) / wallVoxels;
+    std::printf("%zu bodies: %d single bricks, %d clusters, standing stump %.0f %% of the wall\n", sim.bodies().size(), singles, clusters,
+                100 * stumpFraction);
+    EXPECT_GE(singles, 20) << "the breach throws whole bricks";
+    EXPECT_GE(clusters, 3) << "and clusters of bricks";
+    EXPECT_GT(stumpFraction, 0.1) << "part of the wall stands where it stood";
+    EXPECT_LT(stumpFraction, 0.8) << "heavily damaged";
+}

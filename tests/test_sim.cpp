@@ -138,6 +138,7 @@ TEST(Scene, ShippedScenesParseAndTheDefaultMatchesItsAsset)
     const Scene asset = loadScene(dir + "default.json");
     const Scene builtIn = parseScene(defaultSceneJson(), "built-in", ".");
     EXPECT_EQ(sceneToJson(asset), sceneToJson(builtIn));
+    EXPECT_EQ(sceneToJson(loadScene(dir + "brick-wall-yield-limit.json")), sceneToJson(parseScene(paperWallSceneJson(), "built-in", ".")));
     for (const char* name : {"two-charges-concrete.json", "pillar-davison-stevens.json", "brick-wall-lattice.json"}) EXPECT_NO_THROW(loadScene(dir + name)) << name;
 }
 

@@ -184,7 +184,7 @@ struct SceneResult {
 SceneResult runScene(const nlohmann::json& scene, double durationS)
 {
     SceneResult r;
-    const Scene s = parseScene(scene.dump(), "default scene (accuracy study)", ".");
+    const Scene s = parseScene(scene.dump(), "paper wall (accuracy study)", ".");
     const auto start = Clock::now();
     Simulation sim(s);
     for (int f = 0; f * (1.0 / s.frameRateHz) <= durationS + 1e-12; ++f) {
@@ -234,7 +234,7 @@ double massDistributionDistance(const std::vector<std::pair<double, Eigen::Vecto
 
 void sceneStudy(std::vector<Row>& rows, double durationS)
 {
-    const nlohmann::json base = nlohmann::json::parse(defaultSceneJson());
+    const nlohmann::json base = nlohmann::json::parse(paperWallSceneJson());
     struct Variant {
         std::string name;
         double voxelM, frontFraction, pulseFraction, maxStepS;
@@ -254,7 +254,7 @@ void sceneStudy(std::vector<Row>& rows, double durationS)
         scene["voxel_size_m"] = v.voxelM;
         scene["duration_s"] = durationS;
         scene["solver"] = {{"front_fraction_voxels", v.frontFraction}, {"pulse_fraction", v.pulseFraction}, {"max_time_step_s", v.maxStepS}};
-        std::fprintf(stderr, "spall bench accuracy: default scene, %s ...\n", v.name.c_str());
+        std::fprintf(stderr, "spall bench accuracy: paper wall, %s ...\n", v.name.c_str());
         results[v.name] = runScene(scene, durationS);
     }
     const SceneResult& ref = results["reference"];
@@ -265,14 +265,14 @@ void sceneStudy(std::vector<Row>& rows, double durationS)
         const double param = v.frontFraction;
         const auto& last = r.frames.back();
         const auto& refLast = ref.frames.back();
-        rows.push_back({"default scene", "fragments", v.name, param, "relative_error",
+        rows.push_back({"paper wall", "fragments", v.name, param, "relative_error",
                         std::abs(double(last.size()) - double(refLast.size())) / double(refLast.size()), r.wallTimeS});
-        rows.push_back({"default scene", "mass distribution", v.name, param, "cumulative_L1_distance", massDistributionDistance(last, refLast),
+        rows.push_back({"paper wall", "mass distribution", v.name, param, "cumulative_L1_distance", massDistributionDistance(last, refLast),
                         r.wallTimeS});
-        rows.push_back({"default scene", "kinetic energy", v.name, param, "relative_error",
+        rows.push_back({"paper wall", "kinetic energy", v.name, param, "relative_error",
                         std::abs(r.kineticEnergyJ - ref.kineticEnergyJ) / ref.kineticEnergyJ, r.wallTimeS});
         const double refSpread = spreadM(refLast, origin);
-        rows.push_back({"default scene", "debris spread", v.name, param, "relative_error", std::abs(spreadM(last, origin) - refSpread) / refSpread,
+        rows.push_back({"paper wall", "debris spread", v.name, param, "relative_error", std::abs(spreadM(last, origin) - refSpread) / refSpread,
                         r.wallTimeS});
         // Paths of the five heaviest fragments (matched by rank), RMS over frames, per spread.
         double sum = 0;
@@ -282,10 +282,10 @@ void sceneStudy(std::vector<Row>& rows, double durationS)
                 sum += (r.frames[f][k].second - ref.frames[f][k].second).squaredNorm();
                 ++count;
             }
-        rows.push_back({"default scene", "paths of the 5 heaviest", v.name, param, "rms_error_per_spread", std::sqrt(sum / count) / refSpread,
+        rows.push_back({"paper wall", "paths of the 5 heaviest", v.name, param, "rms_error_per_spread", std::sqrt(sum / count) / refSpread,
                         r.wallTimeS});
     }
-    rows.push_back({"default scene", "reference run", "reference", 0.125, "none", 0.0, ref.wallTimeS});
+    rows.push_back({"paper wall", "reference run", "reference", 0.125, "none", 0.0, ref.wallTimeS});
 }
 
 void writeCsv(const std::string& path, const std::vector<Row>& rows)
@@ -372,7 +372,7 @@ int benchAccuracy(const std::string& outputDirectory, double sceneDurationS)
         plotStudy((dir / file).string(), selected, "integrator", false, std::string("integrators: ") + problem);
     }
     plotStudy((dir / "accuracy-blast-table.png").string(), rows, "blast table", false, "blast table against the direct fits");
-    plotStudy((dir / "accuracy-default-scene.png").string(), rows, "default scene", true, "default scene against a 4x finer reference");
+    plotStudy((dir / "accuracy-default-scene.png").string(), rows, "paper wall", true, "paper wall against a 4x finer reference");
     std::printf("\nwrote %s/accuracy.csv and %s/accuracy-*.png\n", outputDirectory.c_str(), outputDirectory.c_str());
     return 0;
 }

@@ -19,7 +19,7 @@ int debrisCommand(const std::string& outDir, const spall::DebrisSettings& settin
                                 ", or pass --allow-incomplete to analyse the frames so far)");
     const spall::DebrisReport report = spall::analyseDebris(history, settings);
     spall::writeDebrisReport(outDir, report);
-    std::printf("%lld fragments (%lld hazardous: at least %.0f J at impact), %zu stumps\n", static_cast<long long>(report.debrisCount()),
+    std::printf("%lld fragments thrown (%lld hazardous: at least %.0f J at impact), %zu pieces stayed where they stood\n", static_cast<long long>(report.debrisCount()),
                 static_cast<long long>(report.hazardousCount()), settings.hazardousEnergyJ,
                 report.fragments.size() - static_cast<size_t>(report.debrisCount()));
     std::printf("throw distance: max %.2f m, median %.2f m, mass median %.2f m\n", report.maxThrowDistanceM, report.medianThrowDistanceM,
@@ -51,6 +51,8 @@ void addDebrisCommand(CLI::App& app, CommandAction& action)
         ->check(CLI::PositiveNumber)->capture_default_str();
     debris->add_option("--launch-speed-m-s", o->settings.launchSpeedMS, "A fragment is launched once it moves this fast (m/s)")
         ->check(CLI::PositiveNumber)->capture_default_str();
+    debris->add_option("--stay-distance-m", o->settings.stayDistanceM, "A piece resting this close to where it came to be is not debris (m)")
+        ->check(CLI::NonNegativeNumber)->capture_default_str();
     debris->add_option("--ring-width-m", o->settings.ringWidthM, "Width of the range rings (m); 0 picks about 20 rings")
         ->check(CLI::NonNegativeNumber)->capture_default_str();
     debris->add_option("--sectors", o->settings.sectors, "Sectors about the charges, the first centred on +x")

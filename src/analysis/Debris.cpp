@@ -45,6 +45,16 @@ std::vector<size_t> trackOf(int64_t id, const History& h, const FrameIndex& inde
     return rows;
 }
 
+/// The body's row in the first frame it appears in.
+size_t birthRow(int64_t id, const FrameIndex& index)
+{
+    for (const auto& frame : index) {
+        const auto row = frame.find(id);
+        if (row != frame.end()) return row->second;
+    }
+    throw InputError("body " + std::to_string(id) + " is in no frame");
+}
+
 double horizontalDistanceM(const Eigen::Vector3d& p, const Eigen::Vector3d& origin)
 {
     return (p - origin).head<2>().norm();
@@ -116,7 +126,7 @@ std::vector<DebrisRing> countRings(const DebrisReport& report)
 {
     double farthestM = 0;
     for (const FragmentFlight& f : report.fragments) {
-        if (f.anchored) continue;
+        if (f.stayed) continue;
         farthestM = std::max(farthestM, f.throwDistanceM);
         if (f.hazardous) farthestM = std::max(farthestM, horizontalDistanceM(f.impactPositionM, report.originM));
     }
@@ -132,7 +142,7 @@ std::vector<DebrisRing> countRings(const DebrisReport& report)
     }
     const auto ringOf = [&](const Eigen::Vector3d& p) { return std::min(count - 1, size_t(horizontalDistanceM(p, report.originM) / width)); };
     for (const FragmentFlight& f : report.fragments) {
-        if (f.anchored) continue;
+        if (f.stayed) continue;
         DebrisRing& rest = rings[ringOf(f.restPositionM)];
         ++rest.fragments;
         rest.massKg += f.massKg;
@@ -188,7 +198,7 @@ void summarise(DebrisReport& report)
     std::vector<std::pair<double, double>> byCount, byMass;
     std::vector<double> masses;
     for (const FragmentFlight& f : report.fragments) {
-        if (f.anchored) continue;
+        if (f.stayed) continue;
         report.maxThrowDistanceM = std::max(report.maxThrowDistanceM, f.throwDistanceM);
         byCount.push_back({f.throwDistanceM, 1.0});
         byMass.push_back({f.throwDistanceM, f.massKg});
@@ -217,7 +227,7 @@ double DebrisRing::worstSectorHazardousDensityPerM2() const
 
 int64_t DebrisReport::debrisCount() const
 {
-    return std::count_if(fragments.begin(), fragments.end(), [](const FragmentFlight& f) { return !f.anchored; });
+    return std::count_if(fragments.begin(), fragments.end(), [](const FragmentFlight& f) { return !f.stayed; });
 }
 
 int64_t DebrisReport::hazardousCount() const
@@ -242,8 +252,9 @@ DebrisReport analyseDebris(const History& h, const DebrisSettings& settings)
         f.anchored = h.bodyAnchored[row] != 0;
         f.restPositionM = h.bodyPositionM[row];
         f.throwDistanceM = horizontalDistanceM(f.restPositionM, report.originM);
+        f.stayed = f.anchored || horizontalDistanceM(f.restPositionM, h.bodyPositionM[birthRow(f.id, index)]) < settings.stayDistanceM;
         if (!f.anchored) followFlight(f, h, trackOf(f.id, h, index, parentOf), settings.launchSpeedMS);
-        f.hazardous = f.impacted && f.impactKineticEnergyJ >= settings.hazardousEnergyJ;
+        f.hazardous = !f.stayed && f.impacted && f.impactKineticEnergyJ >= settings.hazardousEnergyJ;
         report.fragments.push_back(f);
     }
     std::sort(report.fragments.begin(), report.fragments.end(), [](const auto& a, const auto& b) { return a.id < b.id; });

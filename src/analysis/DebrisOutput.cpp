@@ -37,6 +37,7 @@ void writeFragments(H5Out& h5, const std::vector<FragmentFlight>& fr)
     h5.write("/fragments/id", column<int64_t>(fr, [](auto& f) { return f.id; }));
     h5.write("/fragments/mass_kg", column<double>(fr, [](auto& f) { return f.massKg; }));
     h5.write("/fragments/anchored", column<int64_t>(fr, [](auto& f) { return f.anchored; }));
+    h5.write("/fragments/stayed", column<int64_t>(fr, [](auto& f) { return f.stayed; }));
     h5.write("/fragments/launched", column<int64_t>(fr, [](auto& f) { return f.launched; }));
     h5.write("/fragments/launch_time_s", column<double>(fr, [](auto& f) { return f.launchTimeS; }));
     h5.write("/fragments/launch_position_m", vectors(fr, [](auto& f) { return f.launchPositionM; }), 3);
@@ -88,6 +89,7 @@ void writeH5(H5Out& h5, const DebrisReport& report)
     h5.attribute("hazardous_energy_J", report.settings.hazardousEnergyJ);
     h5.attribute("hazardous_area_m2", report.settings.hazardousAreaM2);
     h5.attribute("launch_speed_m_s", report.settings.launchSpeedMS);
+    h5.attribute("stay_distance_m", report.settings.stayDistanceM);
     h5.attribute("max_throw_distance_m", report.maxThrowDistanceM);
     h5.attribute("median_throw_distance_m", report.medianThrowDistanceM);
     h5.attribute("mass_median_throw_distance_m", report.massMedianThrowDistanceM);
@@ -103,12 +105,12 @@ void writeH5(H5Out& h5, const DebrisReport& report)
 
 void writeCsv(std::ostream& out, const DebrisReport& report)
 {
-    out << "id,mass_kg,anchored,launched,launch_time_s,launch_speed_m_s,peak_kinetic_energy_J,impacted,impact_time_s,"
+    out << "id,mass_kg,anchored,stayed,launched,launch_time_s,launch_speed_m_s,peak_kinetic_energy_J,impacted,impact_time_s,"
            "impact_kinetic_energy_J,impact_x_m,impact_y_m,rest_x_m,rest_y_m,rest_z_m,throw_distance_m,hazardous\n";
     char line[512];
     for (const FragmentFlight& f : report.fragments) {
-        std::snprintf(line, sizeof line, "%lld,%.9g,%d,%d,%.9g,%.9g,%.9g,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%d\n",
-                      static_cast<long long>(f.id), f.massKg, f.anchored, f.launched, f.launchTimeS, f.launchVelocityMS.norm(),
+        std::snprintf(line, sizeof line, "%lld,%.9g,%d,%d,%d,%.9g,%.9g,%.9g,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%d\n",
+                      static_cast<long long>(f.id), f.massKg, f.anchored, f.stayed, f.launched, f.launchTimeS, f.launchVelocityMS.norm(),
                       f.peakKineticEnergyJ, f.impacted, f.impactTimeS, f.impactKineticEnergyJ, f.impactPositionM.x(), f.impactPositionM.y(),
                       f.restPositionM.x(), f.restPositionM.y(), f.restPositionM.z(), f.throwDistanceM, f.hazardous);
         out << line;
@@ -127,7 +129,7 @@ Image throwPlot(const DebrisReport& report)
     std::vector<std::pair<double, double>> pieces;
     double totalMass = 0;
     for (const FragmentFlight& f : report.fragments)
-        if (!f.anchored) {
+        if (!f.stayed) {
             pieces.push_back({f.throwDistanceM, f.massKg});
             totalMass += f.massKg;
         }
@@ -169,7 +171,7 @@ Image massPlot(const DebrisReport& report)
 {
     std::vector<double> masses;
     for (const FragmentFlight& f : report.fragments)
-        if (!f.anchored) masses.push_back(f.massKg);
+        if (!f.stayed) masses.push_back(f.massKg);
     std::sort(masses.begin(), masses.end(), std::greater<>());
     PlotSeries counted{"fragments this heavy or more", {}, {}}, fitted{"weibull fit", {}, {}};
     for (size_t i = 0; i < masses.size(); ++i) {

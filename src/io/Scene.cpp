@@ -213,6 +213,31 @@ Eigen::Quaterniond rotationFromDegrees(const Eigen::Vector3d& deg)
 const char* defaultSceneJson()
 {
     return R"({
+  "voxel_size_m": 0.025,
+  "duration_s": 2.0,
+  "frame_rate_hz": 24,
+  "seed": 7,
+  "objects": [
+    {
+      "name": "wall",
+      "primitive": {"shape": "box", "size_m": [1.125, 0.225, 0.9]},
+      "position_m": [0.0, 0.0, 0.45],
+      "material": "brick-masonry",
+      "anchor": "ground"
+    }
+  ],
+  "charges": [
+    {"position_m": [0.0, -0.4, 0.6], "tnt_kg": 0.5, "detonation_time_s": 0.0, "burst": "free-air"}
+  ],
+  "fracture": {"algorithm": "lattice"},
+  "lattice": {"max_vibration_s": 0.03}
+}
+)";
+}
+
+const char* paperWallSceneJson()
+{
+    return R"({
   "voxel_size_m": 0.1,
   "duration_s": 4.0,
   "frame_rate_hz": 24,

@@ -19,6 +19,9 @@ struct DebrisSettings {
     double hazardousEnergyJ = 79.0;   ///< DDESB TP 12's criterion, 58 ft-lb (unit: J)
     double hazardousAreaM2 = 55.7;    ///< one hazardous fragment per this area, 600 ft^2 (unit: m^2)
     double launchSpeedMS = 0.5;       ///< a fragment is launched once it moves this fast (unit: m/s)
+    /// A piece resting within this distance (horizontally) of where it was when it came to be
+    /// stayed where it stood: a stump, not debris (unit: m).
+    double stayDistanceM = 0.1;
     double ringWidthM = 0.0;          ///< 0: a round width giving about 20 rings to the farthest piece (unit: m)
     int sectors = 8;                  ///< equal sectors about the origin, the first centred on +x (unit: 1)
 };
@@ -28,7 +31,8 @@ struct DebrisSettings {
 struct FragmentFlight {
     int64_t id = 0;
     double massKg = 0;
-    bool anchored = false;  ///< still held by the ground (a stump): not debris
+    bool anchored = false;  ///< still held by the ground
+    bool stayed = false;    ///< anchored, or resting where it stood (DebrisSettings::stayDistanceM): not debris
     bool launched = false;
     double launchTimeS = 0;
     Eigen::Vector3d launchPositionM = Eigen::Vector3d::Zero(), launchVelocityMS = Eigen::Vector3d::Zero();

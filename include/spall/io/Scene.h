@@ -107,8 +107,15 @@ const std::vector<Field<Scene>>& fieldTable<Scene>();
 /// Rotation about the world x, then y, then z axes (degrees), as scenes give it.
 Eigen::Quaterniond rotationFromDegrees(const Eigen::Vector3d& degrees);
 
-/// The built-in default scene (also assets/scenes/default.json).
+/// The built-in default scene (also assets/scenes/default.json): a one-brick wall (two leaves of
+/// bricks in mortar, resolved at 2.5 cm) breached by 0.5 kg of TNT 0.4 m in front, fracture from
+/// stress.
 const char* defaultSceneJson();
+
+/// The default scene before fracture from stress (also assets/scenes/brick-wall-yield-limit.json):
+/// a 4 m wall at 0.1 m voxels, 20 kg at 4 m, the paper's yield-limit rule; `spall bench accuracy`
+/// studies its tolerances.
+const char* paperWallSceneJson();
 
 /// Parses scene JSON. `sourceName` names the file in errors; relative mesh paths resolve
 /// against `baseDirectory`.
