@@ -5,6 +5,7 @@
 
 #include <spall/fracture/Material.h>
 #include <spall/lattice/Lattice.h>
+#include <spall/lattice/RandomField.h>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -278,13 +279,15 @@ TEST(Lattice, BarPulledApartDissipatesTheFractureEnergyAtEveryVoxelSize)
 namespace {
 
 /// The presets as a direct tension test sees them: quasi-static (no strain-rate law; the fib
-/// DIF has its own test), and brick masonry as its two materials, the joints and the bricks.
+/// DIF has its own test), without concrete's strength scatter, and brick masonry as its two
+/// materials, the joints and the bricks.
 std::vector<std::pair<std::string, Material>> presetsInTension()
 {
     std::vector<std::pair<std::string, Material>> out;
     for (const char* name : {"glass", "wood", "concrete"}) {
         Material m = findMaterialPreset(name);
         m.strengthRateLaw = StrengthRateLaw::None;
+        m.strengthCoefficientOfVariation = 0.0;  // the mean properties; the scatter has its own test
         out.push_back({name, m});
     }
     Material joints = findMaterialPreset("brick-masonry");
@@ -333,7 +336,9 @@ TEST(Lattice, EveryPresetPulledApartGivesItsModulusStrengthAndFractureEnergyAtTw
             EXPECT_NEAR(pull.youngsModulusPa, material.youngsModulusPa, 0.05 * material.youngsModulusPa) << name << " h " << spec.h;
             EXPECT_NEAR(pull.peakStressPa, ft, 0.10 * ft) << name << " h " << spec.h;
             EXPECT_EQ(pull.broken, pull.across) << name << " h " << spec.h;
-            if (!glass && !(name == "wood" && perSide == 4)) EXPECT_NEAR(pull.dissipatedJ, gfJ, 0.10 * gfJ) << name << " h " << spec.h;
+            if (!glass && !(name == "wood" && perSide == 4)) {
+                EXPECT_NEAR(pull.dissipatedJ, gfJ, 0.10 * gfJ) << name << " h " << spec.h;
+            }
         }
     }
 }
@@ -552,4 +557,65 @@ TEST(Lattice, MasonryPulledAcrossItsBedJointsBreaksInAJointAtTheJointsStrength)
     // Voxels taller than a course (75 mm) do not resolve the bricks: every bond is a joint's.
     const Lattice coarse = Lattice::fromBody(test::boxBody(6, 3, 4, 0.1, material.densityKgM3), material);
     for (const LatticeBond& bond : coarse.bonds) EXPECT_EQ(bond.strengthClass, 0);
+}
+
+TEST(Lattice, StrengthScatterHasTheMaterialsMeanCovAndCorrelation)
+{
+    // The field: zero mean, unit variance and correlation exp(-1/2) at one correlation length,
+    // over 8 seeds x 500 points 5 lengths apart.
+    const double l = 0.02;
+    double sum = 0, squares = 0, lagged = 0;
+    int n = 0;
+    for (uint64_t seed = 1; seed <= 8; ++seed) {
+        const GaussianRandomField field(seed, l);
+        for (int i = 0; i < 500; ++i) {
+            const Eigen::Vector3d x(5 * l * (i % 10), 5 * l * ((i / 10) % 10), 5 * l * (i / 100));
+            const double g = field.at(x);
+            sum += g;
+            squares += g * g;
+            lagged += g * field.at(x + Eigen::Vector3d(l, 0, 0));
+            ++n;
+        }
+    }
+    std::printf("field: mean %.3f, variance %.3f, correlation at one length %.3f (exp(-1/2) = %.3f)\n", sum / n, squares / n, lagged / n,
+                std::exp(-0.5));
+    EXPECT_NEAR(sum / n, 0.0, 0.05);
+    EXPECT_NEAR(squares / n, 1.0, 0.1);
+    EXPECT_NEAR(lagged / n, std::exp(-0.5), 0.08);
+
+    // The variance function against its integral done numerically, and its two limits.
+    for (const double t : {0.3 * l, l, 4 * l}) {
+        double integral = 0;
+        const int steps = 100000;
+        for (int i = 0; i < steps; ++i) {
+            const double tau = (i + 0.5) * t / steps;
+            integral += (t - tau) * std::exp(-tau * tau / (2 * l * l)) * t / steps;
+        }
+        EXPECT_NEAR(varianceFunction(t, l), 2 * integral / (t * t), 1e-6) << t;
+    }
+    EXPECT_DOUBLE_EQ(varianceFunction(0.0, l), 1.0);
+    EXPECT_NEAR(varianceFunction(1000 * l, l), std::sqrt(2 * M_PI) / 1000, 1e-5);
+
+    // The concrete preset's bonds at 5 mm: mean 1, CoV 0.18 times the face's reduction; the same
+    // seed gives the same bonds, another seed others.
+    const Material concrete = findMaterialPreset("concrete");
+    const double h = 0.005;
+    const Body body = test::boxBody(20, 20, 20, h, concrete.densityKgM3);
+    const Lattice a = Lattice::fromBody(body, concrete, LatticeGround(), 3), again = Lattice::fromBody(body, concrete, LatticeGround(), 3),
+                  other = Lattice::fromBody(body, concrete, LatticeGround(), 4);
+    double mean = 0, meanSquare = 0;
+    size_t same = 0, differ = 0;
+    for (size_t b = 0; b < a.bondCount(); ++b) {
+        const double s = a.bondHistory[b].strengthScale;
+        mean += s / a.bondCount();
+        meanSquare += s * s / a.bondCount();
+        same += s == again.bondHistory[b].strengthScale;
+        differ += s != other.bondHistory[b].strengthScale;
+    }
+    const double cov = std::sqrt(meanSquare - mean * mean) / mean, expected = concrete.strengthCoefficientOfVariation * varianceFunction(h, 0.016);
+    std::printf("concrete bonds at h = %.3f m: mean strength scale %.3f, CoV %.3f (expected %.3f)\n", h, mean, cov, expected);
+    EXPECT_NEAR(mean, 1.0, 0.03);
+    EXPECT_NEAR(cov, expected, 0.15 * expected);
+    EXPECT_EQ(same, a.bondCount());
+    EXPECT_EQ(differ, a.bondCount());
 }

@@ -13,10 +13,11 @@ namespace {
 std::string writeScene(const std::string& name)
 {
     const std::string dir = testing::TempDir() + "/sweep_" + name;
+    std::filesystem::remove_all(dir);  // a sweep resumes what it finds: start from nothing
     std::filesystem::create_directories(dir);
-    std::ofstream(dir + "/scene.json") << R"({"voxel_size_m": 0.1, "duration_s": 0.1, "seed": 40,
+    std::ofstream(dir + "/scene.json") << R"({"voxel_size_m": 0.1, "duration_s": 0.5, "seed": 40,
       "objects": [{"name": "box", "primitive": {"shape": "box", "size_m": [0.3, 0.3, 0.3]}, "position_m": [0, 0, 0.15]}],
-      "charges": [{"position_m": [0, -2, 0], "tnt_kg": 1.0}]})";
+      "charges": [{"position_m": [0, -0.6, 0.15], "tnt_kg": 1.0}]})";
     return dir + "/scene.json";
 }
 

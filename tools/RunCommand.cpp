@@ -80,8 +80,7 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
         spall::Scene scene = scenePath.empty() ? spall::parseScene(spall::defaultSceneJson(), "<built-in default scene>", ".")
                                                : spall::loadScene(scenePath);
         if (seed >= 0) {
-            scene.seed = static_cast<uint64_t>(seed);
-            scene.fracture.seed = scene.seed;
+            scene.setSeed(static_cast<uint64_t>(seed));
         }
         if (!quiet) std::fprintf(stderr, "spall run: %s -> %s\n", scene.sourceName.c_str(), outDir.c_str());
         try {

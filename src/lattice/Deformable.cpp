@@ -58,7 +58,7 @@ double rigidKineticEnergyJ(const Lattice& lattice, const std::vector<uint32_t>& 
 DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
                                     const LatticeGround& ground, double timeS)
 {
-    DeformableBody d{body.id, Lattice::fromBody(body, material, ground), timeS, timeS};
+    DeformableBody d{body.id, Lattice::fromBody(body, material, ground, settings.seed), timeS, timeS};
     d.lattice.bulkViscosity = settings.bulkViscosity;
     d.lattice.damageLaw = settings.damageLaw;
     return d;

@@ -1,4 +1,5 @@
 #include <spall/lattice/Lattice.h>
+#include <spall/lattice/RandomField.h>
 
 #include <spall/core/Parallel.h>
 
@@ -96,7 +97,7 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
     return k;
 }
 
-Lattice Lattice::fromBody(const Body& body, const Material& material, const LatticeGround& ground)
+Lattice Lattice::fromBody(const Body& body, const Material& material, const LatticeGround& ground, uint64_t strengthSeed)
 {
     Lattice lattice;
     const double h = body.voxelSizeM;
@@ -110,11 +111,27 @@ Lattice Lattice::fromBody(const Body& body, const Material& material, const Latt
     if (ground.enabled) lattice.addGroundBonds(body);
     if (hasUnits(material)) lattice.classifyUnitBonds(material);
     lattice.bondHistory.assign(lattice.bonds.size(), BondHistory());
+    if (material.strengthCoefficientOfVariation > 0.0) lattice.scatterStrengths(material, strengthSeed);
     const double pWaveSpeed = std::sqrt((lattice.stiffness.lameLambdaPa + 2.0 * lattice.stiffness.shearModulusPa) / material.densityKgM3);
     lattice.mDashpotPerViscosity = material.densityKgM3 * pWaveSpeed * h * h;
     lattice.condenseVolumetricModulus();
     lattice.refreshForces();
     return lattice;
+}
+
+void Lattice::scatterStrengths(const Material& material, uint64_t seed)
+{
+    const double h = voxelSizeM, l = material.strengthCorrelationLengthM;
+    const GaussianRandomField field(seed, l);
+    // The face average's variance: the variance function along each of its two sides.
+    const double cov = material.strengthCoefficientOfVariation * varianceFunction(h, l);
+    const double sigma = std::sqrt(std::log(1.0 + cov * cov));
+    forEach(bonds.size(), [&](size_t b) {
+        const openvdb::Coord lo = voxel[bonds[b].low];
+        Eigen::Vector3d mid = Eigen::Vector3d(lo.x(), lo.y(), lo.z()) * h;
+        mid[bonds[b].axis] += 0.5 * h;
+        bondHistory[b].strengthScale = std::exp(sigma * field.at(mid) - 0.5 * sigma * sigma);
+    });
 }
 
 void Lattice::addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& placeM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,

@@ -54,6 +54,12 @@ struct Material {
     double shearStrengthPa = 6e6;
     double frictionCoefficient = 0.5;  ///< ... and μ = tan φ (unit: 1)
     StrengthRateLaw strengthRateLaw = StrengthRateLaw::None;
+    /// The deformable phase's bonds scatter in strength (tension and shear together) about the
+    /// values above: a lognormal of this coefficient of variation at the scale of the
+    /// correlation length, correlated in space (lattice/RandomField.h); 0: every bond alike
+    /// (unit: fraction).
+    double strengthCoefficientOfVariation = 0.0;
+    double strengthCorrelationLengthM = 0.02;  ///< (unit: m)
     // Masonry: an object of the material is built of units (bricks) laid in running bond, in
     // courses along z from z = 0, each course shifted half a unit along the length axis. The
     // strengths above are then the joints' (the unit–mortar bond), those below the units'; a

@@ -112,7 +112,9 @@ public:
     /// a ground, each anchored voxel is bonded to a held ground point a voxel below it (across
     /// the face that looks most directly into the ground) by a bond like the others, so a body
     /// can break at its base; without one, anchored voxels are held.
-    static Lattice fromBody(const Body& body, const Material& material, const LatticeGround& ground = LatticeGround());
+    /// `strengthSeed` draws the material's strength scatter (Material::strengthCoefficientOfVariation).
+    static Lattice fromBody(const Body& body, const Material& material, const LatticeGround& ground = LatticeGround(),
+                            uint64_t strengthSeed = 1);
 
     size_t particleCount() const { return positionM.size(); }
     /// The particle at a voxel (a ground point at the cell below its voxel), or -1.
@@ -240,6 +242,11 @@ private:
     /// when a voxel is no taller than a course.
     void classifyUnitBonds(const Material& material);
     void condenseVolumetricModulus();
+    /// Each bond's strength scale: a lognormal of mean 1 whose CoV is the material's, reduced
+    /// by averaging over the bond's h x h face (the variance function, squared), drawn from a
+    /// Gaussian random field at the bond's midpoint in the body's index space (so pieces keep
+    /// their strengths through splits).
+    void scatterStrengths(const Material& material, uint64_t seed);
     /// f(i) for i < count: in parallel for large lattices, in order for small ones.
     template <typename F>
     void forEach(size_t count, const F& f) const;

@@ -40,6 +40,8 @@ struct LatticeSettings {
     /// How bonds' damage grows: the crack band's softening line, or Davison–Stevens in rate form
     /// above it, with the material's B and C.
     LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;
+    /// The scene's seed (not a key of its own): it draws the bonds' strength scatter.
+    uint64_t seed = 1;
 };
 
 // Keys and ranges (src/lattice/Settings.cpp).
