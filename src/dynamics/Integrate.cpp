@@ -115,12 +115,12 @@ void integrateBody(Body& body, double t, double dt, Integrator integrator, const
 void integrateBodies(std::vector<Body>& bodies, const std::vector<Wrench>& blast, const WorldSettings& world, const Air& air,
                      Integrator integrator, double timeS, double dt)
 {
+    const bool airDrag = world.airDrag == AirDrag::HaiderLevenspiel;
     forEachIndex(bodies.size(), [&](size_t i) {
         Body& body = bodies[i];
         if (!movable(body)) return;
         const double m = body.mass.massKg;
-        const DragShape shape = dragShapeOf(body);
-        const bool airDrag = world.airDrag == AirDrag::HaiderLevenspiel;
+        const DragShape shape = airDrag ? dragShapeOf(body) : DragShape();
         auto wrench = [&](double, const Eigen::Vector3d&, const Eigen::Quaterniond& q, const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
             Wrench total = blast[i];
             total.forceN += m * world.gravityMS2 - world.linearDragPerS * m * v;

@@ -5,13 +5,23 @@
 #include <hdf5.h>
 
 #include <filesystem>
+#include <mutex>
 #include <unistd.h>
 
 namespace spall {
 
+void initialiseHdf5()
+{
+    static std::once_flag once;
+    std::call_once(once, [] {
+        H5dont_atexit();
+        H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    });
+}
+
 H5Out::H5Out(const std::string& path) : mPath(path)
 {
-    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    initialiseHdf5();
     mFile = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
     if (mFile < 0) throw IoError(path + ": cannot create");
 }

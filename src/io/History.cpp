@@ -1,28 +1,17 @@
 #include <spall/io/History.h>
 
+#include <spall/io/H5Out.h>
+
 #include <spall/core/Error.h>
 
 #include <hdf5.h>
 
 #include <cstring>
 #include <filesystem>
-#include <mutex>
 
 namespace spall {
 
 namespace {
-
-/// Once per process, before any other HDF5 call: errors become IoError instead of stderr noise,
-/// and HDF5 does not close files from an exit handler (after a failed write it would crash
-/// there; the writer closes its file itself).
-void initialiseHdf5()
-{
-    static std::once_flag once;
-    std::call_once(once, [] {
-        H5dont_atexit();
-        H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-    });
-}
 
 void check(herr_t status, const std::string& what)
 {

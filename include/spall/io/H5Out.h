@@ -10,6 +10,11 @@
 
 namespace spall {
 
+/// Once per process, before any other HDF5 call: errors become IoError instead of stderr noise,
+/// and HDF5 does not close files from an exit handler (after a failed write it would crash
+/// there; the writers close their files themselves).
+void initialiseHdf5();
+
 class H5Out {
 public:
     explicit H5Out(const std::string& path);
