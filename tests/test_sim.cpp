@@ -105,11 +105,12 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"max_vibration_s": "long"}})").find("lattice.max_vibration_s: must be a number"),
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"damage_law": "paper"}})").find("lattice.damage_law"), std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "solver": {"air_drag": "stokes"}})").find("solver.air_drag"), std::string::npos);
     const std::string stone = R"(}], "materials": {"stone": {)";
     for (const std::string bad : {R"("youngs_modulus_Pa": 0)", R"("poisson_ratio": 0.5)", R"("tensile_strength_Pa": -1)",
                                   R"("fracture_energy_J_per_m2": 0)", R"("shear_strength_Pa": 0)", R"("friction_coefficient": -0.2)",
                                   R"("unit_length_m": -0.2)", R"("joint_thickness_m": 2)", R"("unit_tensile_strength_Pa": -1)",
-                                  R"("unit_friction_coefficient": 20)"}) {
+                                  R"("unit_friction_coefficient": 20)", R"("strength_cov": 1.5)", R"("strength_correlation_length_m": 0)"}) {
         const std::string key = bad.substr(1, bad.find('"', 1) - 1);
         EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + bad + "}}}").find("materials.stone." + key + ": must be"), std::string::npos) << bad;
     }
