@@ -123,6 +123,15 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("unit_height_m": 0}}})").find("materials.stone.unit_height_m: must be above 0 when"),
               std::string::npos);
     EXPECT_EQ(errorOf(R"({"objects": [{)" + box + stone + R"("unit_length_m": 0, "unit_height_m": 0}}})"), "");
+    // A grain needs its values along it, and a material has units or a grain, not both.
+    const std::string pine = R"(}], "materials": {"pine": {"base": "wood", )";
+    EXPECT_EQ(errorOf(R"({"objects": [{)" + box + pine + R"("grain_axis": "x"}}})"), "");
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + pine + R"("grain_axis": "w"}}})").find("materials.pine.grain_axis"), std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + pine + R"("along_grain_tensile_strength_Pa": 0}}})")
+                  .find("materials.pine.along_grain_tensile_strength_Pa: must be above 0 when grain_axis is set"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("grain_axis": "z"}}})").find("materials.stone.grain_axis: must be none for a material built of units"),
+              std::string::npos);
     EXPECT_EQ(errorOf(defaultSceneJson()), "");
 }
 
@@ -160,7 +169,10 @@ const char* kEveryKeyScene = R"({
                           "strength_cov": 0.15, "strength_correlation_length_m": 0.03,
                           "unit_length_m": 0.3, "unit_width_m": 0.1, "unit_height_m": 0.1, "joint_thickness_m": 0.012,
                           "unit_length_axis": "y", "unit_tensile_strength_Pa": 3e6, "unit_fracture_energy_J_per_m2": 60,
-                          "unit_shear_strength_Pa": 2.5e6, "unit_friction_coefficient": 0.45}},
+                          "unit_shear_strength_Pa": 2.5e6, "unit_friction_coefficient": 0.45},
+                "oak": {"unit_length_m": 0, "youngs_modulus_Pa": 1e9, "grain_axis": "y", "along_grain_youngs_modulus_Pa": 12e9,
+                        "along_grain_shear_modulus_Pa": 0.8e9, "along_grain_tensile_strength_Pa": 9e7,
+                        "along_grain_fracture_energy_J_per_m2": 12000, "along_grain_shear_strength_Pa": 2e7}},
   "objects": [{"name": "block", "primitive": {"shape": "box", "size_m": [1, 1, 1]}, "position_m": [0, 0, 0.5],
                "rotation_deg": [0, 0, 5], "material": "stone", "anchor": "ground"},
               {"name": "sheet", "mesh": "/meshes/sheet.obj", "position_m": [0, 0, 2], "rotation_deg": [0, 0, 0],

@@ -92,6 +92,21 @@ Material withUnits(Material m, double lengthM, double widthM, double heightM, do
     return m;
 }
 
+/// `m` with a grain along `axis`: E, G, tensile strength, fracture energy and shear strength
+/// along it, and the source.
+Material withGrain(Material m, GrainAxis axis, double youngsModulusPa, double shearModulusPa, double tensileStrengthPa,
+                   double fractureEnergyJPerM2, double shearStrengthPa, const std::string& source)
+{
+    m.grainAxis = axis;
+    m.alongGrainYoungsModulusPa = youngsModulusPa;
+    m.alongGrainShearModulusPa = shearModulusPa;
+    m.alongGrainTensileStrengthPa = tensileStrengthPa;
+    m.alongGrainFractureEnergyJPerM2 = fractureEnergyJPerM2;
+    m.alongGrainShearStrengthPa = shearStrengthPa;
+    m.source += "; grain: " + source;
+    return m;
+}
+
 /// Mohr–Coulomb through a material's uniaxial compressive and tensile strengths:
 /// fc = 2c cos φ / (1 − sin φ) and ft = 2c cos φ / (1 + sin φ) give c = √(fc ft) / 2 and
 /// sin φ = (fc − ft) / (fc + ft) (Jaeger, Cook & Zimmerman, Fundamentals of Rock Mechanics, 4th
@@ -120,8 +135,16 @@ const std::vector<Material>& materialPresets()
     // Elasticity and fracture for the deformable phase (issue 17; issue 18 refines them):
     //   glass: EN 572-1 (E 70 GPa, nu 0.2, characteristic bending strength 45 MPa), Gf = KIc^2/E
     //     with KIc = 0.75 MPa m^0.5 (soda-lime glass, e.g. Wiederhorn 1969): 8 J/m^2;
-    //   wood (spruce, isotropic stand-in): USDA Wood Handbook FPL-GTR-190 (2010) ch. 5, E along
-    //     the grain about 10 GPa, tension across the grain 2.5 MPa; Gf across the grain about
+    //   wood (spruce; issue 18: transversely isotropic about its grain, along z by default, a
+    //     post): USDA Wood Handbook FPL-GTR-190 (2010) ch. 5. Along the grain E_L about 10 GPa
+    //     and G_LT = 0.0625 E_L (table 5-1, Sitka spruce: G_LR/E_L 0.064, G_LT/E_L 0.061);
+    //     tension along the grain 70 MPa, the modulus of rupture (table 5-3a, Sitka spruce at
+    //     12 % moisture), which the handbook names a low estimate of clear wood's tensile
+    //     strength parallel to the grain; a crack across the fibres 10 kJ/m^2 (Ashby & Jones,
+    //     Engineering Materials 1, table 13.1: wood across the grain 8-20 kJ/m^2); shear across
+    //     the fibres three times shear along them (Kollmann & Cote 1968, Principles of Wood
+    //     Science and Technology I, ch. 7). Across the grain E_T = 0.06 E_L (table 5-1: E_T/E_L
+    //     0.043, E_R/E_L 0.078), nu 0.35 (nu_RT 0.435 and nu_TR 0.245), tension 2.5 MPa, Gf
     //     250 J/m^2 (mode I, TL; Stanzl-Tschegg, Tan & Tschegg 1995, Wood Sci. Technol. 29);
     //   brick masonry, homogenised on its joints: E = 1000 fk with fk 5 MPa (EN 1996-1-1 3.7.2),
     //     unit–mortar bond 0.3 MPa and mode I Gf 12 J/m^2 (van der Pluijm's tests as quoted by
@@ -153,13 +176,19 @@ const std::vector<Material>& materialPresets()
     constexpr double kConcreteStrengthCov = 0.3 / 1.645, kConcreteAggregateM = 0.016;
     const std::string concreteScatter = "strength CoV 0.18 from EN 1992-1-1 table 3.1 (fctk,0.05 = 0.7 fctm), correlated over 16 mm "
                                         "(maximum aggregate size)";
+    constexpr double kWoodAlongGrainPa = 10e9;
     static const std::vector<Material> presets = {
         withShear(withElasticity(calibrateMaterial("glass", 2500.0, 3.4e3, 6.9e3, "Clancey 1972: windows shatter at 3.4-6.9 kPa"), 70e9,
                                  0.2, 45e6, 8.0, "EN 572-1 (E, strength); Gf = KIc^2/E, KIc 0.75 MPa m^0.5"),
                   45e6, 0.5, StrengthRateLaw::None, "Rankine (principal tension) linearised: c = ft, mu 0.5"),
-        withShear(withElasticity(calibrateMaterial("wood", 500.0, 6.9e3, 13.8e3, "Clancey 1972: wood panels fail at 6.9-13.8 kPa"), 10e9,
-                                 0.3, 2.5e6, 250.0, "Wood Handbook FPL-GTR-190 (E, tension across grain); Stanzl-Tschegg et al. 1995 (Gf)"),
-                  7.9e6, 0.0, StrengthRateLaw::None, "Wood Handbook table 5-3b, Sitka spruce shear parallel to grain; no friction"),
+        withGrain(withShear(withElasticity(calibrateMaterial("wood", 500.0, 6.9e3, 13.8e3, "Clancey 1972: wood panels fail at 6.9-13.8 kPa"),
+                                           0.06 * kWoodAlongGrainPa, 0.35, 2.5e6, 250.0,
+                                           "across the grain: Wood Handbook FPL-GTR-190 tables 5-1, 5-2, 5-3 (E_T, nu, tension); "
+                                           "Stanzl-Tschegg et al. 1995 (Gf)"),
+                            7.9e6, 0.0, StrengthRateLaw::None, "Wood Handbook table 5-3b, Sitka spruce shear parallel to grain; no friction"),
+                  GrainAxis::Z, kWoodAlongGrainPa, 0.0625 * kWoodAlongGrainPa, 70e6, 10e3, 3.0 * 7.9e6,
+                  "along the grain: Wood Handbook tables 5-1 (E_L, G_LT) and 5-3a (modulus of rupture as tensile strength); "
+                  "Ashby & Jones table 13.1 (Gf across the fibres); Kollmann & Cote 1968 (shear across the fibres)"),
         withUnits(withShear(withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
                                                              "Clancey 1972: unreinforced brick panels 8-12 in fail at 48.2-55.1 kPa"),
                                            5e9, 0.2, 0.3e6, 12.0, "EN 1996-1-1 (E = 1000 fk); van der Pluijm via Lourenco 1996 (bond strength, Gf)"),
@@ -221,28 +250,46 @@ const std::vector<Field<Material>>& fieldTable<Material>()
         {"unit_fracture_energy_J_per_m2", &Material::unitFractureEnergyJPerM2, closed(0.0, 1e7)},
         {"unit_shear_strength_Pa", &Material::unitShearStrengthPa, closed(0.0, 1e11)},
         {"unit_friction_coefficient", &Material::unitFrictionCoefficient, closed(0.0, 10.0)},
+        {"grain_axis", choice(&Material::grainAxis)},
+        {"along_grain_youngs_modulus_Pa", &Material::alongGrainYoungsModulusPa, closed(0.0, 1e13)},
+        {"along_grain_shear_modulus_Pa", &Material::alongGrainShearModulusPa, closed(0.0, 1e13)},
+        {"along_grain_tensile_strength_Pa", &Material::alongGrainTensileStrengthPa, closed(0.0, 1e11)},
+        {"along_grain_fracture_energy_J_per_m2", &Material::alongGrainFractureEnergyJPerM2, closed(0.0, 1e7)},
+        {"along_grain_shear_strength_Pa", &Material::alongGrainShearStrengthPa, closed(0.0, 1e11)},
     };
     return table;
 }
 
-std::string missingUnitField(const Material& m)
+FieldProblem structureProblem(const Material& m)
 {
-    if (!hasUnits(m)) return "";
-    const std::pair<const char*, double> needed[] = {{"unit_width_m", m.unitWidthM},
-                                                     {"unit_height_m", m.unitHeightM},
-                                                     {"unit_tensile_strength_Pa", m.unitTensileStrengthPa},
-                                                     {"unit_fracture_energy_J_per_m2", m.unitFractureEnergyJPerM2},
-                                                     {"unit_shear_strength_Pa", m.unitShearStrengthPa}};
+    if (hasUnits(m) && hasGrain(m)) return {"grain_axis", "must be none for a material built of units (unit_length_m above 0)"};
+    std::vector<std::pair<const char*, double>> needed;
+    std::string reason;
+    if (hasUnits(m)) {
+        needed = {{"unit_width_m", m.unitWidthM},
+                  {"unit_height_m", m.unitHeightM},
+                  {"unit_tensile_strength_Pa", m.unitTensileStrengthPa},
+                  {"unit_fracture_energy_J_per_m2", m.unitFractureEnergyJPerM2},
+                  {"unit_shear_strength_Pa", m.unitShearStrengthPa}};
+        reason = "must be above 0 when unit_length_m is (a material built of units; unit_length_m 0 makes it homogeneous)";
+    } else if (hasGrain(m)) {
+        needed = {{"along_grain_youngs_modulus_Pa", m.alongGrainYoungsModulusPa},
+                  {"along_grain_shear_modulus_Pa", m.alongGrainShearModulusPa},
+                  {"along_grain_tensile_strength_Pa", m.alongGrainTensileStrengthPa},
+                  {"along_grain_fracture_energy_J_per_m2", m.alongGrainFractureEnergyJPerM2},
+                  {"along_grain_shear_strength_Pa", m.alongGrainShearStrengthPa}};
+        reason = "must be above 0 when grain_axis is set (grain_axis none makes the material the same in every direction)";
+    }
     for (const auto& [key, value] : needed)
-        if (!(value > 0.0)) return key;
-    return "";
+        if (!(value > 0.0)) return {key, reason};
+    return {};
 }
 
 void validateMaterial(const Material& m)
 {
     validateFields(m, "material '" + m.name + "'");
-    if (const std::string key = missingUnitField(m); !key.empty())
-        throw InputError("material '" + m.name + "': " + key + " must be above 0 when unit_length_m is (a material built of units)");
+    if (const FieldProblem problem = structureProblem(m); !problem.key.empty())
+        throw InputError("material '" + m.name + "': " + problem.key + " " + problem.reason);
 }
 
 std::array<int64_t, 3> masonryUnitOf(const Material& m, double xM, double yM, double zM)

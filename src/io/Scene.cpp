@@ -154,8 +154,7 @@ void readMaterials(ObjectReader& r, const json& root, Scene& scene)
         Material material = m.checked("base", [&]() -> const Material& { return findMaterialPreset(baseName); });
         material.name = it.key();
         readFields(m, material);
-        if (const std::string key = missingUnitField(material); !key.empty())
-            m.fail(m.keyPath(key), "must be above 0 when unit_length_m is (a material built of units; unit_length_m 0 makes it homogeneous)");
+        if (const FieldProblem problem = structureProblem(material); !problem.key.empty()) m.fail(m.keyPath(problem.key), problem.reason);
         material.source = "scene " + r.file();
         bool replaced = false;
         for (Material& existing : scene.materials)

@@ -63,23 +63,59 @@ Eigen::Matrix3d rotationMatrixOf(const Eigen::Quaterniond& q)
 
 }  // namespace
 
+namespace {
+
+/// The normal moduli d (across the grain, along it) and λ of a lattice whose normal stiffness
+/// diag(d) + λ 1 1ᵀ has the compliance of a transversely isotropic solid: E and ν across the
+/// grain, E_L along it. By Sherman–Morrison the compliance is diag(1/d) − κ (1/d)(1/d)ᵀ with
+/// κ = λ / (1 + λ Σ 1/d), so E_i = d_i² / (d_i − κ) and ν_ij = κ d_i / (d_j (d_i − κ)): across
+/// the grain E = d (1 + ν), κ = ν d / (1 + ν); along it d_L is the root of d² − E_L d + E_L κ.
+/// Isotropic (E_L = E): d = 2μ and λ Lamé's. Returns {d across, d along, λ}.
+std::array<double, 3> normalModuli(double acrossPa, double poissonRatio, double alongPa)
+{
+    const double across = acrossPa / (1.0 + poissonRatio);
+    const double kappa = poissonRatio * across / (1.0 + poissonRatio);
+    const double discriminant = alongPa * alongPa - 4.0 * alongPa * kappa;
+    if (discriminant < 0.0) throw std::invalid_argument("calibrateLattice: E along the grain is too small against E and nu across it");
+    const double along = 0.5 * (alongPa + std::sqrt(discriminant));
+    const double denominator = 1.0 - kappa * (1.0 / along + 2.0 / across);
+    if (!(denominator > 0.0)) throw std::invalid_argument("calibrateLattice: no lattice has these E and nu");
+    return {across, along, kappa / denominator};
+}
+
+}  // namespace
+
 LatticeStiffness calibrateLattice(const Material& m, double h)
 {
     if (!(m.youngsModulusPa > 0.0) || !(m.poissonRatio > -1.0 && m.poissonRatio < 0.5) || !(m.densityKgM3 > 0.0) || !(h > 0.0))
         throw std::invalid_argument("calibrateLattice: E, density and h must be positive and -1 < nu < 0.5");
-    const double e = m.youngsModulusPa, nu = m.poissonRatio;
+    const bool grained = hasGrain(m);
+    if (grained && (!(m.alongGrainYoungsModulusPa > 0.0) || !(m.alongGrainShearModulusPa > 0.0)))
+        throw std::invalid_argument("calibrateLattice: a grain needs E and G along it");
+    const double eAcross = m.youngsModulusPa, eAlong = grained ? m.alongGrainYoungsModulusPa : eAcross;
+    const double gAcross = eAcross / (2.0 * (1.0 + m.poissonRatio)), gAlong = grained ? m.alongGrainShearModulusPa : gAcross;
+    const int grainAxis = grained ? int(m.grainAxis) - int(GrainAxis::X) : -1;
+    const auto [dAcross, dAlong, lambda] = normalModuli(eAcross, m.poissonRatio, eAlong);
+    // Shear: C44 across the grain is (2 s_T) / 4h = G_T, along it (s_L + s_T) / 4h = G_L.
+    const double sAcross = 2.0 * gAcross * h, sAlong = (4.0 * gAlong - 2.0 * gAcross) * h;
+    if (!(sAlong > 0.0)) throw std::invalid_argument("calibrateLattice: G along the grain must exceed half of G across it");
     LatticeStiffness k;
-    k.shearModulusPa = e / (2.0 * (1.0 + nu));
-    k.lameLambdaPa = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
-    k.normalNPerM = 2.0 * k.shearModulusPa * h;
-    k.shearNPerM = 2.0 * k.shearModulusPa * h;
-    k.bendingNmPerRad = e * h * h * h / 12.0;
-    k.twistingNmPerRad = kSquareTorsionConstant * k.shearModulusPa * h * h * h;
+    k.lameLambdaPa = lambda;
+    for (int axis = 0; axis < 3; ++axis) {
+        const bool along = axis == grainAxis;
+        k.normalModulusPa[axis] = along ? dAlong : dAcross;
+        k.normalNPerM[axis] = k.normalModulusPa[axis] * h;
+        k.shearNPerM[axis] = along ? sAlong : sAcross;
+        k.bendingNmPerRad[axis] = (along ? eAlong : eAcross) * h * h * h / 12.0;
+        // Twisting about the axis shears the two planes that hold it.
+        k.twistingNmPerRad[axis] = kSquareTorsionConstant * (along ? gAlong : 0.5 * (gAlong + gAcross)) * h * h * h;
+    }
     if (!(m.tensileStrengthPa > 0.0) || !(m.fractureEnergyJPerM2 > 0.0) || !(m.shearStrengthPa > 0.0) || !(m.frictionCoefficient >= 0.0))
         throw std::invalid_argument("calibrateLattice: strengths and fracture energy must be positive and the friction coefficient not negative");
-    const auto strengthOf = [&](double tensilePa, double fractureEnergyJPerM2, double shearPa, double friction) {
+    const auto strengthOf = [&](double youngsPa, double tensilePa, double fractureEnergyJPerM2, double shearPa, double friction) {
         LatticeStiffness::Strength s;
-        s.peakStretchM = tensilePa * h / e;
+        s.youngsModulusPa = youngsPa;
+        s.peakStretchM = tensilePa * h / youngsPa;
         // Voxels too large to soften (snap-back) break at the peak: the strength, which decides
         // whether a body breaks, is kept, and a crack dissipates ft² h / (2E) per area, more than Gf.
         s.zeroTractionStretchM = std::max(2.0 * fractureEnergyJPerM2 / tensilePa, s.peakStretchM);
@@ -87,11 +123,14 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
         s.frictionCoefficient = friction;
         return s;
     };
-    k.strength[0] = strengthOf(m.tensileStrengthPa, m.fractureEnergyJPerM2, m.shearStrengthPa, m.frictionCoefficient);
-    k.strength[1] = hasUnits(m) ? strengthOf(m.unitTensileStrengthPa, m.unitFractureEnergyJPerM2, m.unitShearStrengthPa, m.unitFrictionCoefficient)
-                                : k.strength[0];
+    k.strength[0] = strengthOf(eAcross, m.tensileStrengthPa, m.fractureEnergyJPerM2, m.shearStrengthPa, m.frictionCoefficient);
+    k.strength[1] = k.strength[0];
+    if (hasUnits(m))
+        k.strength[1] = strengthOf(eAcross, m.unitTensileStrengthPa, m.unitFractureEnergyJPerM2, m.unitShearStrengthPa, m.unitFrictionCoefficient);
+    else if (grained)
+        k.strength[1] = strengthOf(eAlong, m.alongGrainTensileStrengthPa, m.alongGrainFractureEnergyJPerM2, m.alongGrainShearStrengthPa,
+                                   m.frictionCoefficient);
     k.strengthRateLaw = m.strengthRateLaw;
-    k.youngsModulusPa = e;
     k.damageRatePerS = m.damageRatePerS;
     k.damageStressScalePerPa = m.damageStressScalePerPa > 0.0 ? m.damageStressScalePerPa : 1.0 / m.tensileStrengthPa;
     return k;
@@ -110,9 +149,12 @@ Lattice Lattice::fromBody(const Body& body, const Material& material, const Latt
     lattice.addLinkBonds(body);
     if (ground.enabled) lattice.addGroundBonds(body);
     if (hasUnits(material)) lattice.classifyUnitBonds(material);
+    if (hasGrain(material)) lattice.classifyGrainBonds(material);
     lattice.bondHistory.assign(lattice.bonds.size(), BondHistory());
     if (material.strengthCoefficientOfVariation > 0.0) lattice.scatterStrengths(material, strengthSeed);
-    const double pWaveSpeed = std::sqrt((lattice.stiffness.lameLambdaPa + 2.0 * lattice.stiffness.shearModulusPa) / material.densityKgM3);
+    const LatticeStiffness& k = lattice.stiffness;
+    const double stiffestPa = *std::max_element(k.normalModulusPa.begin(), k.normalModulusPa.end());
+    const double pWaveSpeed = std::sqrt((k.lameLambdaPa + stiffestPa) / material.densityKgM3);
     lattice.mDashpotPerViscosity = material.densityKgM3 * pWaveSpeed * h * h;
     lattice.condenseVolumetricModulus();
     lattice.refreshForces();
@@ -210,29 +252,38 @@ void Lattice::classifyUnitBonds(const Material& material)
             bond.strengthClass = 1;
 }
 
+void Lattice::classifyGrainBonds(const Material& material)
+{
+    const int grainAxis = int(material.grainAxis) - int(GrainAxis::X);
+    for (LatticeBond& bond : bonds)
+        if (bond.axis == grainAxis) bond.strengthClass = 1;
+}
+
 void Lattice::condenseVolumetricModulus()
 {
-    // λ condensed over the axes a particle has no bond along (σ = 0 there): λ for three axes,
-    // 2μλ / (λ + 2μ) for two (plane stress), λμ / (λ + μ) for one (a bar: E = 2μ + that).
-    const double lambda = stiffness.lameLambdaPa, mu = stiffness.shearModulusPa;
-    const double condensed[4] = {0.0, lambda * mu / (lambda + mu), 2.0 * mu * lambda / (lambda + 2.0 * mu), lambda};
+    // λ condensed over the axes a particle has no bond along (σ = 0 there):
+    // λ / (1 + λ Σ_missing 1/d); isotropic, λ for three axes, 2μλ / (λ + 2μ) for two (plane
+    // stress), λμ / (λ + μ) for one (a bar: E = 2μ + that).
+    const double lambda = stiffness.lameLambdaPa;
     mLambdaPa.resize(particleCount());
     mInverseBondCount.resize(particleCount());
     for (size_t p = 0; p < particleCount(); ++p) {
-        int axes = 0;
+        double missingCompliance = 0.0;
         for (int axis = 0; axis < 3; ++axis) {
             const int count = int(mBondAcross[p][2 * axis] >= 0) + int(mBondAcross[p][2 * axis + 1] >= 0);
             mInverseBondCount[p][axis] = count > 0 ? 1.0 / count : 0.0;
-            axes += count > 0;
+            if (count == 0) missingCompliance += 1.0 / stiffness.normalModulusPa[axis];
         }
-        mLambdaPa[p] = condensed[axes];
+        mLambdaPa[p] = lambda / (1.0 + lambda * missingCompliance);  // a particle with no bonds has no strain to weigh
     }
 }
 
 double Lattice::stableTimeStepS() const
 {
-    const double h = voxelSizeM, mu = stiffness.shearModulusPa, lambda = stiffness.lameLambdaPa;
-    const double omegaSquared = (24.0 * mu + 8.0 * mu + 12.0 * lambda) * h / particleMassKg;
+    const LatticeStiffness& k = stiffness;
+    const double shear = *std::max_element(k.shearNPerM.begin(), k.shearNPerM.end());
+    const double normal = *std::max_element(k.normalNPerM.begin(), k.normalNPerM.end());
+    const double omegaSquared = (12.0 * shear + 4.0 * normal + 12.0 * k.lameLambdaPa * voxelSizeM) / particleMassKg;
     return 0.9 * 2.0 / std::sqrt(omegaSquared);
 }
 
@@ -316,13 +367,13 @@ void Lattice::measureBond(size_t b, double dtS, bool growDamage)
     if (growDamage) growBondDamage(b, equivalentStretchM(bond, s, lengthM), std::abs(openingRateMS) / voxelSizeM, dtS);
     const double intact = 1.0 - bondDamage(b), sqrtIntact = std::sqrt(intact);
     const bool opening = lengthM > voxelSizeM;
-    Eigen::Vector3d local = -intact * k.shearNPerM * s.displacementM;
-    local[a] = -(s.displacementM[a] > 0.0 ? intact : 1.0) * k.normalNPerM * s.displacementM[a];
+    Eigen::Vector3d local = -intact * k.shearNPerM[a] * s.displacementM;
+    local[a] = -(s.displacementM[a] > 0.0 ? intact : 1.0) * k.normalNPerM[a] * s.displacementM[a];
     terms.elasticForceN = s.frame * local;
     // A crack opening carries no viscous stress either: the dashpot softens with the spring.
     if (bulkViscosity > 0.0) terms.elasticForceN -= (opening ? intact : 1.0) * bulkViscosity * mDashpotPerViscosity * openingRateMS * along;
-    Eigen::Vector3d bending = -intact * k.bendingNmPerRad * s.rotationRad;
-    bending[a] = -intact * k.twistingNmPerRad * s.rotationRad[a];
+    Eigen::Vector3d bending = -intact * k.bendingNmPerRad[a] * s.rotationRad;
+    bending[a] = -intact * k.twistingNmPerRad[a] * s.rotationRad[a];
     terms.bendingMomentNm = s.frame * bending;
     terms.effectiveStretchM = opening ? sqrtIntact * (lengthM - voxelSizeM) : lengthM - voxelSizeM;
     terms.volumetricAreaPerArmM = (opening ? sqrtIntact : 1.0) * voxelSizeM * voxelSizeM / lengthM;
@@ -369,7 +420,7 @@ double Lattice::equivalentStretchM(const LatticeBond& bond, const BondStrain& st
     const int a = bond.axis;
     // The shear displacement: across the bond's axis in its half-way frame.
     const double normalM = strain.displacementM[a];
-    const double shearTractionPa = k.shearNPerM * std::sqrt(std::max(0.0, strain.displacementM.squaredNorm() - normalM * normalM)) / (voxelSizeM * voxelSizeM);
+    const double shearTractionPa = k.shearNPerM[a] * std::sqrt(std::max(0.0, strain.displacementM.squaredNorm() - normalM * normalM)) / (voxelSizeM * voxelSizeM);
     const double shearIndex = shearTractionPa / strength.shearStrengthPa;
     const double stretchM = lengthM - voxelSizeM;
     double index = 0.0;
@@ -380,7 +431,7 @@ double Lattice::equivalentStretchM(const LatticeBond& bond, const BondStrain& st
         // The compression across the bond: its spring's and its particles' volumetric share, as
         // the last force pass left them (a substep behind; a function of the saved state).
         const double normalTractionPa =
-            k.normalNPerM * normalM / (voxelSizeM * voxelSizeM) + mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a];
+            k.normalNPerM[a] * normalM / (voxelSizeM * voxelSizeM) + mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a];
         index = std::max(0.0, shearTractionPa - strength.frictionCoefficient * std::max(0.0, -normalTractionPa)) / strength.shearStrengthPa;
     }
     return index * strength.peakStretchM;
@@ -407,7 +458,8 @@ double Lattice::rateDamageAfter(size_t b, double equivalentStretchNowM, double d
     const LatticeStiffness& k = stiffness;
     // Stresses in tension's terms: the bond's (its equivalent stretch on its damaged spring) and
     // what the softening line allows at its damage driver.
-    const double toStressPa = k.youngsModulusPa / voxelSizeM, peakM = history.strengthScale * k.strength[bonds[b].strengthClass].peakStretchM;
+    const LatticeStiffness::Strength& strength = k.strength[bonds[b].strengthClass];
+    const double toStressPa = strength.youngsModulusPa / voxelSizeM, peakM = history.strengthScale * strength.peakStretchM;
     const double stressPa = (1.0 - history.rateDamage) * toStressPa * equivalentStretchNowM;
     const double allowedPa = toStressPa * (history.damageDriverM <= peakM ? peakM : (1.0 - onLine) * history.damageDriverM);
     const double excessPa = stressPa - allowedPa;
@@ -483,10 +535,10 @@ double Lattice::bondStrainEnergyJ(size_t b) const
     const BondStrain s = strainOf(bonds[b]);
     const int a = bonds[b].axis;
     const double normal = s.displacementM[a], twist = s.rotationRad[a], intact = 1.0 - bondDamage(b);
-    return 0.5 * (normal > 0.0 ? intact : 1.0) * k.normalNPerM * normal * normal +
+    return 0.5 * (normal > 0.0 ? intact : 1.0) * k.normalNPerM[a] * normal * normal +
            0.5 * intact *
-               (k.shearNPerM * (s.displacementM.squaredNorm() - normal * normal) +
-                k.bendingNmPerRad * (s.rotationRad.squaredNorm() - twist * twist) + k.twistingNmPerRad * twist * twist);
+               (k.shearNPerM[a] * (s.displacementM.squaredNorm() - normal * normal) +
+                k.bendingNmPerRad[a] * (s.rotationRad.squaredNorm() - twist * twist) + k.twistingNmPerRad[a] * twist * twist);
 }
 
 double Lattice::volumetricEnergyJ(size_t p) const

@@ -31,6 +31,15 @@ struct EnumNames<UnitLengthAxis> {
     static constexpr std::pair<UnitLengthAxis, const char*> kNames[] = {{UnitLengthAxis::X, "x"}, {UnitLengthAxis::Y, "y"}};
 };
 
+/// The axis a wood's grain (its fibres) runs along, in the object's frame at voxelisation; none:
+/// the material is the same in every direction.
+enum class GrainAxis { None, X, Y, Z };
+template <>
+struct EnumNames<GrainAxis> {
+    static constexpr std::pair<GrainAxis, const char*> kNames[] = {
+        {GrainAxis::None, "none"}, {GrainAxis::X, "x"}, {GrainAxis::Y, "y"}, {GrainAxis::Z, "z"}};
+};
+
 /// The dynamic increase factor of strength at a strain rate (unit: 1/s); 1 below the quasi-static rate.
 double dynamicIncreaseFactor(StrengthRateLaw law, double strainRatePerS);
 
@@ -74,6 +83,16 @@ struct Material {
     double unitFractureEnergyJPerM2 = 0.0;    ///< (unit: J/m^2)
     double unitShearStrengthPa = 0.0;         ///< (unit: Pa)
     double unitFrictionCoefficient = 0.0;     ///< (unit: 1)
+    // Wood: transversely isotropic about a grain axis. The elastic and strength values above
+    // are then those across the grain (E and ν of the plane across it, tension across it, shear
+    // along it), those below along it (tension along the grain breaks fibres). A material may
+    // have units or a grain, not both.
+    GrainAxis grainAxis = GrainAxis::None;
+    double alongGrainYoungsModulusPa = 0.0;          ///< E_L (unit: Pa)
+    double alongGrainShearModulusPa = 0.0;           ///< G_LT, shear in planes holding the grain (unit: Pa)
+    double alongGrainTensileStrengthPa = 0.0;        ///< (unit: Pa)
+    double alongGrainFractureEnergyJPerM2 = 0.0;     ///< a crack across the fibres (unit: J/m^2)
+    double alongGrainShearStrengthPa = 0.0;          ///< shear across the fibres (unit: Pa)
     /// Where the numbers come from.
     std::string source;
 };
@@ -81,9 +100,15 @@ struct Material {
 /// Whether a material is built of units (Material's masonry fields).
 inline bool hasUnits(const Material& m) { return m.unitLengthM > 0.0; }
 
-/// For a material built of units, the key of a unit dimension or strength it lacks (not above
-/// 0), or "" when it has them all or has no units.
-std::string missingUnitField(const Material& m);
+/// Whether a material has a grain (Material's wood fields).
+inline bool hasGrain(const Material& m) { return m.grainAxis != GrainAxis::None; }
+
+/// What a material built of units, or with a grain, lacks: the key and why; an empty key when
+/// it lacks nothing.
+struct FieldProblem {
+    std::string key, reason;
+};
+FieldProblem structureProblem(const Material& m);
 
 /// The unit a point lies in, as its indices (along the length axis, across it, course), for a
 /// material built of units; the point in the object's world frame at voxelisation (unit: m).

@@ -24,21 +24,27 @@
 
 namespace spall {
 
-/// One bond's stiffnesses and the volumetric modulus, for voxels of edge h. Derivation (energy
-/// per voxel of the lattice equal to the continuum's, docs/architecture.md): normal and shear
-/// 2μh, so C11 − C12 = 2μ and C44 = μ; bending E h³/12 and twisting 0.1406 G h³, those of a
-/// square beam of side and length h (Roark's torsion constant 0.1406 a⁴), which matter only at
-/// the scale of a voxel.
+/// The bonds' stiffnesses per axis of the body's index space and the volumetric modulus, for
+/// voxels of edge h. Derivation (energy per voxel of the lattice equal to the continuum's,
+/// docs/architecture.md): the normal stiffness matrix is diag(d) + λ 1 1ᵀ, normal bonds d h,
+/// shear bonds so that C44 of each plane (a, b) is (s_a + s_b) / 4h; bending E h³/12 and
+/// twisting 0.1406 G h³, those of a square beam of side and length h (Roark's torsion constant
+/// 0.1406 a⁴), which matter only at the scale of a voxel. Isotropic: d = 2μ, s = 2μh. Wood
+/// (a grain axis L) is transversely isotropic: d and s differ along L (docs/accuracy.md).
 struct LatticeStiffness {
-    double normalNPerM = 0.0;
-    double shearNPerM = 0.0;
-    double bendingNmPerRad = 0.0;
-    double twistingNmPerRad = 0.0;
+    std::array<double, 3> normalNPerM{};
+    std::array<double, 3> shearNPerM{};
+    std::array<double, 3> bendingNmPerRad{};
+    std::array<double, 3> twistingNmPerRad{};
+    /// d per axis, the normal stiffness less λ (2μ when isotropic) (unit: Pa).
+    std::array<double, 3> normalModulusPa{};
     double lameLambdaPa = 0.0;
-    double shearModulusPa = 0.0;
-    /// What a bond fails at; a material built of units (masonry) has two: [0] the material's
-    /// own, which for masonry is its joints', and [1] inside a unit.
+    /// What a bond fails at; a material built of units (masonry) or with a grain (wood) has
+    /// two: [0] the material's own, which for masonry is its joints' and for wood across the
+    /// grain, and [1] inside a unit, or along the grain.
     struct Strength {
+        /// E along the bond, which turns its stretch into stress in uniaxial tension (unit: Pa).
+        double youngsModulusPa = 0.0;
         /// Linear softening in tension, crack band style (Bažant & Oh 1983): a bond's normal
         /// stretch peaks at u0 = ft h / E and its traction falls to nothing at uf = 2 Gf / ft,
         /// so a broken bond has dissipated Gf per unit of its face, whatever h. That needs
@@ -54,13 +60,13 @@ struct LatticeStiffness {
         double frictionCoefficient = 0.0;
     };
     std::array<Strength, 2> strength;
-    double youngsModulusPa = 0.0;
     StrengthRateLaw strengthRateLaw = StrengthRateLaw::None;
     /// Davison–Stevens B (unit: 1/s) and C (unit: 1/Pa; the material's 0 becomes 1/ft).
     double damageRatePerS = 0.0;
     double damageStressScalePerPa = 0.0;
 };
-/// From the material's density, E, ν, tensile strength and Gf (fracture/Material.h).
+/// From the material's density, E, ν, tensile strength and Gf (fracture/Material.h), and for
+/// wood its values along the grain.
 LatticeStiffness calibrateLattice(const Material& material, double voxelSizeM);
 
 /// What a bond remembers (all of it saved with a checkpoint).
@@ -82,7 +88,8 @@ struct BondHistory {
 struct LatticeBond {
     uint32_t low = 0, high = 0;
     int axis = 0;
-    /// Which of LatticeStiffness::strength it fails at: 1 inside a masonry unit, else 0.
+    /// Which of LatticeStiffness::strength it fails at: 1 inside a masonry unit or along wood's
+    /// grain, else 0.
     uint8_t strengthClass = 0;
 };
 
@@ -241,6 +248,8 @@ private:
     /// Bonds between two voxels of the same masonry unit take the unit's strength (Material),
     /// when a voxel is no taller than a course.
     void classifyUnitBonds(const Material& material);
+    /// Bonds along the grain of a material with one take its strength along the grain.
+    void classifyGrainBonds(const Material& material);
     void condenseVolumetricModulus();
     /// Each bond's strength scale: a lognormal of mean 1 whose CoV is the material's, reduced
     /// by averaging over the bond's h x h face (the variance function, squared), drawn from a
