@@ -149,7 +149,9 @@ TEST(Scene, ShippedScenesParseAndTheDefaultMatchesItsAsset)
     const Scene builtIn = parseScene(defaultSceneJson(), "built-in", ".");
     EXPECT_EQ(sceneToJson(asset), sceneToJson(builtIn));
     EXPECT_EQ(sceneToJson(loadScene(dir + "brick-wall-yield-limit.json")), sceneToJson(parseScene(paperWallSceneJson(), "built-in", ".")));
-    for (const char* name : {"two-charges-concrete.json", "pillar-davison-stevens.json", "brick-wall-lattice.json"}) EXPECT_NO_THROW(loadScene(dir + name)) << name;
+    for (const char* name : {"two-charges-concrete.json", "pillar-davison-stevens.json", "brick-wall-lattice.json", "timber-post.json",
+                             "concrete-slab-spall.json"})
+        EXPECT_NO_THROW(loadScene(dir + name)) << name;
 }
 
 namespace {
@@ -261,6 +263,22 @@ TEST(Simulation, ConservesVoxelsAndGivesTheSameResultForAnyThreadCount)
         states.push_back(state);
     }
     EXPECT_EQ(states[0], states[1]) << "bit-identical with 1 and 2 threads";
+}
+
+TEST(Simulation, ANonFiniteMotionStopsTheRunNamingTheBody)
+{
+    // An integration that went unstable must stop the run with the body and the time, not
+    // reach the output as a broken transform.
+    Body body = test::boxBody(2, 2, 2, 0.1, 1000.0, Eigen::Vector3d(0, 0, 1));
+    body.id = 7;
+    body.motion.angularVelocityRadS = Eigen::Vector3d(std::nan(""), 0, 0);
+    Simulation sim = rigidBodySimulation({body}, WorldSettings(), CollisionSettings(), SleepSettings(), 1e-3);
+    try {
+        sim.step();
+        FAIL() << "a NaN spin went unnoticed";
+    } catch (const SimulationError& e) {
+        EXPECT_NE(std::string(e.what()).find("body 7 has a non-finite position or velocity at t = "), std::string::npos) << e.what();
+    }
 }
 
 TEST(Simulation, TimeStepIsFineWhileTheFrontCrossesAndCoarseLater)

@@ -368,8 +368,13 @@ void Lattice::measureBond(size_t b, double dtS, bool growDamage)
     const double intact = 1.0 - bondDamage(b), sqrtIntact = std::sqrt(intact);
     const bool opening = lengthM > voxelSizeM;
     Eigen::Vector3d local = -intact * k.shearNPerM[a] * s.displacementM;
-    local[a] = -(s.displacementM[a] > 0.0 ? intact : 1.0) * k.normalNPerM[a] * s.displacementM[a];
+    local[a] = -intact * k.normalNPerM[a] * s.displacementM[a];
     terms.elasticForceN = s.frame * local;
+    // What damage took still carries compression, as contact: along the line of centres, and
+    // only while the two cubes overlap. (In the bond's frame it would push apart particles that
+    // have slid past each other or turned over, which feeds energy into a shattered lattice.)
+    const double overlapM = voxelSizeM - lengthM;
+    if (intact < 1.0 && overlapM > 0.0) terms.elasticForceN += (1.0 - intact) * k.normalNPerM[a] * overlapM * along;
     // A crack opening carries no viscous stress either: the dashpot softens with the spring.
     if (bulkViscosity > 0.0) terms.elasticForceN -= (opening ? intact : 1.0) * bulkViscosity * mDashpotPerViscosity * openingRateMS * along;
     Eigen::Vector3d bending = -intact * k.bendingNmPerRad[a] * s.rotationRad;
@@ -535,7 +540,8 @@ double Lattice::bondStrainEnergyJ(size_t b) const
     const BondStrain s = strainOf(bonds[b]);
     const int a = bonds[b].axis;
     const double normal = s.displacementM[a], twist = s.rotationRad[a], intact = 1.0 - bondDamage(b);
-    return 0.5 * (normal > 0.0 ? intact : 1.0) * k.normalNPerM[a] * normal * normal +
+    const double overlapM = std::max(0.0, voxelSizeM - (positionM[bonds[b].high] - positionM[bonds[b].low]).norm());
+    return 0.5 * intact * k.normalNPerM[a] * normal * normal + 0.5 * (1.0 - intact) * k.normalNPerM[a] * overlapM * overlapM +
            0.5 * intact *
                (k.shearNPerM[a] * (s.displacementM.squaredNorm() - normal * normal) +
                 k.bendingNmPerRad[a] * (s.rotationRad.squaredNorm() - twist * twist) + k.twistingNmPerRad[a] * twist * twist);

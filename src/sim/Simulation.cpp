@@ -1,5 +1,6 @@
 #include <spall/sim/Simulation.h>
 
+#include <spall/core/Error.h>
 #include <spall/dynamics/Integrate.h>
 #include <spall/dynamics/Sleep.h>
 #include <spall/io/VdbIo.h>
@@ -277,6 +278,7 @@ void Simulation::step(double targetS)
     correctPositions(mState.bodies, contacts, mScene.world);
     updateSleep(mState.bodies, contacts.touching, loaded, mScene.sleep, dt);
     adaptStepToPenetration(contacts.maxPenetrationM);
+    refuseNonFiniteMotion();
     if (mObserver) mRecord.solverContacts = contacts.solverContacts;
 
     mState.timeS = last ? targetS : mState.timeS + dt;
@@ -285,6 +287,17 @@ void Simulation::step(double targetS)
     if (mObserver) {
         mRecord.timeS = mState.timeS;
         mObserver(*this, mRecord);
+    }
+}
+
+void Simulation::refuseNonFiniteMotion() const
+{
+    for (const Body& body : mState.bodies) {
+        const BodyMotion& m = body.motion;
+        if (m.positionM.allFinite() && m.orientation.coeffs().allFinite() && m.linearVelocityMS.allFinite() && m.angularVelocityRadS.allFinite())
+            continue;
+        throw SimulationError("body " + std::to_string(body.id) + " has a non-finite position or velocity at t = " +
+                              std::to_string(mState.timeS) + " s: the integration became unstable (a smaller solver.max_time_step_s may help)");
     }
 }
 

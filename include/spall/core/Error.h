@@ -18,6 +18,13 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+/// The simulation reached a state no physics allows (a non-finite motion); the message names
+/// the body and the time.
+class SimulationError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
 /// Cooperative cancellation and progress, shaped like OpenVDB's interrupter.
 struct Interrupter {
     virtual ~Interrupter() = default;

@@ -132,6 +132,9 @@ private:
     void deformBodies(const FaceForces& faces, const std::vector<OpenWindow>& windows, double dtS);
     /// The ground as the lattices see it.
     LatticeGround latticeGround() const;
+    /// Throws SimulationError naming the first body whose pose or velocity is not finite: an
+    /// unstable integration must stop the run, not reach the output as a broken transform.
+    void refuseNonFiniteMotion() const;
     /// The paper's adaptive step: halve while bodies interpenetrate beyond the tolerance.
     void adaptStepToPenetration(double maxPenetrationM);
     std::pair<Eigen::Vector3d, Eigen::Vector3d> totalMomenta() const;
