@@ -559,6 +559,41 @@ TEST(Lattice, ConcreteIsStrongerWhenPulledFaster)
     }
 }
 
+TEST(Masonry, BondPatternsTieTheLeavesAndStaggerTheirHeadJoints)
+{
+    // A one-brick wall, 215 mm thick: two leaves of 102.5 mm and a 10 mm collar joint between.
+    // Running bond leaves the leaves apart in every course (a collar joint right through the
+    // wall); English bond ties them in every other course (headers across the wall); Flemish
+    // bond at every header, a third of each course (112.5 of every 337.5 mm). In every pattern
+    // the head joints of one course lie at least a quarter brick (56 mm) from those of the
+    // course below: no straight joint runs up the wall.
+    Material m = findMaterialPreset("brick-masonry");
+    const double frontM = 0.05, backM = 0.16, stepM = 0.001;
+    for (const auto& [pattern, tiedShare] : {std::pair{BondPattern::Running, 0.0}, std::pair{BondPattern::English, 0.5},
+                                             std::pair{BondPattern::Flemish, 1.0 / 3.0}}) {
+        m.bondPattern = pattern;
+        int tied = 0, samples = 0;
+        double closestJointsM = 1e9;
+        std::vector<double> jointsBelow;
+        for (int course = 0; course < 4; ++course) {
+            const double z = course * 0.075 + 0.03;
+            std::vector<double> joints;
+            for (double along = 0.0; along < 4.05; along += stepM) {
+                tied += masonryUnitOf(m, along, frontM, z) == masonryUnitOf(m, along, backM, z);
+                ++samples;
+                if (masonryUnitOf(m, along, frontM, z) != masonryUnitOf(m, along + stepM, frontM, z)) joints.push_back(along);
+            }
+            for (const double a : joints)
+                for (const double b : jointsBelow) closestJointsM = std::min(closestJointsM, std::abs(a - b));
+            jointsBelow = joints;
+        }
+        std::printf("%s bond: leaves tied over %.3f of the wall's length, head joints of adjacent courses at least %.1f mm apart\n",
+                    enumName(pattern).c_str(), double(tied) / samples, 1e3 * closestJointsM);
+        EXPECT_NEAR(double(tied) / samples, tiedShare, 0.01) << enumName(pattern);
+        EXPECT_GT(closestJointsM, 0.050) << enumName(pattern);
+    }
+}
+
 TEST(Lattice, MasonryPulledAcrossItsBedJointsBreaksInAJointAtTheJointsStrength)
 {
     // Brick masonry is bricks in mortar (issue 18): a prism of three courses (2.5 cm voxels, a

@@ -118,6 +118,8 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("unit_length_axis": "z"}}})").find("materials.stone.unit_length_axis"),
               std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("unit_bond_pattern": "herringbone"}}})").find("materials.stone.unit_bond_pattern"),
+              std::string::npos);
     // Brick masonry (the default base) is built of units: a unit without a height is an error,
     // and a unit length of 0 makes the material homogeneous.
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("unit_height_m": 0}}})").find("materials.stone.unit_height_m: must be above 0 when"),
@@ -170,7 +172,7 @@ const char* kEveryKeyScene = R"({
                           "shear_strength_Pa": 5e6, "friction_coefficient": 0.6, "strength_rate_law": "fib-mc2010",
                           "strength_cov": 0.15, "strength_correlation_length_m": 0.03,
                           "unit_length_m": 0.3, "unit_width_m": 0.1, "unit_height_m": 0.1, "joint_thickness_m": 0.012,
-                          "unit_length_axis": "y", "unit_tensile_strength_Pa": 3e6, "unit_fracture_energy_J_per_m2": 60,
+                          "unit_length_axis": "y", "unit_bond_pattern": "flemish", "unit_tensile_strength_Pa": 3e6, "unit_fracture_energy_J_per_m2": 60,
                           "unit_shear_strength_Pa": 2.5e6, "unit_friction_coefficient": 0.45},
                 "oak": {"unit_length_m": 0, "youngs_modulus_Pa": 1e9, "grain_axis": "y", "along_grain_youngs_modulus_Pa": 12e9,
                         "along_grain_shear_modulus_Pa": 0.8e9, "along_grain_tensile_strength_Pa": 9e7,

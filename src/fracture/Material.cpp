@@ -246,6 +246,7 @@ const std::vector<Field<Material>>& fieldTable<Material>()
         {"unit_height_m", &Material::unitHeightM, closed(0.0, 100.0)},
         {"joint_thickness_m", &Material::jointThicknessM, closed(0.0, 1.0)},
         {"unit_length_axis", choice(&Material::unitLengthAxis)},
+        {"unit_bond_pattern", choice(&Material::bondPattern)},
         {"unit_tensile_strength_Pa", &Material::unitTensileStrengthPa, closed(0.0, 1e11)},
         {"unit_fracture_energy_J_per_m2", &Material::unitFractureEnergyJPerM2, closed(0.0, 1e7)},
         {"unit_shear_strength_Pa", &Material::unitShearStrengthPa, closed(0.0, 1e11)},
@@ -298,11 +299,30 @@ std::array<int64_t, 3> masonryUnitOf(const Material& m, double xM, double yM, do
     // goes to the unit above it whatever the rounding of its coordinate.
     const auto index = [](double coordinateM, double pitchM) { return int64_t(std::floor(coordinateM / pitchM + 1e-9)); };
     const double alongM = m.unitLengthAxis == UnitLengthAxis::X ? xM : yM, acrossM = m.unitLengthAxis == UnitLengthAxis::X ? yM : xM;
-    const double lengthPitchM = m.unitLengthM + m.jointThicknessM;
+    const double lengthPitchM = m.unitLengthM + m.jointThicknessM, widthPitchM = m.unitWidthM + m.jointThicknessM;
     const int64_t course = index(zM, m.unitHeightM + m.jointThicknessM);
-    // Running (stretcher) bond: every other course shifted half a unit.
-    const double shiftM = (course & 1) ? 0.5 * lengthPitchM : 0.0;
-    return {index(alongM + shiftM, lengthPitchM), index(acrossM, m.unitWidthM + m.jointThicknessM), course};
+    const bool odd = (course & 1) != 0;
+    // Keys: a stretcher's (along, across, course); a header's first key is offset so that it
+    // differs from every stretcher's in its course.
+    switch (m.bondPattern) {
+    case BondPattern::Running:
+        return {index(alongM + (odd ? 0.5 * lengthPitchM : 0.0), lengthPitchM), index(acrossM, widthPitchM), course};
+    case BondPattern::English:
+        // Header courses: units across the wall, their joints a quarter unit off the stretchers'
+        // (the queen closer at the end of each header course).
+        if (!odd) return {index(alongM, lengthPitchM), index(acrossM, widthPitchM), course};
+        return {index(alongM + 0.25 * lengthPitchM, widthPitchM), index(acrossM, lengthPitchM), course};
+    case BondPattern::Flemish: {
+        // Stretcher then header along each course; the next course shifted half the period, so
+        // each header sits centred on a stretcher.
+        const double periodM = lengthPitchM + widthPitchM, shiftedM = alongM + (odd ? 0.5 * periodM : 0.0);
+        const int64_t period = index(shiftedM, periodM);
+        const bool header = shiftedM - double(period) * periodM >= lengthPitchM - 1e-9 * periodM;
+        return header ? std::array<int64_t, 3>{2 * period + 1, index(acrossM, lengthPitchM), course}
+                      : std::array<int64_t, 3>{2 * period, index(acrossM, widthPitchM), course};
+    }
+    }
+    return {0, 0, course};
 }
 
 }  // namespace spall

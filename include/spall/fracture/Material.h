@@ -31,6 +31,18 @@ struct EnumNames<UnitLengthAxis> {
     static constexpr std::pair<UnitLengthAxis, const char*> kNames[] = {{UnitLengthAxis::X, "x"}, {UnitLengthAxis::Y, "y"}};
 };
 
+/// How masonry units are laid (each pattern's courses along z from z = 0): running (stretcher)
+/// bond, every unit along the wall, each course shifted half a unit; English bond, courses of
+/// stretchers and of headers (units across the wall) in turn, headers shifted a quarter unit;
+/// Flemish bond, a header after each stretcher in every course, each header centred on the
+/// stretcher below.
+enum class BondPattern { Running, English, Flemish };
+template <>
+struct EnumNames<BondPattern> {
+    static constexpr std::pair<BondPattern, const char*> kNames[] = {
+        {BondPattern::Running, "running"}, {BondPattern::English, "english"}, {BondPattern::Flemish, "flemish"}};
+};
+
 /// The axis a wood's grain (its fibres) runs along, in the object's frame at voxelisation; none:
 /// the material is the same in every direction.
 enum class GrainAxis { None, X, Y, Z };
@@ -69,8 +81,8 @@ struct Material {
     /// (unit: fraction).
     double strengthCoefficientOfVariation = 0.0;
     double strengthCorrelationLengthM = 0.02;  ///< (unit: m)
-    // Masonry: an object of the material is built of units (bricks) laid in running bond, in
-    // courses along z from z = 0, each course shifted half a unit along the length axis. The
+    // Masonry: an object of the material is built of units (bricks) laid in a bond pattern, in
+    // courses along z from z = 0, the length axis along the wall (BondPattern). The
     // strengths above are then the joints' (the unit–mortar bond), those below the units'; a
     // bond between two voxels whose centres lie in different units crosses a joint. Elasticity
     // stays the assembly's. A unit length of 0 means a homogeneous material.
@@ -79,6 +91,7 @@ struct Material {
     double unitHeightM = 0.0;      ///< (unit: m)
     double jointThicknessM = 0.0;  ///< mortar between units (unit: m)
     UnitLengthAxis unitLengthAxis = UnitLengthAxis::X;
+    BondPattern bondPattern = BondPattern::Running;
     double unitTensileStrengthPa = 0.0;       ///< (unit: Pa)
     double unitFractureEnergyJPerM2 = 0.0;    ///< (unit: J/m^2)
     double unitShearStrengthPa = 0.0;         ///< (unit: Pa)
