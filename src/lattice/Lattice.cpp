@@ -61,10 +61,6 @@ Eigen::Matrix3d rotationMatrixOf(const Eigen::Quaterniond& q)
     return r;
 }
 
-}  // namespace
-
-namespace {
-
 /// The normal moduli d (across the grain, along it) and λ of a lattice whose normal stiffness
 /// diag(d) + λ 1 1ᵀ has the compliance of a transversely isotropic solid: E and ν across the
 /// grain, E_L along it. By Sherman–Morrison the compliance is diag(1/d) − κ (1/d)(1/d)ᵀ with

@@ -131,8 +131,9 @@ public:
     size_t bondCount() const { return bonds.size(); }
 
     /// Largest stable step (unit: s): 0.9 × 2/ω with ω bounding the lattice's highest frequency,
-    /// the rotational optical mode of the shear bonds (ω² = 24 μ h / m) and the translational
-    /// breathing mode (ω² = (8μ + 12λ) h / m) added.
+    /// the rotational optical mode of the stiffest shear bonds (ω² = 12 k_s / m; 24 μ h / m
+    /// isotropic) and the translational breathing mode (ω² = (4 k_n + 12 λ h) / m, k_n the
+    /// stiffest normal bonds; (8μ + 12λ) h / m isotropic) added.
     double stableTimeStepS() const;
     void step(double dtS);
     /// The bonds' forces from the state, leaving their damage as it is (after the state arrays
