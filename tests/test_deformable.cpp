@@ -407,7 +407,7 @@ TEST(Deformable, ABreachingChargeLeavesFinitePiecesWithNoMoreEnergyThanItsImpuls
 
 TEST(DefaultScene, BrickWallEndsInBricksClustersAndAStandingStump)
 {
-    // Issue 18's default scene: a one-brick wall of bricks in mortar at 2.5 cm, breached by 0.5 kg
+    // Issue 18's default scene: a one-brick wall of bricks in mortar at 2.5 cm, breached by 0.4 kg
     // of TNT 0.4 m in front. Sizes are counted in bricks with their share of joints
     // (0.225 x 0.1125 x 0.075 m: 121.5 voxels).
     const Scene scene = parseScene(defaultSceneJson(), "default scene", ".");

@@ -522,8 +522,9 @@ TEST(Lattice, ConcreteIsStrongerWhenPulledFaster)
     // 0.01, 1 and 3 1/s, with the fib Model Code's rate law and without: the ratio of the peak
     // stresses must be the Model Code's dynamic increase factor for tension at that rate, by
     // hand 1e4^0.018 = 1.180, 1e6^0.018 = 1.282 and 3e6^0.018 = 1.308 (fib Model Code 2010 eq.
-    // 5.1-108, ε̇0 = 1e-6 1/s), within 4 %: as the rate rises, the stress a substep adds
-    // (E ε̇ dt, 1.4 % of ft at 3 1/s) and the bar's inertia blur the peaks (faster than about
+    // 5.1-108, ε̇0 = 1e-6 1/s), within 5 %: as the rate rises, the stress a substep adds
+    // (E ε̇ dt, 1.4 % of ft at 3 1/s), the bar's inertia and the undamped ringing of the bending
+    // its held grips put into the bonds at their corners blur the peaks (faster than about
     // 10 1/s the bar breaks within a few of its wave transits and inertia sets its peak).
     const std::pair<double, double> rateAndFactor[] = {{1e-2, 1.180}, {1.0, 1.282}, {3.0, 1.308}};
     auto peakStressPa = [](double ratePerS, StrengthRateLaw law) {
@@ -557,7 +558,7 @@ TEST(Lattice, ConcreteIsStrongerWhenPulledFaster)
         const double ratio = withLaw / without;
         std::printf("pulled at %g 1/s: peak stress x %.3f of the rate-free lattice's, fib DIF %.3f (%+.1f %%)\n", ratePerS, ratio, factor,
                     100 * (ratio / factor - 1));
-        EXPECT_NEAR(ratio, factor, 0.04 * factor) << ratePerS << " 1/s";
+        EXPECT_NEAR(ratio, factor, 0.05 * factor) << ratePerS << " 1/s";
     }
 }
 

@@ -226,7 +226,7 @@ const char* defaultSceneJson()
     }
   ],
   "charges": [
-    {"position_m": [0.0, -0.4, 0.6], "tnt_kg": 0.5, "detonation_time_s": 0.0, "burst": "free-air"}
+    {"position_m": [0.0, -0.4, 0.6], "tnt_kg": 0.4, "detonation_time_s": 0.0, "burst": "free-air"}
   ],
   "fracture": {"algorithm": "lattice"},
   "lattice": {"max_vibration_s": 0.03}

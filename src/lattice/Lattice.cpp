@@ -90,7 +90,7 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
         throw std::invalid_argument("calibrateLattice: a grain needs E and G along it");
     const double eAcross = m.youngsModulusPa, eAlong = grained ? m.alongGrainYoungsModulusPa : eAcross;
     const double gAcross = eAcross / (2.0 * (1.0 + m.poissonRatio)), gAlong = grained ? m.alongGrainShearModulusPa : gAcross;
-    const int grainAxis = grained ? int(m.grainAxis) - int(GrainAxis::X) : -1;
+    const int grainAxis = grainAxisIndex(m);
     const auto [dAcross, dAlong, lambda] = normalModuli(eAcross, m.poissonRatio, eAlong);
     // Shear: C44 across the grain is (2 s_T) / 4h = G_T, along it (s_L + s_T) / 4h = G_L.
     const double sAcross = 2.0 * gAcross * h, sAlong = (4.0 * gAlong - 2.0 * gAcross) * h;
@@ -221,6 +221,7 @@ void Lattice::addGroundBonds(const Body& body)
     down.cwiseAbs().maxCoeff(&axis);
     const int face = 2 * axis + (down[axis] > 0.0 ? 1 : 0);
     const Eigen::Vector3d step = body.motion.orientation * (voxelSizeM * faceNormal(face));
+    mGroundBond.assign(voxelParticleCount, -1);
     for (uint32_t p = 0; p < voxelParticleCount; ++p) {
         const openvdb::Coord below = voxel[p] + faceOffset(face);
         if (!held[p] || body.grid->tree().isValueOn(below)) continue;
@@ -231,6 +232,7 @@ void Lattice::addGroundBonds(const Body& body)
         held[p] = 0;
         if (face & 1) addBond(p, groundPoint, axis);
         else addBond(groundPoint, p, axis);
+        mGroundBond[p] = int32_t(bonds.size() - 1);
     }
 }
 
@@ -250,7 +252,7 @@ void Lattice::classifyUnitBonds(const Material& material)
 
 void Lattice::classifyGrainBonds(const Material& material)
 {
-    const int grainAxis = int(material.grainAxis) - int(GrainAxis::X);
+    const int grainAxis = grainAxisIndex(material);
     for (LatticeBond& bond : bonds)
         if (bond.axis == grainAxis) bond.strengthClass = 1;
 }
@@ -360,7 +362,7 @@ void Lattice::measureBond(size_t b, double dtS, bool growDamage)
     const double lengthM = terms.armM.norm();
     const Eigen::Vector3d along = terms.armM / lengthM;
     const double openingRateMS = (velocityMS[bond.high] - velocityMS[bond.low]).dot(along);
-    if (growDamage) growBondDamage(b, equivalentStretchM(bond, s, lengthM), std::abs(openingRateMS) / voxelSizeM, dtS);
+    if (growDamage) growBondDamage(b, equivalentStretchM(b, s, lengthM), std::abs(openingRateMS) / voxelSizeM, dtS);
     const double intact = 1.0 - bondDamage(b), sqrtIntact = std::sqrt(intact);
     const bool opening = lengthM > voxelSizeM;
     Eigen::Vector3d local = -intact * k.shearNPerM[a] * s.displacementM;
@@ -411,11 +413,12 @@ void Lattice::gatherBondForces(size_t p)
 double Lattice::equivalentStretchM(size_t b) const
 {
     const LatticeBond& bond = bonds[b];
-    return equivalentStretchM(bond, strainOf(bond), (positionM[bond.high] - positionM[bond.low]).norm());
+    return equivalentStretchM(b, strainOf(bond), (positionM[bond.high] - positionM[bond.low]).norm());
 }
 
-double Lattice::equivalentStretchM(const LatticeBond& bond, const BondStrain& strain, double lengthM) const
+double Lattice::equivalentStretchM(size_t b, const BondStrain& strain, double lengthM) const
 {
+    const LatticeBond& bond = bonds[b];
     const LatticeStiffness& k = stiffness;
     const LatticeStiffness::Strength& strength = k.strength[bond.strengthClass];
     const int a = bond.axis;
@@ -423,7 +426,16 @@ double Lattice::equivalentStretchM(const LatticeBond& bond, const BondStrain& st
     const double normalM = strain.displacementM[a];
     const double shearTractionPa = k.shearNPerM[a] * std::sqrt(std::max(0.0, strain.displacementM.squaredNorm() - normalM * normalM)) / (voxelSizeM * voxelSizeM);
     const double shearIndex = shearTractionPa / strength.shearStrengthPa;
-    const double stretchM = lengthM - voxelSizeM;
+    // The stretch at the face's most stretched corner: the moment the bond carries, (1 − D) of
+    // its bending stiffness times θ, opens one edge by (1 − D) θ h/2 per axis across it, so the
+    // outermost bonds of a bent member see the strain of its surface, E κ t/2, as a continuum
+    // would (the parallel bond's σ = F/A + |M| R/I, Potyondy & Cundall 2004), not that of their
+    // centres, t/2 − h/2 from the neutral axis. As the bond softens its moment goes, and its
+    // opening alone carries it to the end of the softening line, so it still dissipates Gf.
+    const Eigen::Vector3d& rotation = strain.rotationRad;
+    const double bendingStretchM =
+        0.5 * voxelSizeM * (1.0 - bondDamage(b)) * (std::abs(rotation[(a + 1) % 3]) + std::abs(rotation[(a + 2) % 3]));
+    const double stretchM = lengthM - voxelSizeM + bendingStretchM;
     double index = 0.0;
     if (stretchM >= 0.0) {
         const double tensionIndex = stretchM / strength.peakStretchM;
@@ -494,7 +506,7 @@ void Lattice::step(double dtS)
         kick(p);
         positionM[p] += dtS * velocityMS[p];
         orientation[p] = (rotationOf(dtS * angularVelocityRadS[p]) * orientation[p]).normalized();
-        if (ground.enabled && !held[p]) keepAboveGround(p);
+        if (ground.enabled && !held[p] && !bondedToGround(p)) keepAboveGround(p);
     });
     // Damage first, from the new positions (and the velocities half-way through the step, for
     // the strain rate), then the forces from the state.
@@ -504,6 +516,11 @@ void Lattice::step(double dtS)
         gatherBondForces(p);
         kick(p);
     });
+}
+
+bool Lattice::bondedToGround(size_t p) const
+{
+    return p < mGroundBond.size() && mGroundBond[p] >= 0 && bondDamage(size_t(mGroundBond[p])) < 1.0;
 }
 
 void Lattice::keepAboveGround(size_t p)

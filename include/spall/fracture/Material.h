@@ -116,6 +116,9 @@ inline bool hasUnits(const Material& m) { return m.unitLengthM > 0.0; }
 /// Whether a material has a grain (Material's wood fields).
 inline bool hasGrain(const Material& m) { return m.grainAxis != GrainAxis::None; }
 
+/// The index (0 x, 1 y, 2 z) of a material's grain axis, or -1 without a grain.
+inline int grainAxisIndex(const Material& m) { return hasGrain(m) ? int(m.grainAxis) - int(GrainAxis::X) : -1; }
+
 /// What a material built of units, or with a grain, lacks: the key and why; an empty key when
 /// it lacks nothing.
 struct FieldProblem {

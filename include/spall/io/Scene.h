@@ -114,7 +114,7 @@ const std::vector<Field<Scene>>& fieldTable<Scene>();
 Eigen::Quaterniond rotationFromDegrees(const Eigen::Vector3d& degrees);
 
 /// The built-in default scene (also assets/scenes/default.json): a one-brick wall (two leaves of
-/// bricks in mortar, resolved at 2.5 cm) breached by 0.5 kg of TNT 0.4 m in front, fracture from
+/// bricks in mortar, resolved at 2.5 cm) breached by 0.4 kg of TNT 0.4 m in front, fracture from
 /// stress.
 const char* defaultSceneJson();
 

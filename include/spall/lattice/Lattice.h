@@ -169,8 +169,8 @@ public:
     /// much in pure tension, u0 × f with f its failure index (1 on the failure surface).
     /// Tension: f² = (stretch/u0)² + (τ/c)² (the tension cut-off joined to pure shear by an
     /// ellipse, Camacho & Ortiz 1996's effective traction); compression: f = (|τ| − μ σc)/c,
-    /// Mohr–Coulomb. Bending does not count: its stress at a face vanishes with h for a smooth
-    /// curvature (unit: m).
+    /// Mohr–Coulomb. The stretch is the face's most stretched corner's, the bond's bending
+    /// included, so a bent member cracks when its surface reaches ft (unit: m).
     double equivalentStretchM(size_t b) const;
     /// 0 intact … 1 broken: the secant stiffness lost in tension, shear and bending (compression
     /// still carries, as contact).
@@ -197,6 +197,8 @@ private:
     std::shared_ptr<LinkTree> mParticleIndex = std::make_shared<LinkTree>(-1);
     /// Per particle, the bond across each face (LinkBits.h's Face order) or -1.
     std::vector<std::array<int32_t, 6>> mBondAcross;
+    /// Per voxel particle, its bond to a ground point, or -1.
+    std::vector<int32_t> mGroundBond;
     /// Per particle, λ for the axes it has bonds along (stress-free missing axes condensed out).
     std::vector<double> mLambdaPa;
     /// Per particle and axis, 1 / (its bonds along the axis), or 0 without any.
@@ -226,7 +228,7 @@ private:
     /// state; writes only the bond's own entries, so bonds measure in parallel.
     void measureBond(size_t b, double dtS, bool growDamage);
     /// The failure index as a stretch (equivalentStretchM) from a measured strain.
-    double equivalentStretchM(const LatticeBond& bond, const BondStrain& strain, double lengthM) const;
+    double equivalentStretchM(size_t b, const BondStrain& strain, double lengthM) const;
     /// Damage grows with the damage driver (and under Davison–Stevens, over the step's
     /// duration); what it takes away stays away.
     void growBondDamage(size_t b, double equivalentStretchNowM, double strainRatePerS, double dtS);
@@ -262,6 +264,10 @@ private:
     void forEach(size_t count, const F& f) const;
     /// Puts a particle that sank into the ground back on it (LatticeGround).
     void keepAboveGround(size_t p);
+    /// Whether a particle is still bonded to its ground point: it then bears on the ground
+    /// through that bond, and the plane (a plastic contact at its rest height) would hold the
+    /// compression side of a bent base rigid, stiffening and strengthening it.
+    bool bondedToGround(size_t p) const;
     BondStrain strainOf(const LatticeBond& bond) const;
 };
 
