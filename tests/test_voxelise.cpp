@@ -251,6 +251,35 @@ TEST(Voxelise, MeshesWithHolesAreFilledByTheWindingNumber)
     EXPECT_NEAR(filledVolumeM3(closedPair, 0.025, InsideTest::Auto), unionVolume, 0.05 * unionVolume);
 }
 
+TEST(Voxelise, ASealedHollowStaysEmptyAndAnIslandInItIsSolid)
+{
+    // A 1 m box with a sealed 0.6 m room inside it (a house, a tank) and a 0.2 m block standing
+    // free in the room. Modellers export every shell wound outward; the nesting rule (a shell
+    // inside an odd number of closed shells bounds a hollow) must keep the room empty and the
+    // block solid, whichever way the file winds them. Voxel centres lie on multiples of h and no
+    // face on one, so the counts are exact: 20³ − 12³ voxels, plus 4³ for the block.
+    const double h = 0.05;
+    const TriangleMesh outer = boxMesh({0.01f, 0.01f, 0.01f}, {1.01f, 1.01f, 1.01f});
+    const TriangleMesh room = boxMesh({0.21f, 0.21f, 0.21f}, {0.81f, 0.81f, 0.81f});
+    const TriangleMesh block = boxMesh({0.41f, 0.41f, 0.41f}, {0.61f, 0.61f, 0.61f});
+    TriangleMesh roomWoundInward = room;
+    for (auto& t : roomWoundInward.triangles) std::swap(t[1], t[2]);
+    VoxeliseSettings settings;
+    settings.voxelSizeM = h;
+    for (const TriangleMesh& inside : {room, roomWoundInward}) {
+        const VoxeliseResult hollow = voxeliseMesh(merged(outer, inside), settings, "hollow box");
+        EXPECT_EQ(hollow.voxelCount, 20 * 20 * 20 - 12 * 12 * 12);
+        EXPECT_NEAR(hollow.enclosedVolumeM3, 1.0 - 0.216, 1e-5);
+        const VoxeliseResult island = voxeliseMesh(merged(merged(outer, inside), block), settings, "hollow box with a block");
+        EXPECT_EQ(island.voxelCount, 20 * 20 * 20 - 12 * 12 * 12 + 4 * 4 * 4);
+    }
+    // Asked for the level set, the room is filled, and a note says so.
+    settings.insideTest = InsideTest::LevelSet;
+    const VoxeliseResult filled = voxeliseMesh(merged(outer, room), settings, "hollow box");
+    EXPECT_EQ(filled.voxelCount, 20 * 20 * 20);
+    EXPECT_TRUE(anyNoteHas(filled.notes, "1 sealed hollows are filled"));
+}
+
 TEST(Voxelise, TrianglesWoundTheWrongWayAreTurned)
 {
     initialiseOpenVdb();

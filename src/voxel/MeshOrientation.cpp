@@ -1,5 +1,7 @@
 #include "MeshOrientation.h"
 
+#include "WindingNumber.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -107,6 +109,48 @@ std::vector<std::vector<int>> walkShells(TriangleMesh& mesh, const EdgeUses& use
     return shells;
 }
 
+Eigen::AlignedBox3d shellBounds(const TriangleMesh& mesh, const std::vector<int>& shell)
+{
+    Eigen::AlignedBox3d bounds;
+    for (int t : shell)
+        for (int k = 0; k < 3; ++k) bounds.extend(mesh.positionsM[mesh.triangles[t][k]].cast<double>());
+    return bounds;
+}
+
+/// Whether every edge of the shell's triangles is shared with exactly one other triangle.
+bool shellIsClosed(const TriangleMesh& mesh, const EdgeUses& uses, const std::vector<int>& shell)
+{
+    for (int t : shell)
+        for (int e = 0; e < 3; ++e)
+            if (uses.across(mesh.triangles[t][e], mesh.triangles[t][(e + 1) % 3], t) < 0) return false;
+    return true;
+}
+
+/// Per shell, how many closed shells hold it: a vertex of it has a winding number of magnitude
+/// above one half about them (shells do not cross, or they would be one shell or intersect).
+/// A shell held by an odd number bounds a hollow (a sealed room, a tank's inside), one held by
+/// an even number a solid (an island in that hollow): the nesting rule of polygon fill.
+std::vector<int> nestingDepths(const TriangleMesh& mesh, const EdgeUses& uses, const std::vector<std::vector<int>>& shells)
+{
+    std::vector<Eigen::AlignedBox3d> bounds;
+    for (const auto& shell : shells) bounds.push_back(shellBounds(mesh, shell));
+    std::vector<int> depth(shells.size(), 0);
+    for (size_t holder = 0; holder < shells.size(); ++holder) {
+        std::vector<size_t> candidates;
+        for (size_t s = 0; s < shells.size(); ++s)
+            if (s != holder && bounds[holder].contains(bounds[s])) candidates.push_back(s);
+        if (candidates.empty() || !shellIsClosed(mesh, uses, shells[holder])) continue;
+        TriangleMesh holderMesh{mesh.positionsM, {}};
+        for (int t : shells[holder]) holderMesh.triangles.push_back(mesh.triangles[t]);
+        const WindingNumberField field(holderMesh);
+        for (const size_t s : candidates) {
+            const Eigen::Vector3d vertex = mesh.positionsM[mesh.triangles[shells[s].front()][0]].cast<double>();
+            depth[s] += std::abs(field.at(vertex)) > 0.5;
+        }
+    }
+    return depth;
+}
+
 /// Merges vertices at equal positions (readers keep copies per face normal or texture seam) and
 /// drops triangles that two of their corners then share, which bound nothing.
 void weldEqualPositions(TriangleMesh& mesh)
@@ -149,12 +193,15 @@ MeshTopology orientOutward(TriangleMesh& mesh)
     const EdgeUses uses(mesh);
     topology.openEdges = uses.openEdges();
     const auto shells = walkShells(mesh, uses);
+    const std::vector<int> depths = nestingDepths(mesh, uses, shells);
     double sixV = 0.0;
-    for (const auto& shell : shells) {
-        const double sixShell = sixConeVolume(mesh, shell, vertexMean(mesh, shell));
-        sixV += std::abs(sixShell);
-        if (sixShell < 0.0)
-            for (int t : shell) turn(mesh.triangles[t]);
+    for (size_t i = 0; i < shells.size(); ++i) {
+        const double sixShell = sixConeVolume(mesh, shells[i], vertexMean(mesh, shells[i]));
+        const bool hollow = depths[i] % 2 == 1;
+        topology.hollows += hollow;
+        sixV += hollow ? -std::abs(sixShell) : std::abs(sixShell);
+        if ((sixShell < 0.0) != hollow)
+            for (int t : shells[i]) turn(mesh.triangles[t]);
     }
     topology.enclosedVolumeM3 = sixV / 6.0;
     for (size_t t = 0; t < asGiven.size(); ++t) topology.turnedTriangles += (mesh.triangles[t] != asGiven[t]);

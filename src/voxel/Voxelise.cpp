@@ -203,6 +203,9 @@ void noteRepairs(VoxeliseResult& result, const MeshTopology& topology, InsideTes
         result.notes.push_back(std::to_string(topology.openEdges) + " open edges (the mesh is not watertight): the inside comes from " +
                                (test == InsideTest::WindingNumber ? "the generalised winding number, which bridges holes"
                                                                   : "OpenVDB's sign flood fill, which closes only holes narrower than about 3 voxels"));
+    if (topology.hollows > 0 && test == InsideTest::LevelSet)
+        result.notes.push_back(std::to_string(topology.hollows) + " sealed hollows are filled: OpenVDB's level set takes everything "
+                               "the flood fill from outside cannot reach as inside; the winding number (inside: winding-number) keeps them");
 }
 
 }  // namespace
@@ -227,7 +230,10 @@ VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& se
     TriangleMesh outward = mesh;
     const MeshTopology topology = orientOutward(outward);
     InsideTest test = settings.insideTest;
-    if (test == InsideTest::Auto) test = topology.openEdges == 0 ? InsideTest::LevelSet : InsideTest::WindingNumber;
+    // OpenVDB's level set finds its sign by flood fill from outside, which fills sealed hollows;
+    // the winding number of the shells, hollows wound inward, leaves them empty.
+    if (test == InsideTest::Auto)
+        test = topology.openEdges == 0 && topology.hollows == 0 ? InsideTest::LevelSet : InsideTest::WindingNumber;
     VoxeliseResult result;
     result.enclosedVolumeM3 = topology.enclosedVolumeM3;
     if (settings.shellThicknessM == 0.0) noteRepairs(result, topology, test);
