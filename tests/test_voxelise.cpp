@@ -251,28 +251,31 @@ TEST(Voxelise, MeshesWithHolesAreFilledByTheWindingNumber)
     EXPECT_NEAR(filledVolumeM3(closedPair, 0.025, InsideTest::Auto), unionVolume, 0.05 * unionVolume);
 }
 
-TEST(Voxelise, ASealedHollowStaysEmptyAndAnIslandInItIsSolid)
+TEST(Voxelise, ASealedHollowStaysEmptyAndAPartInsideAPartStaysSolid)
 {
-    // A 1 m box with a sealed 0.6 m room inside it (a house, a tank) and a 0.2 m block standing
-    // free in the room. Modellers export every shell wound outward; the nesting rule (a shell
-    // inside an odd number of closed shells bounds a hollow) must keep the room empty and the
-    // block solid, whichever way the file winds them. Voxel centres lie on multiples of h and no
-    // face on one, so the counts are exact: 20³ − 12³ voxels, plus 4³ for the block.
+    // A 1 m box with a sealed 0.6 m room inside it (a house, a tank): the room's shell wound
+    // inward, as a solid modeller writes a cavity, must stay empty, and a 0.2 m block standing
+    // free in the room (wound outward) is solid again. The same room's shell wound outward is a
+    // part inside a part, as interpenetrating parts are modelled: the union, solid. The whole
+    // mesh turned inside out is the same object. Voxel centres lie on multiples of h and no face
+    // on one, so the counts are exact: 20³ − 12³ voxels, + 4³ with the block, 20³ solid.
     const double h = 0.05;
+    const auto inverted = [](TriangleMesh m) {
+        for (auto& t : m.triangles) std::swap(t[1], t[2]);
+        return m;
+    };
     const TriangleMesh outer = boxMesh({0.01f, 0.01f, 0.01f}, {1.01f, 1.01f, 1.01f});
-    const TriangleMesh room = boxMesh({0.21f, 0.21f, 0.21f}, {0.81f, 0.81f, 0.81f});
+    const TriangleMesh room = inverted(boxMesh({0.21f, 0.21f, 0.21f}, {0.81f, 0.81f, 0.81f}));
     const TriangleMesh block = boxMesh({0.41f, 0.41f, 0.41f}, {0.61f, 0.61f, 0.61f});
-    TriangleMesh roomWoundInward = room;
-    for (auto& t : roomWoundInward.triangles) std::swap(t[1], t[2]);
     VoxeliseSettings settings;
     settings.voxelSizeM = h;
-    for (const TriangleMesh& inside : {room, roomWoundInward}) {
-        const VoxeliseResult hollow = voxeliseMesh(merged(outer, inside), settings, "hollow box");
-        EXPECT_EQ(hollow.voxelCount, 20 * 20 * 20 - 12 * 12 * 12);
-        EXPECT_NEAR(hollow.enclosedVolumeM3, 1.0 - 0.216, 1e-5);
-        const VoxeliseResult island = voxeliseMesh(merged(merged(outer, inside), block), settings, "hollow box with a block");
-        EXPECT_EQ(island.voxelCount, 20 * 20 * 20 - 12 * 12 * 12 + 4 * 4 * 4);
-    }
+    const VoxeliseResult hollow = voxeliseMesh(merged(outer, room), settings, "hollow box");
+    EXPECT_EQ(hollow.voxelCount, 20 * 20 * 20 - 12 * 12 * 12);
+    EXPECT_NEAR(hollow.enclosedVolumeM3, 1.0 - 0.216, 1e-5);
+    EXPECT_EQ(voxeliseMesh(merged(merged(outer, room), block), settings, "hollow box with a block").voxelCount,
+              20 * 20 * 20 - 12 * 12 * 12 + 4 * 4 * 4);
+    EXPECT_EQ(voxeliseMesh(inverted(merged(outer, room)), settings, "hollow box inside out").voxelCount, 20 * 20 * 20 - 12 * 12 * 12);
+    EXPECT_EQ(voxeliseMesh(merged(outer, inverted(room)), settings, "a part inside a part").voxelCount, 20 * 20 * 20);
     // Asked for the level set, the room is filled, and a note says so.
     settings.insideTest = InsideTest::LevelSet;
     const VoxeliseResult filled = voxeliseMesh(merged(outer, room), settings, "hollow box");

@@ -126,15 +126,13 @@ bool shellIsClosed(const TriangleMesh& mesh, const EdgeUses& uses, const std::ve
     return true;
 }
 
-/// Per shell, how many closed shells hold it: a vertex of it has a winding number of magnitude
-/// above one half about them (shells do not cross, or they would be one shell or intersect).
-/// A shell held by an odd number bounds a hollow (a sealed room, a tank's inside), one held by
-/// an even number a solid (an island in that hollow): the nesting rule of polygon fill.
-std::vector<int> nestingDepths(const TriangleMesh& mesh, const EdgeUses& uses, const std::vector<std::vector<int>>& shells)
+/// Per shell, the outermost closed shell that holds it (a vertex of it has a winding number of
+/// magnitude above one half about that shell), or -1 when none does.
+std::vector<int> outermostHolders(const TriangleMesh& mesh, const EdgeUses& uses, const std::vector<std::vector<int>>& shells)
 {
     std::vector<Eigen::AlignedBox3d> bounds;
     for (const auto& shell : shells) bounds.push_back(shellBounds(mesh, shell));
-    std::vector<int> depth(shells.size(), 0);
+    std::vector<int> outermost(shells.size(), -1);
     for (size_t holder = 0; holder < shells.size(); ++holder) {
         std::vector<size_t> candidates;
         for (size_t s = 0; s < shells.size(); ++s)
@@ -145,10 +143,11 @@ std::vector<int> nestingDepths(const TriangleMesh& mesh, const EdgeUses& uses, c
         const WindingNumberField field(holderMesh);
         for (const size_t s : candidates) {
             const Eigen::Vector3d vertex = mesh.positionsM[mesh.triangles[shells[s].front()][0]].cast<double>();
-            depth[s] += std::abs(field.at(vertex)) > 0.5;
+            const bool larger = outermost[s] < 0 || bounds[holder].volume() > bounds[size_t(outermost[s])].volume();
+            if (larger && std::abs(field.at(vertex)) > 0.5) outermost[s] = int(holder);
         }
     }
-    return depth;
+    return outermost;
 }
 
 /// Merges vertices at equal positions (readers keep copies per face normal or texture seam) and
@@ -193,14 +192,21 @@ MeshTopology orientOutward(TriangleMesh& mesh)
     const EdgeUses uses(mesh);
     topology.openEdges = uses.openEdges();
     const auto shells = walkShells(mesh, uses);
-    const std::vector<int> depths = nestingDepths(mesh, uses, shells);
+    const std::vector<int> holders = outermostHolders(mesh, uses, shells);
+    std::vector<double> sixVolumes;
+    for (const auto& shell : shells) sixVolumes.push_back(sixConeVolume(mesh, shell, vertexMean(mesh, shell)));
     double sixV = 0.0;
     for (size_t i = 0; i < shells.size(); ++i) {
-        const double sixShell = sixConeVolume(mesh, shells[i], vertexMean(mesh, shells[i]));
-        const bool hollow = depths[i] % 2 == 1;
-        topology.hollows += hollow;
-        sixV += hollow ? -std::abs(sixShell) : std::abs(sixShell);
-        if ((sixShell < 0.0) != hollow)
+        // A shell no other holds faces outward. One inside another keeps its winding relative to
+        // the outermost shell around it, which turns with it: wound against that shell it bounds
+        // a hollow (a sealed room, a tank's inside), with it it is a part inside a part (the
+        // union stays solid).
+        const int holder = holders[i];
+        const bool turned = (holder < 0 ? sixVolumes[i] : sixVolumes[size_t(holder)]) < 0.0;
+        const double sixOutward = turned ? -sixVolumes[i] : sixVolumes[i];
+        if (holder >= 0) topology.hollows += sixOutward < 0.0;
+        sixV += sixOutward;
+        if (turned)
             for (int t : shells[i]) turn(mesh.triangles[t]);
     }
     topology.enclosedVolumeM3 = sixV / 6.0;
