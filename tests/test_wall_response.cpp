@@ -217,7 +217,7 @@ TEST(WallResponse, CrackingTracesThePressureImpulseCurveOfTheBeamAndOfItsSingleD
                     peakPa / sdofPeakPa, peakPa / beamPeakPa);
         EXPECT_NEAR(peakPa / beamPeakPa, 1.0, 0.2) << "td/T " << ratio;
         // One mode in its static shape carries the response of all but short pulses; those
-        // excite higher modes, which add to the base moment (the beam cracks at 0.57 of the
+        // excite higher modes, which add to the base moment (the beam cracks at 0.54 of the
         // SDOF's impulse at td = T/100).
         if (ratio >= 0.3) {
             EXPECT_NEAR(peakPa / sdofPeakPa, 1.0, 0.3) << "td/T " << ratio;
