@@ -117,96 +117,109 @@ std::pair<double, double> mohrCoulombThrough(double compressiveStrengthPa, doubl
     return {0.5 * std::sqrt(compressiveStrengthPa * tensileStrengthPa), sinPhi / std::sqrt(1.0 - sinPhi * sinPhi)};
 }
 
+// Failure overpressures (the paper's rules): Clancey (1972), "Monitoring dangerous explosions",
+// damage table as quoted widely (e.g. explosion-safety.jp "Damage from Blast (Clancey)"):
+//   glass windows, large and small, usually shattered     3.4–6.9 kPa
+//   wood panels (standard housing) fail, blow in           6.9–13.8 kPa
+//   concrete or cinder block walls, not reinforced, shatter 13.8–20.7 kPa
+//   brick panels 8–12 in thick, not reinforced, fail        48.2–55.1 kPa
+// Reinforced concrete has no entry there (see reinforcedConcretePreset). Densities: typical
+// values; concrete and reinforced concrete from EN 1991-1-1 Table A.1 (24 and 25 kN/m^3). Each
+// preset below gives the sources of what the deformable phase reads (issues 17 and 18).
+
+/// EN 572-1 (E 70 GPa, ν 0.2, characteristic bending strength 45 MPa), Gf = KIc²/E with KIc =
+/// 0.75 MPa m^0.5 (soda-lime glass, e.g. Wiederhorn 1969): 8 J/m². Glass fails by principal
+/// tension, so in pure shear at τ = ft, and Rankine's criterion linearised at no normal stress
+/// adds half the compression: c = ft, μ = 0.5.
+Material glassPreset()
+{
+    return withShear(withElasticity(calibrateMaterial("glass", 2500.0, 3.4e3, 6.9e3, "Clancey 1972: windows shatter at 3.4-6.9 kPa"), 70e9,
+                                    0.2, 45e6, 8.0, "EN 572-1 (E, strength); Gf = KIc^2/E, KIc 0.75 MPa m^0.5"),
+                     45e6, 0.5, StrengthRateLaw::None, "Rankine (principal tension) linearised: c = ft, mu 0.5");
+}
+
+/// Spruce, transversely isotropic about its grain (along z: a post): USDA Wood Handbook
+/// FPL-GTR-190 (2010) ch. 5. Along the grain E_L about 10 GPa and G_LT = 0.0625 E_L (table 5-1,
+/// Sitka spruce: G_LR/E_L 0.064, G_LT/E_L 0.061); tension along the grain 70 MPa, the modulus of
+/// rupture (table 5-3a, Sitka spruce at 12 % moisture), which the handbook names a low estimate
+/// of clear wood's tensile strength parallel to the grain; a crack across the fibres 10 kJ/m²
+/// (Ashby & Jones, Engineering Materials 1, table 13.1: wood across the grain 8-20 kJ/m²); shear
+/// across the fibres three times shear along them (Kollmann & Cote 1968, Principles of Wood
+/// Science and Technology I, ch. 7). Across the grain E_T = 0.06 E_L (table 5-1: E_T/E_L 0.043,
+/// E_R/E_L 0.078), ν 0.35 (ν_RT 0.435 and ν_TR 0.245), tension 2.5 MPa, Gf 250 J/m² (mode I,
+/// TL; Stanzl-Tschegg, Tan & Tschegg 1995, Wood Sci. Technol. 29); shear parallel to the grain
+/// 7.9 MPa (table 5-3b, Sitka spruce, 12 % moisture), no friction (the handbook gives none).
+Material woodPreset()
+{
+    constexpr double kAlongGrainPa = 10e9;
+    return withGrain(withShear(withElasticity(calibrateMaterial("wood", 500.0, 6.9e3, 13.8e3, "Clancey 1972: wood panels fail at 6.9-13.8 kPa"),
+                                              0.06 * kAlongGrainPa, 0.35, 2.5e6, 250.0,
+                                              "across the grain: Wood Handbook FPL-GTR-190 tables 5-1, 5-2, 5-3 (E_T, nu, tension); "
+                                              "Stanzl-Tschegg et al. 1995 (Gf)"),
+                               7.9e6, 0.0, StrengthRateLaw::None, "Wood Handbook table 5-3b, Sitka spruce shear parallel to grain; no friction"),
+                     GrainAxis::Z, kAlongGrainPa, 0.0625 * kAlongGrainPa, 70e6, 10e3, 3.0 * 7.9e6,
+                     "along the grain: Wood Handbook tables 5-1 (E_L, G_LT) and 5-3a (modulus of rupture as tensile strength); "
+                     "Ashby & Jones table 13.1 (Gf across the fibres); Kollmann & Cote 1968 (shear across the fibres)");
+}
+
+/// Bricks in mortar. The joints (the material's own values): E = 1000 fk with fk 5 MPa (EN
+/// 1996-1-1 3.7.2), unit–mortar bond 0.3 MPa and mode I Gf 12 J/m² (van der Pluijm's tests as
+/// quoted by Lourenco 1996, "Computational strategies for masonry structures", ch. 3: 0.3–0.9 MPa
+/// and 5–20 J/m²), shear EN 1996-1-1 table 3.4 (clay units, general-purpose mortar M10–M20)
+/// fvko = 0.3 MPa and eq. 3.5, fvk = fvko + 0.4 σd. The units: 215 × 102.5 × 65 mm (the UK work
+/// size) in 10 mm joints, running bond, cracking at 2.0 MPa with 80 J/m² (Lourenço & Rots 1997,
+/// J. Eng. Mech. 123(7), the potential cracks in the units of the TU Eindhoven shear walls).
+Material brickMasonryPreset()
+{
+    return withUnits(withShear(withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
+                                                                "Clancey 1972: unreinforced brick panels 8-12 in fail at 48.2-55.1 kPa"),
+                                              5e9, 0.2, 0.3e6, 12.0, "EN 1996-1-1 (E = 1000 fk); van der Pluijm via Lourenco 1996 (bond strength, Gf)"),
+                               0.3e6, 0.4, StrengthRateLaw::None, "EN 1996-1-1 table 3.4 and eq. 3.5 (fvko 0.3 MPa, 0.4 sigma_d)"),
+                     0.215, 0.1025, 0.065, 0.01, 2.0e6, 80.0,
+                     "215 x 102.5 x 65 mm bricks, 10 mm joints, running bond; potential cracks in units ft 2.0 MPa, Gf 80 J/m^2 "
+                     "(Lourenco & Rots 1997, TU Eindhoven shear walls)");
+}
+
+/// Concrete C30/37 with the given density and failure range: fib Model Code 2010 5.1: Eci =
+/// 21.5 GPa (fcm/10)^(1/3) = 33.6 GPa, fctm = 0.3 fck^(2/3) = 2.9 MPa, Gf = 73 fcm^0.18 =
+/// 141 J/m² (fcm = 38 MPa); Mohr–Coulomb through fcm and fctm (mohrCoulombThrough), strength
+/// rising with strain rate as MC2010 5.1.11 gives for tension. Scatter: EN 1992-1-1 table 3.1
+/// (and MC2010 5.1.5.1) put the 5 % fractile of the tensile strength at 0.7 fctm, so a normal
+/// scatter's CoV is 0.3 / 1.645 = 0.18; its correlation length is the maximum aggregate size of
+/// a common C30/37 mix, 16 mm (issue 18: "near its aggregate size"; a modelling choice, not a
+/// measured length).
+Material c30ConcretePreset(const std::string& name, double densityKgM3, double failureLowPa, double failureHighPa,
+                           const std::string& failureSource, const std::string& elasticityNote)
+{
+    const auto [cohesionPa, friction] = mohrCoulombThrough(38e6, 2.9e6);
+    return withScatter(withShear(withElasticity(calibrateMaterial(name, densityKgM3, failureLowPa, failureHighPa, failureSource), 33.6e9, 0.2,
+                                                2.9e6, 141.0, "fib Model Code 2010, C30/37: E 33.6 GPa, fctm 2.9 MPa, Gf 141 J/m^2" + elasticityNote),
+                                 cohesionPa, friction, StrengthRateLaw::FibModelCode2010,
+                                 "Mohr-Coulomb through fcm 38 MPa and fctm (Jaeger, Cook & Zimmerman 2007); rate: fib MC2010 5.1.11"),
+                       0.3 / 1.645, 0.016,
+                       "strength CoV 0.18 from EN 1992-1-1 table 3.1 (fctk,0.05 = 0.7 fctm), correlated over 16 mm (maximum aggregate size)");
+}
+
+/// Reinforced concrete: the same concrete (its steel is not modelled). Its failure range's high
+/// end is NUKEMAP's heavy-damage benchmark (A. Wellerstein, nuclearsecrecy.com/nukemap): at
+/// 20 psi = 137.9 kPa "heavily built concrete buildings are severely damaged or demolished"; its
+/// low end keeps brick's relative spread (48.2/55.1).
+Material reinforcedConcretePreset()
+{
+    return c30ConcretePreset("reinforced-concrete", 2500.0, 137.9e3 * (48.2 / 55.1), 137.9e3,
+                             "NUKEMAP 20 psi benchmark: heavily built concrete buildings severely damaged or demolished at 137.9 kPa; "
+                             "low end at brick's relative spread (120.6 kPa)",
+                             " (steel not modelled)");
+}
+
 }  // namespace
 
 const std::vector<Material>& materialPresets()
 {
-    // Failure overpressures: Clancey (1972), "Monitoring dangerous explosions", damage table as
-    // quoted widely (e.g. explosion-safety.jp "Damage from Blast (Clancey)"):
-    //   glass windows, large and small, usually shattered     3.4–6.9 kPa
-    //   wood panels (standard housing) fail, blow in           6.9–13.8 kPa
-    //   concrete or cinder block walls, not reinforced, shatter 13.8–20.7 kPa
-    //   brick panels 8–12 in thick, not reinforced, fail        48.2–55.1 kPa
-    // Reinforced concrete has no entry there. Its high end is NUKEMAP's heavy-damage benchmark
-    // (A. Wellerstein, nuclearsecrecy.com/nukemap): at 20 psi = 137.9 kPa "heavily built concrete
-    // buildings are severely damaged or demolished"; its low end keeps brick's relative spread
-    // (48.2/55.1). Densities: typical values; concrete and reinforced concrete from
-    // EN 1991-1-1 Table A.1 (24 and 25 kN/m^3).
-    // Elasticity and fracture for the deformable phase (issue 17; issue 18 refines them):
-    //   glass: EN 572-1 (E 70 GPa, nu 0.2, characteristic bending strength 45 MPa), Gf = KIc^2/E
-    //     with KIc = 0.75 MPa m^0.5 (soda-lime glass, e.g. Wiederhorn 1969): 8 J/m^2;
-    //   wood (spruce; issue 18: transversely isotropic about its grain, along z by default, a
-    //     post): USDA Wood Handbook FPL-GTR-190 (2010) ch. 5. Along the grain E_L about 10 GPa
-    //     and G_LT = 0.0625 E_L (table 5-1, Sitka spruce: G_LR/E_L 0.064, G_LT/E_L 0.061);
-    //     tension along the grain 70 MPa, the modulus of rupture (table 5-3a, Sitka spruce at
-    //     12 % moisture), which the handbook names a low estimate of clear wood's tensile
-    //     strength parallel to the grain; a crack across the fibres 10 kJ/m^2 (Ashby & Jones,
-    //     Engineering Materials 1, table 13.1: wood across the grain 8-20 kJ/m^2); shear across
-    //     the fibres three times shear along them (Kollmann & Cote 1968, Principles of Wood
-    //     Science and Technology I, ch. 7). Across the grain E_T = 0.06 E_L (table 5-1: E_T/E_L
-    //     0.043, E_R/E_L 0.078), nu 0.35 (nu_RT 0.435 and nu_TR 0.245), tension 2.5 MPa, Gf
-    //     250 J/m^2 (mode I, TL; Stanzl-Tschegg, Tan & Tschegg 1995, Wood Sci. Technol. 29);
-    //   brick masonry, homogenised on its joints: E = 1000 fk with fk 5 MPa (EN 1996-1-1 3.7.2),
-    //     unit–mortar bond 0.3 MPa and mode I Gf 12 J/m^2 (van der Pluijm's tests as quoted by
-    //     Lourenco 1996, "Computational strategies for masonry structures", ch. 3: 0.3–0.9 MPa
-    //     and 5–20 J/m^2);
-    //   concrete C30/37: fib Model Code 2010 5.1: Eci = 21.5 GPa (fcm/10)^(1/3) = 33.6 GPa,
-    //     fctm = 0.3 fck^(2/3) = 2.9 MPa, Gf = 73 fcm^0.18 = 141 J/m^2 (fcm = 38 MPa); reinforced
-    //     concrete the same concrete (its steel is not modelled).
-    //   Shear (Mohr–Coulomb with the tension cut-off above):
-    //   glass fails by principal tension, so in pure shear at τ = ft, and Rankine's criterion
-    //     linearised at no normal stress adds half the compression: c = ft, μ = 0.5;
-    //   wood: shear parallel to the grain 7.9 MPa (Wood Handbook table 5-3b, Sitka spruce, 12 %
-    //     moisture); the handbook gives no friction, none assumed (μ = 0);
-    //   brick masonry: EN 1996-1-1 table 3.4 (clay units, general-purpose mortar M10–M20)
-    //     fvko = 0.3 MPa and eq. 3.5, fvk = fvko + 0.4 σd;
-    //   Units (issue 18): brick masonry is bricks (215 × 102.5 × 65 mm, the UK work size) in
-    //     10 mm joints, running bond; the strengths above are the joints'; the bricks crack at
-    //     2.0 MPa with 80 J/m^2 (Lourenço & Rots 1997, J. Eng. Mech. 123(7), the potential
-    //     cracks in the units of the TU Eindhoven shear walls).
-    //   concrete: Mohr–Coulomb through fcm = 38 MPa and fctm (mohrCoulombThrough), strength
-    //     rising with strain rate as fib Model Code 2010 5.1.11 gives for tension.
-    const std::string fibC30 = "fib Model Code 2010, C30/37: E 33.6 GPa, fctm 2.9 MPa, Gf 141 J/m^2";
-    const auto [concreteCohesionPa, concreteFriction] = mohrCoulombThrough(38e6, 2.9e6);
-    const std::string concreteShear = "Mohr-Coulomb through fcm 38 MPa and fctm (Jaeger, Cook & Zimmerman 2007); rate: fib MC2010 5.1.11";
-    //   concrete's scatter: EN 1992-1-1 table 3.1 (and fib MC2010 5.1.5.1) put the 5 % fractile of
-    //     the tensile strength at 0.7 fctm, so a normal scatter's CoV is 0.3 / 1.645 = 0.18; its
-    //     correlation length is the maximum aggregate size of a common C30/37 mix, 16 mm (issue
-    //     18: "near its aggregate size"; a modelling choice, not a measured length).
-    constexpr double kConcreteStrengthCov = 0.3 / 1.645, kConcreteAggregateM = 0.016;
-    const std::string concreteScatter = "strength CoV 0.18 from EN 1992-1-1 table 3.1 (fctk,0.05 = 0.7 fctm), correlated over 16 mm "
-                                        "(maximum aggregate size)";
-    constexpr double kWoodAlongGrainPa = 10e9;
     static const std::vector<Material> presets = {
-        withShear(withElasticity(calibrateMaterial("glass", 2500.0, 3.4e3, 6.9e3, "Clancey 1972: windows shatter at 3.4-6.9 kPa"), 70e9,
-                                 0.2, 45e6, 8.0, "EN 572-1 (E, strength); Gf = KIc^2/E, KIc 0.75 MPa m^0.5"),
-                  45e6, 0.5, StrengthRateLaw::None, "Rankine (principal tension) linearised: c = ft, mu 0.5"),
-        withGrain(withShear(withElasticity(calibrateMaterial("wood", 500.0, 6.9e3, 13.8e3, "Clancey 1972: wood panels fail at 6.9-13.8 kPa"),
-                                           0.06 * kWoodAlongGrainPa, 0.35, 2.5e6, 250.0,
-                                           "across the grain: Wood Handbook FPL-GTR-190 tables 5-1, 5-2, 5-3 (E_T, nu, tension); "
-                                           "Stanzl-Tschegg et al. 1995 (Gf)"),
-                            7.9e6, 0.0, StrengthRateLaw::None, "Wood Handbook table 5-3b, Sitka spruce shear parallel to grain; no friction"),
-                  GrainAxis::Z, kWoodAlongGrainPa, 0.0625 * kWoodAlongGrainPa, 70e6, 10e3, 3.0 * 7.9e6,
-                  "along the grain: Wood Handbook tables 5-1 (E_L, G_LT) and 5-3a (modulus of rupture as tensile strength); "
-                  "Ashby & Jones table 13.1 (Gf across the fibres); Kollmann & Cote 1968 (shear across the fibres)"),
-        withUnits(withShear(withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
-                                                             "Clancey 1972: unreinforced brick panels 8-12 in fail at 48.2-55.1 kPa"),
-                                           5e9, 0.2, 0.3e6, 12.0, "EN 1996-1-1 (E = 1000 fk); van der Pluijm via Lourenco 1996 (bond strength, Gf)"),
-                            0.3e6, 0.4, StrengthRateLaw::None, "EN 1996-1-1 table 3.4 and eq. 3.5 (fvko 0.3 MPa, 0.4 sigma_d)"),
-                  0.215, 0.1025, 0.065, 0.01, 2.0e6, 80.0,
-                  "215 x 102.5 x 65 mm bricks, 10 mm joints, running bond; potential cracks in units ft 2.0 MPa, Gf 80 J/m^2 "
-                  "(Lourenco & Rots 1997, TU Eindhoven shear walls)"),
-        withScatter(withShear(withElasticity(calibrateMaterial("concrete", 2400.0, 13.8e3, 20.7e3,
-                                                               "Clancey 1972: unreinforced concrete/cinder block walls shatter at 13.8-20.7 kPa"),
-                                             33.6e9, 0.2, 2.9e6, 141.0, fibC30),
-                              concreteCohesionPa, concreteFriction, StrengthRateLaw::FibModelCode2010, concreteShear),
-                    kConcreteStrengthCov, kConcreteAggregateM, concreteScatter),
-        withScatter(withShear(withElasticity(calibrateMaterial("reinforced-concrete", 2500.0, 137.9e3 * (48.2 / 55.1), 137.9e3,
-                                                               "NUKEMAP 20 psi benchmark: heavily built concrete buildings severely damaged or "
-                                                               "demolished at 137.9 kPa; low end at brick's relative spread (120.6 kPa)"),
-                                             33.6e9, 0.2, 2.9e6, 141.0, fibC30 + " (steel not modelled)"),
-                              concreteCohesionPa, concreteFriction, StrengthRateLaw::FibModelCode2010, concreteShear),
-                    kConcreteStrengthCov, kConcreteAggregateM, concreteScatter),
+        glassPreset(), woodPreset(), brickMasonryPreset(),
+        c30ConcretePreset("concrete", 2400.0, 13.8e3, 20.7e3, "Clancey 1972: unreinforced concrete/cinder block walls shatter at 13.8-20.7 kPa", ""),
+        reinforcedConcretePreset(),
     };
     return presets;
 }
