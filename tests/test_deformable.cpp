@@ -189,7 +189,7 @@ TEST(Deformable, AnchorsHoldTheMaterialsTensileStrengthAndThenLetGo)
         if (it.getCoord().z() == 0) it.setValue(*it | kAnchorBit);
     refreshDerivedData(column);
     column.motion.positionM = Eigen::Vector3d(0.0, 0.0, 0.125);  // the base's faces on z = 0
-    Lattice lattice = Lattice::fromBody(column, brick, LatticeGround{true, Eigen::Vector3d::UnitZ(), 0.0});
+    Lattice lattice = Lattice::fromBody(column, brick, LatticeSupports{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}});
     ASSERT_EQ(lattice.particleCount() - lattice.voxelParticleCount, 16u) << "one ground point per anchored voxel";
     const double strengthN = brick.tensileStrengthPa * 0.1 * 0.1;
     const double columnMassKg = lattice.particleMassKg * double(lattice.voxelParticleCount);

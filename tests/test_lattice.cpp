@@ -125,6 +125,56 @@ TEST(Lattice, OneAndTwoThreadsGiveTheSameBits)
     for (size_t p = 0; p < one.size(); ++p) ASSERT_EQ(one[p], two[p]) << p;
 }
 
+TEST(Lattice, ABeamHeldByTwoBoxesBendsAtTheClampedClampedFrequency)
+{
+    // A beam 120 voxels long, 8 thick and 2 wide, its end layers anchored against two boxes (a
+    // collider at each end): each end voxel is bonded to a held point in the box, a voxel beyond
+    // its end face, so the beam is clamped at those points' centres, a span of 121 voxels.
+    // Euler–Bernoulli, clamped–clamped: f1 = 4.7300² / (2π L²) √(EI/(ρA)) (Clough & Penzien,
+    // table 18-1). Timoshenko's shear correction at this slenderness is about −1.6 %.
+    const int length = 120, thick = 8;
+    Body body = test::boxBody(length, thick, 2, kH, kConcrete.densityKgM3);
+    for (auto it = body.grid->beginValueOn(); it; ++it)
+        if (it.getCoord().x() == 0 || it.getCoord().x() == length - 1) it.setValue(*it | kAnchorBit);
+    const double halfLengthM = 0.5 * length * kH;
+    LatticeSupports supports;
+    for (const double side : {-1.0, 1.0})
+        supports.boxes.push_back({Eigen::Vector3d(side * (halfLengthM + 0.5), 0, 0), Eigen::Vector3d(0.5, 1, 1), Eigen::Quaterniond::Identity()});
+    Lattice lattice = Lattice::fromBody(body, kConcrete, supports);
+    ASSERT_EQ(lattice.particleCount() - lattice.voxelParticleCount, size_t(2 * thick * 2)) << "one held point per anchored voxel";
+    for (size_t p = lattice.voxelParticleCount; p < lattice.particleCount(); ++p) {
+        const int x = lattice.voxel[p].x();
+        ASSERT_TRUE(x == -1 || x == length) << "a held point beyond an end face, not a side";
+    }
+    lattice.bulkViscosity = 0.0;
+    const double spanM = (length + 1) * kH, t = thick * kH;
+    const double expected = 4.7300 * 4.7300 / (2 * M_PI * spanM * spanM) * std::sqrt(kConcrete.youngsModulusPa * t * t / 12 / kConcrete.densityKgM3);
+    // The first mode's shape as velocities in y, x from the left held point.
+    const double beta = 4.7300 / spanM, sigma = 0.982502;
+    const double x0 = -halfLengthM - 0.5 * kH;
+    size_t middle = 0;
+    for (size_t p = 0; p < lattice.voxelParticleCount; ++p) {
+        const double x = beta * (lattice.positionM[p].x() - x0);
+        const double shape = std::cosh(x) - std::cos(x) - sigma * (std::sinh(x) - std::sin(x));
+        lattice.velocityMS[p] = Eigen::Vector3d(0, 0.01 * shape / 1.6, 0);
+        if (lattice.voxel[p] == openvdb::Coord(length / 2, thick / 2, 0)) middle = p;
+    }
+    const double dt = lattice.stableTimeStepS(), middleRestY = lattice.positionM[middle].y();
+    std::vector<double> upCrossings;
+    double previous = 0.0;
+    for (int i = 0; i < int(2.2 / expected / dt); ++i) {
+        lattice.step(dt);
+        const double y = lattice.positionM[middle].y() - middleRestY;
+        if (previous < 0.0 && y >= 0.0) upCrossings.push_back((i + previous / (previous - y)) * dt);
+        previous = y;
+    }
+    ASSERT_GE(upCrossings.size(), 2u);
+    const double frequency = 1.0 / (upCrossings[1] - upCrossings[0]);
+    std::printf("clamped-clamped beam: f1 = %.2f Hz measured, %.2f Hz Euler-Bernoulli (%+.2f %%)\n", frequency, expected,
+                100 * (frequency / expected - 1));
+    EXPECT_NEAR(frequency, expected, 0.05 * expected);
+}
+
 TEST(Lattice, LongitudinalPulseTravelsAtTheBarSpeed)
 {
     // A half-sine force pulse on one end of a 160 × 4 × 4 bar, 30 voxels long (far above the
@@ -688,8 +738,8 @@ TEST(Lattice, StrengthScatterHasTheMaterialsMeanCovAndCorrelation)
     const Material concrete = findMaterialPreset("concrete");
     const double h = 0.005;
     const Body body = test::boxBody(20, 20, 20, h, concrete.densityKgM3);
-    const Lattice a = Lattice::fromBody(body, concrete, LatticeGround(), 3), again = Lattice::fromBody(body, concrete, LatticeGround(), 3),
-                  other = Lattice::fromBody(body, concrete, LatticeGround(), 4);
+    const Lattice a = Lattice::fromBody(body, concrete, LatticeSupports(), 3), again = Lattice::fromBody(body, concrete, LatticeSupports(), 3),
+                  other = Lattice::fromBody(body, concrete, LatticeSupports(), 4);
     double mean = 0, meanSquare = 0;
     size_t same = 0, differ = 0;
     for (size_t b = 0; b < a.bondCount(); ++b) {

@@ -496,6 +496,30 @@ TEST(Scene, BurstFollowsTheChargesHeightAboveTheGround)
     EXPECT_NEAR(surfaceBurstHeightM(20.0), 2 * std::cbrt(3 * 20.0 / (4 * M_PI * 1600)), 1e-12);
 }
 
+TEST(Scene, APaneAnchoredToItsSupportsIsHeldAlongTheEdgesThatTouchThem)
+{
+    // A 1 × 0.1 × 1 m pane 2 m above the ground between two colliders at its left and right
+    // edges: with `supports` exactly the voxels whose faces touch a collider are anchored (two
+    // columns of 10 × 1); nothing touches the ground. Moved away, it is an error naming the object.
+    auto pane = [](double gapM) {
+        return R"({"voxel_size_m": 0.1, "objects": [{"name": "pane", "primitive": {"shape": "box", "size_m": [1, 0.1, 1]},
+                    "position_m": [0, 0, 2.5], "anchor": "supports"}],
+                   "colliders": [{"position_m": [)" + std::to_string(-0.55 - gapM) + R"(, 0, 2.5], "size_m": [0.1, 0.3, 1.2]},
+                                 {"position_m": [)" + std::to_string(0.55 + gapM) + R"(, 0, 2.5], "size_m": [0.1, 0.3, 1.2]}]})";
+    };
+    const Simulation sim(parseScene(pane(0.02), "pane.json", "."));
+    const Body& body = sim.state().bodies.at(0);
+    EXPECT_TRUE(body.anchored);
+    int anchored = 0;
+    for (auto it = body.grid->cbeginValueOn(); it; ++it) {
+        if (!(*it & kAnchorBit)) continue;
+        ++anchored;
+        EXPECT_TRUE(it.getCoord().x() == body.indexBounds.min().x() || it.getCoord().x() == body.indexBounds.max().x()) << it.getCoord();
+    }
+    EXPECT_EQ(anchored, 20);
+    EXPECT_NE(errorOf(pane(0.05)).find("objects[0].anchor: no voxel of 'pane' touches the ground or a collider"), std::string::npos);
+}
+
 // Issue 21: a scene too large for max_voxels or for the machine is refused before anything is
 // allocated, naming the figure and what to change.
 TEST(Scene, ObjectsBeyondTheVoxelBudgetOrTheMemoryAreRefusedBeforeVoxelising)

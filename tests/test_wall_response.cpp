@@ -159,7 +159,7 @@ LatticeResponse loadWall(const WallStrip& wall, double peakPa, double durationS,
         if (it.getCoord().z() == 0) it.setValue(*it | kAnchorBit);
     refreshDerivedData(body);
     body.motion.positionM = Eigen::Vector3d(0.0, 0.0, 0.5 * wall.heightM);  // the base's faces on z = 0
-    Lattice lattice = Lattice::fromBody(body, wall.material, LatticeGround{true, Eigen::Vector3d::UnitZ(), 0.0});
+    Lattice lattice = Lattice::fromBody(body, wall.material, LatticeSupports{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}});
     // The pulse's impulse up to t, so each step takes exactly the pulse's share.
     auto impulsePerPa = [&](double t) {
         const double s = std::min(t, durationS);

@@ -56,18 +56,18 @@ double rigidKineticEnergyJ(const Lattice& lattice, const std::vector<uint32_t>& 
 }  // namespace
 
 DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
-                                    const LatticeGround& ground, double timeS)
+                                    const LatticeSupports& supports, double timeS)
 {
-    DeformableBody d{body.id, Lattice::fromBody(body, material, ground, settings.seed), timeS, timeS};
+    DeformableBody d{body.id, Lattice::fromBody(body, material, supports, settings.seed), timeS, timeS};
     d.lattice.bulkViscosity = settings.bulkViscosity;
     d.lattice.damageLaw = settings.damageLaw;
     return d;
 }
 
 void restoreDeformable(DeformableBody& saved, const Body& body, const Material& material, const LatticeSettings& settings,
-                       const LatticeGround& ground)
+                       const LatticeSupports& supports)
 {
-    DeformableBody fresh = enterDeformablePhase(body, material, settings, ground, saved.enteredS);
+    DeformableBody fresh = enterDeformablePhase(body, material, settings, supports, saved.enteredS);
     fresh.lastLoadedS = saved.lastLoadedS;
     Lattice& to = fresh.lattice;
     Lattice& from = saved.lattice;
@@ -185,9 +185,9 @@ double elasticCapacityPerVoxelJ(const Material& material, double voxelSizeM)
 }
 
 DeformableBody continueDeformable(const Body& part, const DeformableBody& whole, const Material& material, const LatticeSettings& settings,
-                                  const LatticeGround& ground)
+                                  const LatticeSupports& supports)
 {
-    DeformableBody d = enterDeformablePhase(part, material, settings, ground, whole.enteredS);
+    DeformableBody d = enterDeformablePhase(part, material, settings, supports, whole.enteredS);
     d.lastLoadedS = whole.lastLoadedS;
     const Lattice& from = whole.lattice;
     Lattice& to = d.lattice;
@@ -217,9 +217,9 @@ HandOff handOff(const Body& body, const Lattice& lattice)
     for (size_t b = 0; b < lattice.bondCount(); ++b) {
         if (lattice.bondDamage(b) < 1.0) continue;
         const LatticeBond& bond = lattice.bonds[b];
-        const uint32_t groundPoint = std::max(bond.low, bond.high);
-        if (groundPoint >= lattice.voxelParticleCount) {
-            // An anchor: its voxel lets go of the ground.
+        const uint32_t supportPoint = std::max(bond.low, bond.high);
+        if (supportPoint >= lattice.voxelParticleCount) {
+            // An anchor: its voxel lets go of its support.
             const openvdb::Coord& v = lattice.voxel[std::min(bond.low, bond.high)];
             links.setValueOn(v, links.getValue(v) & ~kAnchorBit);
             ++result.brokenAnchors;
@@ -261,7 +261,7 @@ Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tole
     departure.timedOut = !allQuiet;
     departure.handOff = handOff(body, lattice);
     for (Body& part : departure.handOff.parts) {
-        // A part is a piece, or pieces joined through the ground: its first voxel says which.
+        // A part is a piece, or pieces joined through a support: its first voxel says which.
         const uint32_t piece = pieces.pieceOf[size_t(lattice.particleAt(part.grid->cbeginValueOn().getCoord()))];
         part.motion.deformable = !all && !quiet[piece];
     }

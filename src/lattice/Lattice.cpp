@@ -132,7 +132,7 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
     return k;
 }
 
-Lattice Lattice::fromBody(const Body& body, const Material& material, const LatticeGround& ground, uint64_t strengthSeed)
+Lattice Lattice::fromBody(const Body& body, const Material& material, const LatticeSupports& supports, uint64_t strengthSeed)
 {
     Lattice lattice;
     const double h = body.voxelSizeM;
@@ -140,10 +140,10 @@ Lattice Lattice::fromBody(const Body& body, const Material& material, const Latt
     lattice.particleMassKg = material.densityKgM3 * h * h * h;
     lattice.particleInertiaKgM2 = lattice.particleMassKg * h * h / 6.0;
     lattice.stiffness = calibrateLattice(material, h);
-    lattice.ground = ground;
+    lattice.ground = supports.ground;
     lattice.addVoxelParticles(body);
     lattice.addLinkBonds(body);
-    if (ground.enabled) lattice.addGroundBonds(body);
+    lattice.addSupportBonds(body, supports);
     if (hasUnits(material)) lattice.classifyUnitBonds(material);
     if (hasGrain(material)) lattice.classifyGrainBonds(material);
     lattice.bondHistory.assign(lattice.bonds.size(), BondHistory());
@@ -213,27 +213,59 @@ void Lattice::addLinkBonds(const Body& body)
     }
 }
 
-void Lattice::addGroundBonds(const Body& body)
+void Lattice::addSupportBonds(const Body& body, const LatticeSupports& supports)
 {
     // The face of the body's voxels that looks most directly into the ground.
-    const Eigen::Vector3d down = body.motion.orientation.inverse() * -ground.normal;
-    int axis = 0;
-    down.cwiseAbs().maxCoeff(&axis);
-    const int face = 2 * axis + (down[axis] > 0.0 ? 1 : 0);
-    const Eigen::Vector3d step = body.motion.orientation * (voxelSizeM * faceNormal(face));
+    int groundFace = -1;
+    if (supports.ground.enabled) {
+        const Eigen::Vector3d down = body.motion.orientation.inverse() * -supports.ground.normal;
+        int axis = 0;
+        down.cwiseAbs().maxCoeff(&axis);
+        groundFace = 2 * axis + (down[axis] > 0.0 ? 1 : 0);
+    }
     mGroundBond.assign(voxelParticleCount, -1);
     for (uint32_t p = 0; p < voxelParticleCount; ++p) {
-        const openvdb::Coord below = voxel[p] + faceOffset(face);
-        if (!held[p] || body.grid->tree().isValueOn(below)) continue;
-        // The ground point: a held particle a voxel below, as if the ground were more of the
+        if (!held[p]) continue;
+        const int face = supportedFace(body, p, groundFace, supports.boxes);
+        if (face < 0) continue;
+        // The support point: a held particle a voxel beyond, as if the support were more of the
         // material, joined by a bond of the material's own stiffness and strength.
-        const uint32_t groundPoint = uint32_t(particleCount());
-        addParticle(below, positionM[p] + step, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), body.motion.orientation, true);
+        const int axis = faceAxis(face);
+        const uint32_t supportPoint = uint32_t(particleCount());
+        addParticle(voxel[p] + faceOffset(face), positionM[p] + body.motion.orientation * (voxelSizeM * faceNormal(face)),
+                    Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), body.motion.orientation, true);
         held[p] = 0;
-        if (face & 1) addBond(p, groundPoint, axis);
-        else addBond(groundPoint, p, axis);
-        mGroundBond[p] = int32_t(bonds.size() - 1);
+        if (face & 1) addBond(p, supportPoint, axis);
+        else addBond(supportPoint, p, axis);
+        if (face == groundFace) mGroundBond[p] = int32_t(bonds.size() - 1);
     }
+}
+
+int Lattice::supportedFace(const Body& body, uint32_t p, int groundFace, const std::vector<ObstacleBox>& boxes) const
+{
+    const auto isFree = [&](int face) { return !body.grid->tree().isValueOn(voxel[p] + faceOffset(face)); };
+    if (groundFace >= 0) {
+        // Anchors were set within a quarter voxel of the ground (Simulation); half a voxel here
+        // only tells the ground's anchors from the boxes'.
+        const Eigen::Vector3d& n = ground.normal;
+        const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
+        const double support = 0.5 * voxelSizeM * (std::abs(n.dot(rot.col(0))) + std::abs(n.dot(rot.col(1))) + std::abs(n.dot(rot.col(2))));
+        if (n.dot(positionM[p]) - support - ground.offsetM <= 0.5 * voxelSizeM) return isFree(groundFace) ? groundFace : -1;
+    }
+    int best = -1;
+    double deepestM = 0.0;
+    for (int face = 0; face < 6; ++face) {
+        if (!isFree(face)) continue;
+        const Eigen::Vector3d beyondM = positionM[p] + body.motion.orientation * (voxelSizeM * faceNormal(face));
+        for (const ObstacleBox& box : boxes) {
+            const double depthM = depthInsideM(box, beyondM);
+            if (depthM >= deepestM) {
+                deepestM = depthM;
+                best = face;
+            }
+        }
+    }
+    return best;
 }
 
 void Lattice::classifyUnitBonds(const Material& material)

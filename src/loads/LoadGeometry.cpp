@@ -15,6 +15,14 @@ std::array<Eigen::Vector3d, 8> cornersOf(const ObstacleBox& box)
     return corners;
 }
 
+double depthInsideM(const ObstacleBox& box, const Eigen::Vector3d& pointM)
+{
+    // Per axis, how far the point lies beyond the face on its side (negative: inside).
+    const Eigen::Vector3d beyond = (box.orientation.inverse() * (pointM - box.centreM)).cwiseAbs() - box.halfExtentM;
+    const double outsideM = beyond.cwiseMax(0.0).norm();
+    return outsideM > 0.0 ? -outsideM : -beyond.maxCoeff();
+}
+
 bool segmentMeetsBox(const Eigen::Vector3d& aM, const Eigen::Vector3d& bM, const ObstacleBox& box)
 {
     const Eigen::Matrix3d toBox = box.orientation.toRotationMatrix().transpose();

@@ -17,6 +17,8 @@ namespace spall {
 
 namespace {
 
+ObstacleBox obstacleOf(const StaticBox& box) { return {box.centreM, box.halfExtentM, box.orientation}; }
+
 /// Sets the anchor bit of voxels whose lowest point lies within a quarter voxel of the ground.
 void anchorToGround(Body& body, const GroundPlane& ground)
 {
@@ -27,6 +29,17 @@ void anchorToGround(Body& body, const GroundPlane& ground)
         const double lowest = n.dot(body.voxelWorldM(it.getCoord())) - support - ground.offsetM;
         if (lowest <= 0.25 * body.voxelSizeM) it.setValue(*it | kAnchorBit);
     }
+}
+
+/// Sets the anchor bit of voxels with a face within a quarter voxel of a collider: the centre of
+/// the cell beyond the face lies at least a quarter voxel inside the box.
+void anchorToColliders(Body& body, const std::vector<StaticBox>& colliders)
+{
+    for (auto it = body.grid->beginValueOn(); it; ++it)
+        for (int face = 0; face < 6; ++face)
+            for (const StaticBox& box : colliders)
+                if (depthInsideM(obstacleOf(box), body.voxelWorldM(it.getCoord() + faceOffset(face))) >= 0.25 * body.voxelSizeM)
+                    it.setValue(*it | kAnchorBit);
 }
 
 /// Refuses, before anything is allocated, a scene whose objects' bounding boxes hold more voxels
@@ -134,12 +147,14 @@ Body Simulation::placeObject(size_t index, const VoxeliseResult& vox)
     // world = t + Q (index h + offset): the centre of mass goes to t + Q (c + offset).
     body.motion.orientation = rotationFromDegrees(spec.rotationDeg);
     body.motion.positionM = spec.positionM + body.motion.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
-    if (spec.anchor == AnchorMode::Ground) {
-        anchorToGround(body, mScene.world.ground);
+    if (spec.anchor != AnchorMode::None) {
+        if (spec.anchor == AnchorMode::Ground || mScene.world.ground.enabled) anchorToGround(body, mScene.world.ground);
+        if (spec.anchor == AnchorMode::Supports) anchorToColliders(body, mScene.world.colliders);
         refreshDerivedData(body);
         body.motion.positionM = spec.positionM + body.motion.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
         if (!body.anchored)
-            throw InputError(mScene.sourceName + ": objects[" + std::to_string(index) + "].anchor: no voxel of '" + spec.name + "' touches the ground");
+            throw InputError(mScene.sourceName + ": objects[" + std::to_string(index) + "].anchor: no voxel of '" + spec.name + "' touches the ground" +
+                             (spec.anchor == AnchorMode::Supports ? " or a collider" : ""));
     }
     refuseChargesInside(body, spec.name, mScene);
     return body;
@@ -167,14 +182,16 @@ Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene
     for (DeformableBody& d : mState.deformable) {
         const auto body = std::find_if(mState.bodies.begin(), mState.bodies.end(), [&](const Body& b) { return b.id == d.bodyId; });
         if (body == mState.bodies.end()) throw InputError("saved state: deformable body " + std::to_string(d.bodyId) + " is not among the bodies");
-        restoreDeformable(d, *body, mScene.materials[body->materialIndex], mScene.lattice, latticeGround());
+        restoreDeformable(d, *body, mScene.materials[body->materialIndex], mScene.lattice, latticeSupports());
     }
 }
 
-LatticeGround Simulation::latticeGround() const
+LatticeSupports Simulation::latticeSupports() const
 {
     const GroundPlane& g = mScene.world.ground;
-    return {g.enabled, g.normal.normalized(), g.offsetM};
+    LatticeSupports supports{{g.enabled, g.normal.normalized(), g.offsetM}, {}};
+    for (const StaticBox& box : mScene.world.colliders) supports.boxes.push_back(obstacleOf(box));
+    return supports;
 }
 
 StepStats Simulation::takeStepStats()
@@ -263,7 +280,7 @@ void Simulation::step(double targetS)
     enterDeformablePhase(windows);
 
     LoadGeometry geometry{{mScene.world.ground.enabled, mScene.world.ground.normal.normalized(), mScene.world.ground.offsetM}, {}};
-    for (const StaticBox& box : mScene.world.colliders) geometry.obstacles.push_back({box.centreM, box.halfExtentM, box.orientation});
+    for (const StaticBox& box : mScene.world.colliders) geometry.obstacles.push_back(obstacleOf(box));
     const BlastLoads blast(*mField, windows, mScene.loads, geometry);
     const std::vector<char> loaded = blast.loadedBodies(mState.bodies);
     wakeLoadedBodies(mState.bodies, loaded);
@@ -384,7 +401,7 @@ void Simulation::enterDeformablePhase(const std::vector<OpenWindow>& windows)
     for (Body& body : mState.bodies) {
         if (body.motion.deformable || (body.linkCount == 0 && !body.anchored) || !bodyInWindows(body, *mField, windows)) continue;
         mState.deformable.push_back(
-            spall::enterDeformablePhase(body, mScene.materials[body.materialIndex], mScene.lattice, latticeGround(), mState.timeS));
+            spall::enterDeformablePhase(body, mScene.materials[body.materialIndex], mScene.lattice, latticeSupports(), mState.timeS));
         body.motion.deformable = true;
         body.motion.asleep = false;
         body.motion.restTimeS = 0.0;
@@ -449,7 +466,7 @@ void Simulation::continueVibratingParts(const std::vector<DeformableBody>& leavi
     for (const Body& body : mState.bodies) {
         if (!body.motion.deformable || !leftBy.count(body.parentId)) continue;
         mState.deformable.push_back(continueDeformable(body, *leftBy.at(body.parentId), mScene.materials[body.materialIndex], mScene.lattice,
-                                                       latticeGround()));
+                                                       latticeSupports()));
         mState.deformable.back().bodyId = body.id;
     }
 }

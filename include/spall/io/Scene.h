@@ -19,10 +19,13 @@
 
 namespace spall {
 
-enum class AnchorMode { None, Ground };
+/// What an object's voxels are bonded to: nothing, the ground, or the ground and the colliders
+/// (a pane in its frame, a wall under a floor).
+enum class AnchorMode { None, Ground, Supports };
 template <>
 struct EnumNames<AnchorMode> {
-    static constexpr std::pair<AnchorMode, const char*> kNames[] = {{AnchorMode::None, "none"}, {AnchorMode::Ground, "ground"}};
+    static constexpr std::pair<AnchorMode, const char*> kNames[] = {
+        {AnchorMode::None, "none"}, {AnchorMode::Ground, "ground"}, {AnchorMode::Supports, "supports"}};
 };
 
 struct ObjectSpec {

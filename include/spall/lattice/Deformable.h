@@ -22,12 +22,12 @@ struct DeformableBody {
 
 /// The lattice of a body entering the phase, moving with the body.
 DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
-                                    const LatticeGround& ground, double timeS);
+                                    const LatticeSupports& supports, double timeS);
 
 /// Rebuilds a saved lattice (a checkpoint holds only its particles' state, the bond forces velocity
 /// Verlet carries, and its bonds' stretch and strength) from its body; throws InputError when the saved arrays do not fit the body.
 void restoreDeformable(DeformableBody& saved, const Body& body, const Material& material, const LatticeSettings& settings,
-                       const LatticeGround& ground);
+                       const LatticeSupports& supports);
 
 /// Each particle's external force for the next step: the mean force on each of the body's exposed
 /// faces (body.exposedFaces order, from the loads phase; empty when nothing loads it) on the
@@ -51,11 +51,11 @@ void followLattice(Body& body, const Lattice& lattice);
 
 /// A lattice's particles in pieces held together by bonds that have not broken (numbered by their
 /// lowest particle), each with its vibration: the strain energy of its bonds and particles plus
-/// its kinetic energy about its rigid motion, or all of it for a piece the ground holds.
+/// its kinetic energy about its rigid motion, or all of it for a piece a support holds.
 struct LatticePieces {
     std::vector<uint32_t> pieceOf;                  ///< per particle
     std::vector<std::vector<uint32_t>> particles;   ///< per piece
-    std::vector<char> held;                         ///< per piece: bonded to the ground
+    std::vector<char> held;                         ///< per piece: bonded to a support
     std::vector<double> vibrationJ;                 ///< per piece (unit: J)
     std::vector<int64_t> voxels;                    ///< per piece: its particles that are voxels
 };
@@ -71,16 +71,16 @@ double elasticCapacityPerVoxelJ(const Material& material, double voxelSizeM);
 /// A part of a body that left the phase (handOff) carrying on in it: a lattice of the part whose
 /// particles and bonds take their state from the body's lattice.
 DeformableBody continueDeformable(const Body& part, const DeformableBody& whole, const Material& material, const LatticeSettings& settings,
-                                  const LatticeGround& ground);
+                                  const LatticeSupports& supports);
 
 /// The body back as rigid bodies: each bond that broke breaks its link (the frames' fracture
-/// surface), each ground bond that broke clears its voxel's anchor bit, and each connected part
+/// surface), each support bond that broke clears its voxel's anchor bit, and each connected part
 /// gets its particles' momenta and best-fit pose; anchored parts stay where they are. Part ids
 /// are left to the caller; with one part, it is the body.
 struct HandOff {
     std::vector<Body> parts;
     int64_t brokenBonds = 0;
-    int64_t brokenAnchors = 0;  ///< bonds to the ground that broke
+    int64_t brokenAnchors = 0;  ///< bonds to supports (the ground, a box) that broke
 };
 HandOff handOff(const Body& body, const Lattice& lattice);
 

@@ -12,6 +12,7 @@
 
 #include <spall/fracture/Material.h>
 #include <spall/lattice/Settings.h>
+#include <spall/loads/LoadGeometry.h>
 #include <spall/voxel/Body.h>
 
 #include <Eigen/Core>
@@ -109,22 +110,31 @@ struct LatticeGround {
     double offsetM = 0.0;
 };
 
+/// What a body's anchored voxels are bonded to: the ground, and static boxes (the scene's
+/// colliders: a window's frame, the floor over a wall).
+struct LatticeSupports {
+    LatticeGround ground;
+    std::vector<ObstacleBox> boxes;
+};
+
 /// Particles (one per voxel, in the grid's leaf order) and bonds (one per intact link) as flat
 /// arrays. The caller sets externalForceN before a step (it acts through the step); step()
 /// integrates by velocity Verlet, symplectic, so with no damping the energy oscillates but does
 /// not drift. Held particles (the body's anchored voxels) stay where they are.
 class Lattice {
 public:
-    /// A body's voxels at their world places, moving with the body's rigid velocity field. With
-    /// a ground, each anchored voxel is bonded to a held ground point a voxel below it (across
-    /// the face that looks most directly into the ground) by a bond like the others, so a body
-    /// can break at its base; without one, anchored voxels are held.
+    /// A body's voxels at their world places, moving with the body's rigid velocity field. Each
+    /// anchored voxel is bonded to a held support point a voxel beyond it, by a bond like the
+    /// others, so a body can break where it is held: on the ground (within a quarter voxel of
+    /// it), across the face that looks most directly into the ground; else across its free face
+    /// whose neighbouring cell lies deepest inside a support box. An anchored voxel next to
+    /// neither is held.
     /// `strengthSeed` draws the material's strength scatter (Material::strengthCoefficientOfVariation).
-    static Lattice fromBody(const Body& body, const Material& material, const LatticeGround& ground = LatticeGround(),
+    static Lattice fromBody(const Body& body, const Material& material, const LatticeSupports& supports = LatticeSupports(),
                             uint64_t strengthSeed = 1);
 
     size_t particleCount() const { return positionM.size(); }
-    /// The particle at a voxel (a ground point at the cell below its voxel), or -1.
+    /// The particle at a voxel (a support point at the cell beyond its voxel), or -1.
     int32_t particleAt(const openvdb::Coord& ijk) const { return mParticleIndex->getValue(ijk); }
     /// The bond across a face of particle p (LinkBits.h's Face order), or -1.
     int32_t bondAcross(size_t p, int face) const { return mBondAcross[p][face]; }
@@ -153,9 +163,9 @@ public:
 
     // State, world frame, one entry per particle.
     /// Particles [0, voxelParticleCount) are the body's voxels, in its leaf order; those after
-    /// them are its anchors' ground points (held).
+    /// them are its anchors' support points (held).
     size_t voxelParticleCount = 0;
-    std::vector<openvdb::Coord> voxel;  ///< the body's index of each particle (a ground point: the cell below its voxel)
+    std::vector<openvdb::Coord> voxel;  ///< the body's index of each particle (a support point: the cell beyond its voxel)
     std::vector<Eigen::Vector3d> positionM, velocityMS, angularVelocityRadS, externalForceN;
     std::vector<Eigen::Quaterniond> orientation;
     /// The bonds' force and moment on each particle as the last step left them (unit: N, N m):
@@ -247,7 +257,12 @@ private:
     /// A bond from `low` to its +axis neighbour `high`.
     void addBond(uint32_t low, uint32_t high, int axis);
     void addLinkBonds(const Body& body);
-    void addGroundBonds(const Body& body);
+    /// Bonds each anchored voxel to a held point beyond it (fromBody).
+    void addSupportBonds(const Body& body, const LatticeSupports& supports);
+    /// The face of an anchored voxel that a support holds, or -1: the ground's face when the
+    /// voxel lies within a quarter voxel of it, else the free face whose neighbouring cell's
+    /// centre lies deepest (at least a quarter voxel) inside a box.
+    int supportedFace(const Body& body, uint32_t p, int groundFace, const std::vector<ObstacleBox>& boxes) const;
     /// Bonds between two voxels of the same masonry unit take the unit's strength (Material),
     /// when a voxel is no taller than a course.
     void classifyUnitBonds(const Material& material);

@@ -19,6 +19,10 @@ struct ObstacleBox {
 /// The box's eight corners in the world.
 std::array<Eigen::Vector3d, 8> cornersOf(const ObstacleBox& box);
 
+/// How deep a point lies inside the box: its distance to the box's surface, positive inside and
+/// negative outside (unit: m).
+double depthInsideM(const ObstacleBox& box, const Eigen::Vector3d& pointM);
+
 /// True when the segment from a to b meets the box (slab test in the box's frame).
 bool segmentMeetsBox(const Eigen::Vector3d& aM, const Eigen::Vector3d& bM, const ObstacleBox& box);
 

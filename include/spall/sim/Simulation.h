@@ -130,8 +130,8 @@ private:
     void continueVibratingParts(const std::vector<DeformableBody>& leaving);
     /// Each deformable body's lattice through the step under its face loads and gravity.
     void deformBodies(const FaceForces& faces, const std::vector<OpenWindow>& windows, double dtS);
-    /// The ground as the lattices see it.
-    LatticeGround latticeGround() const;
+    /// The ground and the colliders, as the lattices' anchors are bonded to them.
+    LatticeSupports latticeSupports() const;
     /// Throws SimulationError naming the first body whose pose or velocity is not finite: an
     /// unstable integration must stop the run, not reach the output as a broken transform.
     void refuseNonFiniteMotion() const;
