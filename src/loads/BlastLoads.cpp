@@ -36,9 +36,20 @@ void forEachFaceBlock(size_t faceCount, F&& perBlock)
 
 bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows)
 {
+    const ObstacleBox bounds = worldBounds(body);
+    const std::array<Eigen::Vector3d, 8> corners = cornersOf(bounds);
     for (const OpenWindow& w : windows) {
-        const double d = (body.motion.positionM - field.charges()[w.charge].positionM).norm();
-        if (d + body.boundingRadiusM >= w.minDistanceM && d - body.boundingRadiusM <= w.maxDistanceM) return true;
+        const Eigen::Vector3d& chargeM = field.charges()[w.charge].positionM;
+        double nearestM = 0.0, farthestM = 0.0;
+        if (body.motion.deformable) {
+            const double d = (body.motion.positionM - chargeM).norm();
+            nearestM = d - body.boundingRadiusM;
+            farthestM = d + body.boundingRadiusM;
+        } else {
+            nearestM = std::max(0.0, -depthInsideM(bounds, chargeM));
+            for (const Eigen::Vector3d& corner : corners) farthestM = std::max(farthestM, (corner - chargeM).norm());
+        }
+        if (farthestM >= w.minDistanceM && nearestM <= w.maxDistanceM) return true;
     }
     return false;
 }

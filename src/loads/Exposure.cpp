@@ -24,7 +24,8 @@ uint64_t blockKey(int64_t i, int64_t j, int64_t k) { return cellKey(i >> kBlockS
 /// Cell of a point in cell units: the nearest lattice point.
 uint64_t cellKey(const Eigen::Vector3d& u) { return cellKey(std::llround(u.x()), std::llround(u.y()), std::llround(u.z())); }
 
-/// The body's index bounds (voxels as cubes) as an oriented box in the world.
+}  // namespace
+
 ObstacleBox worldBounds(const Body& body)
 {
     const openvdb::CoordBBox& box = body.indexBounds;
@@ -35,8 +36,6 @@ ObstacleBox worldBounds(const Body& body)
     out.halfExtentM = (0.5 * (hi - lo) + Eigen::Vector3d::Constant(0.5)) * body.voxelSizeM;
     return out;
 }
-
-}  // namespace
 
 Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& considered)
     : mCovered(bodies.size()), mGroup(bodies.size()), mGroupBounds(bodies.size())

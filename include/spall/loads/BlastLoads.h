@@ -23,8 +23,10 @@ struct Wrench {
     Eigen::Vector3d torqueNm = Eigen::Vector3d::Zero();  ///< (unit: N m)
 };
 
-/// True when the body's bounding sphere meets some open window's distance range: only then can
-/// the blast load it.
+/// True when the body's distances from a charge meet that charge's open window: only then can
+/// the blast load it. A rigid body's distances are those of its voxels' oriented bounding box
+/// (the nearest point to its farthest corner); a deformable one's, of its bounding sphere, which
+/// also holds particles that have strayed from the box of their rigid fit.
 bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows);
 
 /// A body's outline as seen from a charge: the rectangle its bounding box covers across the

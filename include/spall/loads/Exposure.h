@@ -16,6 +16,9 @@
 
 namespace spall {
 
+/// The oriented box of a body's voxel cubes, in the world.
+ObstacleBox worldBounds(const Body& body);
+
 class Exposure {
 public:
     /// Occupancy of world cells of the bodies' voxel size by the boundary voxels of every body
