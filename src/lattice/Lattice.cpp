@@ -247,10 +247,7 @@ int Lattice::supportedFace(const Body& body, uint32_t p, int groundFace, const s
     if (groundFace >= 0) {
         // Anchors were set within a quarter voxel of the ground (Simulation); half a voxel here
         // only tells the ground's anchors from the boxes'.
-        const Eigen::Vector3d& n = ground.normal;
-        const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
-        const double support = 0.5 * voxelSizeM * (std::abs(n.dot(rot.col(0))) + std::abs(n.dot(rot.col(1))) + std::abs(n.dot(rot.col(2))));
-        if (n.dot(positionM[p]) - support - ground.offsetM <= 0.5 * voxelSizeM) return isFree(groundFace) ? groundFace : -1;
+        if (body.voxelHeightAbovePlaneM(voxel[p], ground.normal, ground.offsetM) <= 0.5 * voxelSizeM) return isFree(groundFace) ? groundFace : -1;
     }
     int best = -1;
     double deepestM = 0.0;

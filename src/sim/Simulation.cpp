@@ -22,13 +22,8 @@ ObstacleBox obstacleOf(const StaticBox& box) { return {box.centreM, box.halfExte
 /// Sets the anchor bit of voxels whose lowest point lies within a quarter voxel of the ground.
 void anchorToGround(Body& body, const GroundPlane& ground)
 {
-    const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
-    const Eigen::Vector3d& n = ground.normal;
-    const double support = 0.5 * body.voxelSizeM * (std::abs(n.dot(rot.col(0))) + std::abs(n.dot(rot.col(1))) + std::abs(n.dot(rot.col(2))));
-    for (auto it = body.grid->beginValueOn(); it; ++it) {
-        const double lowest = n.dot(body.voxelWorldM(it.getCoord())) - support - ground.offsetM;
-        if (lowest <= 0.25 * body.voxelSizeM) it.setValue(*it | kAnchorBit);
-    }
+    for (auto it = body.grid->beginValueOn(); it; ++it)
+        if (body.voxelHeightAbovePlaneM(it.getCoord(), ground.normal, ground.offsetM) <= 0.25 * body.voxelSizeM) it.setValue(*it | kAnchorBit);
 }
 
 /// Sets the anchor bit of voxels with a face within a quarter voxel of a collider: the centre of

@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -109,6 +110,13 @@ struct Body {
     Eigen::Vector3d voxelWorldM(const openvdb::Coord& ijk) const
     {
         return motion.positionM + motion.orientation * voxelOffsetM(ijk);
+    }
+    /// How far the lowest point of a voxel's cube lies above the plane normal · x = offset (unit: m).
+    double voxelHeightAbovePlaneM(const openvdb::Coord& ijk, const Eigen::Vector3d& normal, double offsetM) const
+    {
+        const Eigen::Matrix3d r = motion.orientation.toRotationMatrix();
+        const double halfDepthM = 0.5 * voxelSizeM * (std::abs(normal.dot(r.col(0))) + std::abs(normal.dot(r.col(1))) + std::abs(normal.dot(r.col(2))));
+        return normal.dot(voxelWorldM(ijk)) - halfDepthM - offsetM;
     }
     Eigen::Matrix3d worldInertiaKgM2() const
     {
