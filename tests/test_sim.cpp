@@ -152,7 +152,7 @@ TEST(Scene, ShippedScenesParseAndTheDefaultMatchesItsAsset)
     EXPECT_EQ(sceneToJson(asset), sceneToJson(builtIn));
     EXPECT_EQ(sceneToJson(loadScene(dir + "brick-wall-yield-limit.json")), sceneToJson(parseScene(paperWallSceneJson(), "built-in", ".")));
     for (const char* name : {"two-charges-concrete.json", "pillar-davison-stevens.json", "brick-wall-lattice.json", "timber-post.json",
-                             "concrete-slab-spall.json"})
+                             "concrete-slab-spall.json", "house-wall.json"})
         EXPECT_NO_THROW(loadScene(dir + name)) << name;
 }
 
