@@ -11,6 +11,7 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <functional>
 #include <random>
 
 using namespace spall;
@@ -39,6 +40,24 @@ Lattice latticeOfBox(int nx, int ny, int nz, const Material& material = kConcret
 }
 
 double barWaveSpeed(const Material& m) { return std::sqrt(m.youngsModulusPa / m.densityKgM3); }
+
+/// Steps the lattice `steps` times by dt, calling afterStep(i) after step i, and returns the
+/// times at which particle p's displacement in y from where it starts turns from negative to
+/// positive (interpolated within the step).
+std::vector<double> upCrossingTimesS(Lattice& lattice, size_t p, double dt, int steps, const std::function<void(int)>& afterStep = {})
+{
+    const double restY = lattice.positionM[p].y();
+    std::vector<double> upCrossings;
+    double previous = 0.0;
+    for (int i = 0; i < steps; ++i) {
+        lattice.step(dt);
+        const double y = lattice.positionM[p].y() - restY;
+        if (previous < 0.0 && y >= 0.0) upCrossings.push_back((i + previous / (previous - y)) * dt);
+        previous = y;
+        if (afterStep) afterStep(i);
+    }
+    return upCrossings;
+}
 
 }  // namespace
 
@@ -159,15 +178,8 @@ TEST(Lattice, ABeamHeldByTwoBoxesBendsAtTheClampedClampedFrequency)
         lattice.velocityMS[p] = Eigen::Vector3d(0, 0.01 * shape / 1.6, 0);
         if (lattice.voxel[p] == openvdb::Coord(length / 2, thick / 2, 0)) middle = p;
     }
-    const double dt = lattice.stableTimeStepS(), middleRestY = lattice.positionM[middle].y();
-    std::vector<double> upCrossings;
-    double previous = 0.0;
-    for (int i = 0; i < int(2.2 / expected / dt); ++i) {
-        lattice.step(dt);
-        const double y = lattice.positionM[middle].y() - middleRestY;
-        if (previous < 0.0 && y >= 0.0) upCrossings.push_back((i + previous / (previous - y)) * dt);
-        previous = y;
-    }
+    const double dt = lattice.stableTimeStepS();
+    const std::vector<double> upCrossings = upCrossingTimesS(lattice, middle, dt, int(2.2 / expected / dt));
     ASSERT_GE(upCrossings.size(), 2u);
     const double frequency = 1.0 / (upCrossings[1] - upCrossings[0]);
     std::printf("clamped-clamped beam: f1 = %.2f Hz measured, %.2f Hz Euler-Bernoulli (%+.2f %%)\n", frequency, expected,
@@ -236,18 +248,12 @@ TEST(Lattice, CantileverBendsAtTheEulerBernoulliFrequency)
     size_t tip = 0;
     for (size_t p = 0; p < lattice.particleCount(); ++p)
         if (lattice.voxel[p] == openvdb::Coord(free, thick / 2, 0)) tip = p;
-    const double tipRestY = lattice.positionM[tip].y();
-    std::vector<double> upCrossings;  // times the tip's displacement turns from negative to positive
-    double previous = 0.0, energyStart = 0.0, energyEnd = 0.0;
+    double energyStart = 0.0, energyEnd = 0.0;
     const int window = 500;
-    for (int i = 0; i < steps; ++i) {
-        lattice.step(dt);
-        const double y = lattice.positionM[tip].y() - tipRestY;
-        if (previous < 0.0 && y >= 0.0) upCrossings.push_back((i + previous / (previous - y)) * dt);
-        previous = y;
+    const std::vector<double> upCrossings = upCrossingTimesS(lattice, tip, dt, steps, [&](int i) {
         if (i < window) energyStart += (lattice.kineticEnergyJ() + lattice.strainEnergyJ()) / window;
         if (i >= steps - window) energyEnd += (lattice.kineticEnergyJ() + lattice.strainEnergyJ()) / window;
-    }
+    });
     ASSERT_GE(upCrossings.size(), 2u);
     const double frequency = 1.0 / (upCrossings[1] - upCrossings[0]);
     std::printf("cantilever: f1 = %.2f Hz measured, %.2f Hz Euler-Bernoulli (%+.2f %%); energy drift %.2e over %d steps\n", frequency,

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 
 namespace spall {
 
@@ -14,10 +13,6 @@ namespace {
 /// Below this many particles a lattice steps on one thread: dispatching a parallel loop costs
 /// more than its work (the 1 296-particle cantilever test took 8.5 s in parallel).
 constexpr size_t kParallelParticles = 2048;
-
-/// Torsion constant of a square section of side a is 0.1406 a⁴ (Roark's Formulas for Stress and
-/// Strain, table 10.7).
-constexpr double kSquareTorsionConstant = 0.1406;
 
 /// Rotation vector of a unit quaternion (angle × axis), the short way round. Bonds turn by
 /// small angles: there 2 atan(s/w)/s by its series (relative error below 1e-13 for s/w < 1e-3).
@@ -61,101 +56,7 @@ Eigen::Matrix3d rotationMatrixOf(const Eigen::Quaterniond& q)
     return r;
 }
 
-/// The normal moduli d (across the grain, along it) and λ of a lattice whose normal stiffness
-/// diag(d) + λ 1 1ᵀ has the compliance of a transversely isotropic solid: E and ν across the
-/// grain, E_L along it. By Sherman–Morrison the compliance is diag(1/d) − κ (1/d)(1/d)ᵀ with
-/// κ = λ / (1 + λ Σ 1/d), so E_i = d_i² / (d_i − κ) and ν_ij = κ d_i / (d_j (d_i − κ)): across
-/// the grain E = d (1 + ν), κ = ν d / (1 + ν); along it d_L is the root of d² − E_L d + E_L κ.
-/// Isotropic (E_L = E): d = 2μ and λ Lamé's. Returns {d across, d along, λ}.
-std::array<double, 3> normalModuli(double acrossPa, double poissonRatio, double alongPa)
-{
-    const double across = acrossPa / (1.0 + poissonRatio);
-    const double kappa = poissonRatio * across / (1.0 + poissonRatio);
-    const double discriminant = alongPa * alongPa - 4.0 * alongPa * kappa;
-    if (discriminant < 0.0) throw std::invalid_argument("calibrateLattice: E along the grain is too small against E and nu across it");
-    const double along = 0.5 * (alongPa + std::sqrt(discriminant));
-    const double denominator = 1.0 - kappa * (1.0 / along + 2.0 / across);
-    if (!(denominator > 0.0)) throw std::invalid_argument("calibrateLattice: no lattice has these E and nu");
-    return {across, along, kappa / denominator};
-}
-
 }  // namespace
-
-LatticeStiffness calibrateLattice(const Material& m, double h)
-{
-    if (!(m.youngsModulusPa > 0.0) || !(m.poissonRatio > -1.0 && m.poissonRatio < 0.5) || !(m.densityKgM3 > 0.0) || !(h > 0.0))
-        throw std::invalid_argument("calibrateLattice: E, density and h must be positive and -1 < nu < 0.5");
-    const bool grained = hasGrain(m);
-    if (grained && (!(m.alongGrainYoungsModulusPa > 0.0) || !(m.alongGrainShearModulusPa > 0.0)))
-        throw std::invalid_argument("calibrateLattice: a grain needs E and G along it");
-    const double eAcross = m.youngsModulusPa, eAlong = grained ? m.alongGrainYoungsModulusPa : eAcross;
-    const double gAcross = eAcross / (2.0 * (1.0 + m.poissonRatio)), gAlong = grained ? m.alongGrainShearModulusPa : gAcross;
-    const int grainAxis = grainAxisIndex(m);
-    const auto [dAcross, dAlong, lambda] = normalModuli(eAcross, m.poissonRatio, eAlong);
-    // Shear: C44 across the grain is (2 s_T) / 4h = G_T, along it (s_L + s_T) / 4h = G_L.
-    const double sAcross = 2.0 * gAcross * h, sAlong = (4.0 * gAlong - 2.0 * gAcross) * h;
-    if (!(sAlong > 0.0)) throw std::invalid_argument("calibrateLattice: G along the grain must exceed half of G across it");
-    LatticeStiffness k;
-    k.lameLambdaPa = lambda;
-    for (int axis = 0; axis < 3; ++axis) {
-        const bool along = axis == grainAxis;
-        k.normalModulusPa[axis] = along ? dAlong : dAcross;
-        k.normalNPerM[axis] = k.normalModulusPa[axis] * h;
-        k.shearNPerM[axis] = along ? sAlong : sAcross;
-        k.bendingNmPerRad[axis] = (along ? eAlong : eAcross) * h * h * h / 12.0;
-        // Twisting about the axis shears the two planes that hold it.
-        k.twistingNmPerRad[axis] = kSquareTorsionConstant * (along ? gAlong : 0.5 * (gAlong + gAcross)) * h * h * h;
-    }
-    if (!(m.tensileStrengthPa > 0.0) || !(m.fractureEnergyJPerM2 > 0.0) || !(m.shearStrengthPa > 0.0) || !(m.frictionCoefficient >= 0.0))
-        throw std::invalid_argument("calibrateLattice: strengths and fracture energy must be positive and the friction coefficient not negative");
-    const auto strengthOf = [&](double youngsPa, double tensilePa, double fractureEnergyJPerM2, double shearPa, double friction) {
-        LatticeStiffness::Strength s;
-        s.youngsModulusPa = youngsPa;
-        s.peakStretchM = tensilePa * h / youngsPa;
-        // Voxels too large to soften (snap-back) break at the peak: the strength, which decides
-        // whether a body breaks, is kept, and a crack dissipates ft² h / (2E) per area, more than Gf.
-        s.zeroTractionStretchM = std::max(2.0 * fractureEnergyJPerM2 / tensilePa, s.peakStretchM);
-        s.shearStrengthPa = shearPa;
-        s.frictionCoefficient = friction;
-        return s;
-    };
-    k.strength[0] = strengthOf(eAcross, m.tensileStrengthPa, m.fractureEnergyJPerM2, m.shearStrengthPa, m.frictionCoefficient);
-    k.strength[1] = k.strength[0];
-    if (hasUnits(m))
-        k.strength[1] = strengthOf(eAcross, m.unitTensileStrengthPa, m.unitFractureEnergyJPerM2, m.unitShearStrengthPa, m.unitFrictionCoefficient);
-    else if (grained)
-        k.strength[1] = strengthOf(eAlong, m.alongGrainTensileStrengthPa, m.alongGrainFractureEnergyJPerM2, m.alongGrainShearStrengthPa,
-                                   m.frictionCoefficient);
-    k.strengthRateLaw = m.strengthRateLaw;
-    k.damageRatePerS = m.damageRatePerS;
-    k.damageStressScalePerPa = m.damageStressScalePerPa > 0.0 ? m.damageStressScalePerPa : 1.0 / m.tensileStrengthPa;
-    return k;
-}
-
-Lattice Lattice::fromBody(const Body& body, const Material& material, const LatticeSupports& supports, uint64_t strengthSeed)
-{
-    Lattice lattice;
-    const double h = body.voxelSizeM;
-    lattice.voxelSizeM = h;
-    lattice.particleMassKg = material.densityKgM3 * h * h * h;
-    lattice.particleInertiaKgM2 = lattice.particleMassKg * h * h / 6.0;
-    lattice.stiffness = calibrateLattice(material, h);
-    lattice.ground = supports.ground;
-    lattice.addVoxelParticles(body);
-    lattice.addLinkBonds(body);
-    lattice.addSupportBonds(body, supports);
-    if (hasUnits(material)) lattice.classifyUnitBonds(material);
-    if (hasGrain(material)) lattice.classifyGrainBonds(material);
-    lattice.bondHistory.assign(lattice.bonds.size(), BondHistory());
-    if (material.strengthCoefficientOfVariation > 0.0) lattice.scatterStrengths(material, strengthSeed);
-    const LatticeStiffness& k = lattice.stiffness;
-    const double stiffestPa = *std::max_element(k.normalModulusPa.begin(), k.normalModulusPa.end());
-    const double pWaveSpeed = std::sqrt((k.lameLambdaPa + stiffestPa) / material.densityKgM3);
-    lattice.mDashpotPerViscosity = material.densityKgM3 * pWaveSpeed * h * h;
-    lattice.condenseVolumetricModulus();
-    lattice.refreshForces();
-    return lattice;
-}
 
 void Lattice::scatterStrengths(const Material& material, uint64_t seed)
 {
@@ -170,139 +71,6 @@ void Lattice::scatterStrengths(const Material& material, uint64_t seed)
         mid[bonds[b].axis] += 0.5 * h;
         bondHistory[b].strengthScale = std::exp(sigma * field.at(mid) - 0.5 * sigma * sigma);
     });
-}
-
-void Lattice::addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& placeM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
-                          const Eigen::Quaterniond& q, bool isHeld)
-{
-    mParticleIndex->setValueOn(ijk, int32_t(voxel.size()));
-    voxel.push_back(ijk);
-    positionM.push_back(placeM);
-    velocityMS.push_back(isHeld ? Eigen::Vector3d::Zero() : velocity);
-    angularVelocityRadS.push_back(isHeld ? Eigen::Vector3d::Zero() : spin);
-    orientation.push_back(q);
-    held.push_back(isHeld ? 1 : 0);
-    externalForceN.push_back(Eigen::Vector3d::Zero());
-    mBondAcross.push_back({-1, -1, -1, -1, -1, -1});
-}
-
-void Lattice::addVoxelParticles(const Body& body)
-{
-    for (auto it = body.grid->constTree().cbeginValueOn(); it; ++it) {
-        const Eigen::Vector3d offset = body.motion.orientation * body.voxelOffsetM(it.getCoord());
-        addParticle(it.getCoord(), body.motion.positionM + offset, body.motion.linearVelocityMS + body.motion.angularVelocityRadS.cross(offset),
-                    body.motion.angularVelocityRadS, body.motion.orientation, (it.getValue() & kAnchorBit) != 0);
-    }
-    voxelParticleCount = voxel.size();
-}
-
-void Lattice::addBond(uint32_t low, uint32_t high, int axis)
-{
-    mBondAcross[low][2 * axis + 1] = mBondAcross[high][2 * axis] = int32_t(bonds.size());
-    bonds.push_back({low, high, axis});
-}
-
-void Lattice::addLinkBonds(const Body& body)
-{
-    auto links = body.grid->getConstAccessor();
-    openvdb::tree::ValueAccessor<const LinkTree> indices(*mParticleIndex);
-    for (uint32_t p = 0; p < voxelParticleCount; ++p) {
-        const int32_t bits = links.getValue(voxel[p]);
-        for (const int face : {kPosX, kPosY, kPosZ})
-            if (bits & (1 << face)) addBond(p, uint32_t(indices.getValue(voxel[p] + faceOffset(face))), faceAxis(face));
-    }
-}
-
-void Lattice::addSupportBonds(const Body& body, const LatticeSupports& supports)
-{
-    // The face of the body's voxels that looks most directly into the ground.
-    int groundFace = -1;
-    if (supports.ground.enabled) {
-        const Eigen::Vector3d down = body.motion.orientation.inverse() * -supports.ground.normal;
-        int axis = 0;
-        down.cwiseAbs().maxCoeff(&axis);
-        groundFace = 2 * axis + (down[axis] > 0.0 ? 1 : 0);
-    }
-    mGroundBond.assign(voxelParticleCount, -1);
-    for (uint32_t p = 0; p < voxelParticleCount; ++p) {
-        if (!held[p]) continue;
-        const int face = supportedFace(body, p, groundFace, supports.boxes);
-        if (face < 0) continue;
-        // The support point: a held particle a voxel beyond, as if the support were more of the
-        // material, joined by a bond of the material's own stiffness and strength.
-        const int axis = faceAxis(face);
-        const uint32_t supportPoint = uint32_t(particleCount());
-        addParticle(voxel[p] + faceOffset(face), positionM[p] + body.motion.orientation * (voxelSizeM * faceNormal(face)),
-                    Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), body.motion.orientation, true);
-        held[p] = 0;
-        if (face & 1) addBond(p, supportPoint, axis);
-        else addBond(supportPoint, p, axis);
-        if (face == groundFace) mGroundBond[p] = int32_t(bonds.size() - 1);
-    }
-}
-
-int Lattice::supportedFace(const Body& body, uint32_t p, int groundFace, const std::vector<ObstacleBox>& boxes) const
-{
-    const auto isFree = [&](int face) { return !body.grid->tree().isValueOn(voxel[p] + faceOffset(face)); };
-    if (groundFace >= 0) {
-        // Anchors were set within a quarter voxel of the ground (Simulation); half a voxel here
-        // only tells the ground's anchors from the boxes'.
-        if (body.voxelHeightAbovePlaneM(voxel[p], ground.normal, ground.offsetM) <= 0.5 * voxelSizeM) return isFree(groundFace) ? groundFace : -1;
-    }
-    int best = -1;
-    double deepestM = 0.0;
-    for (int face = 0; face < 6; ++face) {
-        if (!isFree(face)) continue;
-        const Eigen::Vector3d beyondM = positionM[p] + body.motion.orientation * (voxelSizeM * faceNormal(face));
-        for (const ObstacleBox& box : boxes) {
-            const double depthM = depthInsideM(box, beyondM);
-            if (depthM >= deepestM) {
-                deepestM = depthM;
-                best = face;
-            }
-        }
-    }
-    return best;
-}
-
-void Lattice::classifyUnitBonds(const Material& material)
-{
-    // Voxels taller than a course do not resolve the units: every bond then spans a bed joint,
-    // and the material stays what its own (the joints') values make it, homogenised.
-    if (voxelSizeM > material.unitHeightM + material.jointThicknessM) return;
-    // A voxel's centre where the object was voxelised: its index times h (Voxelise.cpp's transform).
-    const auto unitOf = [&](const openvdb::Coord& v) {
-        return masonryUnitOf(material, voxelSizeM * v.x(), voxelSizeM * v.y(), voxelSizeM * v.z());
-    };
-    for (LatticeBond& bond : bonds)
-        if (bond.low < voxelParticleCount && bond.high < voxelParticleCount && unitOf(voxel[bond.low]) == unitOf(voxel[bond.high]))
-            bond.strengthClass = 1;
-}
-
-void Lattice::classifyGrainBonds(const Material& material)
-{
-    const int grainAxis = grainAxisIndex(material);
-    for (LatticeBond& bond : bonds)
-        if (bond.axis == grainAxis) bond.strengthClass = 1;
-}
-
-void Lattice::condenseVolumetricModulus()
-{
-    // λ condensed over the axes a particle has no bond along (σ = 0 there):
-    // λ / (1 + λ Σ_missing 1/d); isotropic, λ for three axes, 2μλ / (λ + 2μ) for two (plane
-    // stress), λμ / (λ + μ) for one (a bar: E = 2μ + that).
-    const double lambda = stiffness.lameLambdaPa;
-    mLambdaPa.resize(particleCount());
-    mInverseBondCount.resize(particleCount());
-    for (size_t p = 0; p < particleCount(); ++p) {
-        double missingCompliance = 0.0;
-        for (int axis = 0; axis < 3; ++axis) {
-            const int count = int(mBondAcross[p][2 * axis] >= 0) + int(mBondAcross[p][2 * axis + 1] >= 0);
-            mInverseBondCount[p][axis] = count > 0 ? 1.0 / count : 0.0;
-            if (count == 0) missingCompliance += 1.0 / stiffness.normalModulusPa[axis];
-        }
-        mLambdaPa[p] = lambda / (1.0 + lambda * missingCompliance);  // a particle with no bonds has no strain to weigh
-    }
 }
 
 double Lattice::stableTimeStepS() const

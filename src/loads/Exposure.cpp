@@ -4,6 +4,7 @@
 #include <spall/core/Parallel.h>
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 
 namespace spall {
@@ -35,6 +36,20 @@ ObstacleBox worldBounds(const Body& body)
     out.centreM = body.motion.positionM + body.motion.orientation * (0.5 * (lo + hi) * body.voxelSizeM - body.mass.centreOfMassLocalM);
     out.halfExtentM = (0.5 * (hi - lo) + Eigen::Vector3d::Constant(0.5)) * body.voxelSizeM;
     return out;
+}
+
+FaceInBox freeFaceDeepestInBoxes(const Body& body, const openvdb::Coord& ijk, const std::vector<ObstacleBox>& boxes)
+{
+    FaceInBox deepest{-1, -std::numeric_limits<double>::infinity()};
+    for (int face = 0; face < 6; ++face) {
+        if (body.grid->tree().isValueOn(ijk + faceOffset(face))) continue;
+        const Eigen::Vector3d beyondM = body.voxelWorldM(ijk + faceOffset(face));
+        for (const ObstacleBox& box : boxes) {
+            const double depthM = depthInsideM(box, beyondM);
+            if (depthM > deepest.depthM) deepest = {face, depthM};
+        }
+    }
+    return deepest.depthM >= 0.0 ? deepest : FaceInBox();
 }
 
 Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& considered)

@@ -5,6 +5,7 @@
 #include <spall/dynamics/Sleep.h>
 #include <spall/io/VdbIo.h>
 #include <spall/loads/BlastLoads.h>
+#include <spall/loads/Exposure.h>
 #include <spall/sim/MemoryBudget.h>
 
 #include <algorithm>
@@ -26,15 +27,14 @@ void anchorToGround(Body& body, const GroundPlane& ground)
         if (body.voxelHeightAbovePlaneM(it.getCoord(), ground.normal, ground.offsetM) <= 0.25 * body.voxelSizeM) it.setValue(*it | kAnchorBit);
 }
 
-/// Sets the anchor bit of voxels with a face within a quarter voxel of a collider: the centre of
-/// the cell beyond the face lies at least a quarter voxel inside the box.
+/// Sets the anchor bit of voxels with a free face within a quarter voxel of a collider: the
+/// centre of the cell beyond the face lies at least a quarter voxel inside the box.
 void anchorToColliders(Body& body, const std::vector<StaticBox>& colliders)
 {
+    std::vector<ObstacleBox> boxes;
+    for (const StaticBox& box : colliders) boxes.push_back(obstacleOf(box));
     for (auto it = body.grid->beginValueOn(); it; ++it)
-        for (int face = 0; face < 6; ++face)
-            for (const StaticBox& box : colliders)
-                if (depthInsideM(obstacleOf(box), body.voxelWorldM(it.getCoord() + faceOffset(face))) >= 0.25 * body.voxelSizeM)
-                    it.setValue(*it | kAnchorBit);
+        if (freeFaceDeepestInBoxes(body, it.getCoord(), boxes).depthM >= 0.25 * body.voxelSizeM) it.setValue(*it | kAnchorBit);
 }
 
 /// Refuses, before anything is allocated, a scene whose objects' bounding boxes hold more voxels

@@ -260,8 +260,8 @@ private:
     /// Bonds each anchored voxel to a held point beyond it (fromBody).
     void addSupportBonds(const Body& body, const LatticeSupports& supports);
     /// The face of an anchored voxel that a support holds, or -1: the ground's face when the
-    /// voxel lies within a quarter voxel of it, else the free face whose neighbouring cell's
-    /// centre lies deepest (at least a quarter voxel) inside a box.
+    /// voxel lies within half a voxel of it, else the free face whose neighbouring cell's centre
+    /// lies deepest inside a box (freeFaceDeepestInBoxes).
     int supportedFace(const Body& body, uint32_t p, int groundFace, const std::vector<ObstacleBox>& boxes) const;
     /// Bonds between two voxels of the same masonry unit take the unit's strength (Material),
     /// when a voxel is no taller than a course.

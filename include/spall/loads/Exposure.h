@@ -19,6 +19,15 @@ namespace spall {
 /// The oriented box of a body's voxel cubes, in the world.
 ObstacleBox worldBounds(const Body& body);
 
+/// A voxel's free face (no voxel of its body beyond it) whose neighbouring cell's centre lies
+/// deepest inside one of the boxes, with that depth (unit: m); face -1 when every such centre
+/// lies outside them all. A box holds the voxel across that face (an anchor to a collider).
+struct FaceInBox {
+    int face = -1;
+    double depthM = 0.0;
+};
+FaceInBox freeFaceDeepestInBoxes(const Body& body, const openvdb::Coord& ijk, const std::vector<ObstacleBox>& boxes);
+
 class Exposure {
 public:
     /// Occupancy of world cells of the bodies' voxel size by the boundary voxels of every body
