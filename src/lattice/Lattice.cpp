@@ -157,21 +157,23 @@ void Lattice::measureBond(size_t b, double dtS, bool growDamage)
     BondForceTerms& terms = mBondTerms[b];
     terms.armM = positionM[bond.high] - positionM[bond.low];
     const double lengthM = terms.armM.norm();
-    const Eigen::Vector3d along = terms.armM / lengthM;
+    const Eigen::Vector3d along = terms.armM * (1.0 / lengthM);
     const double openingRateMS = (velocityMS[bond.high] - velocityMS[bond.low]).dot(along);
-    if (growDamage) growBondDamage(b, equivalentStretchM(b, s, lengthM), std::abs(openingRateMS) / voxelSizeM, dtS);
-    const double intact = 1.0 - bondDamage(b), sqrtIntact = std::sqrt(intact);
+    double damage = bondDamage(b);
+    if (growDamage && growBondDamage(b, equivalentStretchM(b, s, lengthM, damage), std::abs(openingRateMS) / voxelSizeM, dtS))
+        damage = bondDamage(b);
+    const double intact = 1.0 - damage, sqrtIntact = std::sqrt(intact);
     const bool opening = lengthM > voxelSizeM;
     Eigen::Vector3d local = -intact * k.shearNPerM[a] * s.displacementM;
     local[a] = -intact * k.normalNPerM[a] * s.displacementM[a];
-    terms.elasticForceN = s.frame * local;
+    terms.forceOnHighN = s.frame * local;
     // What damage took still carries compression, as contact: along the line of centres, and
     // only while the two cubes overlap. (In the bond's frame it would push apart particles that
     // have slid past each other or turned over, which feeds energy into a shattered lattice.)
     const double overlapM = voxelSizeM - lengthM;
-    if (intact < 1.0 && overlapM > 0.0) terms.elasticForceN += (1.0 - intact) * k.normalNPerM[a] * overlapM * along;
+    if (intact < 1.0 && overlapM > 0.0) terms.forceOnHighN += (1.0 - intact) * k.normalNPerM[a] * overlapM * along;
     // A crack opening carries no viscous stress either: the dashpot softens with the spring.
-    if (bulkViscosity > 0.0) terms.elasticForceN -= (opening ? intact : 1.0) * bulkViscosity * mDashpotPerViscosity * openingRateMS * along;
+    if (bulkViscosity > 0.0) terms.forceOnHighN -= (opening ? intact : 1.0) * bulkViscosity * mDashpotPerViscosity * openingRateMS * along;
     Eigen::Vector3d bending = -intact * k.bendingNmPerRad[a] * s.rotationRad;
     bending[a] = -intact * k.twistingNmPerRad[a] * s.rotationRad[a];
     terms.bendingMomentNm = s.frame * bending;
@@ -179,13 +181,16 @@ void Lattice::measureBond(size_t b, double dtS, bool growDamage)
     terms.volumetricAreaPerArmM = (opening ? sqrtIntact : 1.0) * voxelSizeM * voxelSizeM / lengthM;
 }
 
-Eigen::Vector3d Lattice::bondForceOnHighN(size_t b) const
+void Lattice::completeBondForce(size_t b)
 {
     // The volumetric energy's force along the bond: d(Σ ½ λ h³ (tr ε)²) / d(length).
     const LatticeBond& bond = bonds[b];
-    const BondForceTerms& terms = mBondTerms[b];
+    BondForceTerms& terms = mBondTerms[b];
     const double sharesPa = mVolumetricStressShare[bond.low][bond.axis] + mVolumetricStressShare[bond.high][bond.axis];
-    return terms.elasticForceN - (terms.volumetricAreaPerArmM * sharesPa) * terms.armM;
+    terms.forceOnHighN -= (terms.volumetricAreaPerArmM * sharesPa) * terms.armM;
+    // The bond acts at the face between its particles: the pair's moment about either centre
+    // is the same, -(arm / 2) × force.
+    terms.pairMomentNm = -0.5 * terms.armM.cross(terms.forceOnHighN);
 }
 
 void Lattice::gatherBondForces(size_t p)
@@ -195,13 +200,13 @@ void Lattice::gatherBondForces(size_t p)
         const int32_t b = mBondAcross[p][face];
         if (b < 0) continue;
         const BondForceTerms& terms = mBondTerms[size_t(b)];
-        // The bond acts at the face between its particles: the pair's moment about either
-        // centre is the same, -(arm / 2) × force.
-        const Eigen::Vector3d onHigh = bondForceOnHighN(size_t(b));
-        const Eigen::Vector3d pairMoment = -0.5 * terms.armM.cross(onHigh);
-        const bool isLow = (face & 1) != 0;  // the bond across p's +axis face
-        force += isLow ? Eigen::Vector3d(-onHigh) : onHigh;
-        moment += pairMoment + (isLow ? Eigen::Vector3d(-terms.bendingMomentNm) : terms.bendingMomentNm);
+        if (face & 1) {  // the bond across p's +axis face: p is its low end
+            force -= terms.forceOnHighN;
+            moment += terms.pairMomentNm - terms.bendingMomentNm;
+        } else {
+            force += terms.forceOnHighN;
+            moment += terms.pairMomentNm + terms.bendingMomentNm;
+        }
     }
     bondForceN[p] = force;
     bondMomentNm[p] = moment;
@@ -210,19 +215,38 @@ void Lattice::gatherBondForces(size_t p)
 double Lattice::equivalentStretchM(size_t b) const
 {
     const LatticeBond& bond = bonds[b];
-    return equivalentStretchM(b, strainOf(bond), (positionM[bond.high] - positionM[bond.low]).norm());
+    return equivalentStretchM(b, strainOf(bond), (positionM[bond.high] - positionM[bond.low]).norm(), bondDamage(b));
 }
 
-double Lattice::equivalentStretchM(size_t b, const BondStrain& strain, double lengthM) const
+Lattice::FailureTerms Lattice::failureTerms(int strengthClass, int axis) const
+{
+    const LatticeStiffness& k = stiffness;
+    const LatticeStiffness::Strength& strength = k.strength[size_t(strengthClass)];
+    const double faceAreaM2 = voxelSizeM * voxelSizeM;
+    FailureTerms terms;
+    terms.peakStretchM = strength.peakStretchM;
+    terms.tensionIndexPerM = 1.0 / strength.peakStretchM;
+    terms.shearIndexPerM = k.shearNPerM[size_t(axis)] / (faceAreaM2 * strength.shearStrengthPa);
+    terms.normalIndexPerM = k.normalNPerM[size_t(axis)] / (faceAreaM2 * strength.shearStrengthPa);
+    terms.indexPerPa = 1.0 / strength.shearStrengthPa;
+    terms.frictionCoefficient = strength.frictionCoefficient;
+    return terms;
+}
+
+void Lattice::updateFailureTerms()
+{
+    for (int strengthClass = 0; strengthClass < 2; ++strengthClass)
+        for (int axis = 0; axis < 3; ++axis) mFailureTerms[size_t(strengthClass)][size_t(axis)] = failureTerms(strengthClass, axis);
+}
+
+double Lattice::equivalentStretchM(size_t b, const BondStrain& strain, double lengthM, double damage) const
 {
     const LatticeBond& bond = bonds[b];
-    const LatticeStiffness& k = stiffness;
-    const LatticeStiffness::Strength& strength = k.strength[bond.strengthClass];
     const int a = bond.axis;
+    const FailureTerms& terms = mFailureTerms[bond.strengthClass][size_t(a)];
     // The shear displacement: across the bond's axis in its half-way frame.
     const double normalM = strain.displacementM[a];
-    const double shearTractionPa = k.shearNPerM[a] * std::sqrt(std::max(0.0, strain.displacementM.squaredNorm() - normalM * normalM)) / (voxelSizeM * voxelSizeM);
-    const double shearIndex = shearTractionPa / strength.shearStrengthPa;
+    const double shearIndex = terms.shearIndexPerM * std::sqrt(std::max(0.0, strain.displacementM.squaredNorm() - normalM * normalM));
     // The stretch at the face's most stretched corner: the moment the bond carries, (1 − D) of
     // its bending stiffness times θ, opens one edge by (1 − D) θ h/2 per axis across it, so the
     // outermost bonds of a bent member see the strain of its surface, E κ t/2, as a continuum
@@ -230,24 +254,24 @@ double Lattice::equivalentStretchM(size_t b, const BondStrain& strain, double le
     // centres, t/2 − h/2 from the neutral axis. As the bond softens its moment goes, and its
     // opening alone carries it to the end of the softening line, so it still dissipates Gf.
     const Eigen::Vector3d& rotation = strain.rotationRad;
-    const double bendingStretchM =
-        0.5 * voxelSizeM * (1.0 - bondDamage(b)) * (std::abs(rotation[(a + 1) % 3]) + std::abs(rotation[(a + 2) % 3]));
+    const double bendingStretchM = 0.5 * voxelSizeM * (1.0 - damage) * (std::abs(rotation[(a + 1) % 3]) + std::abs(rotation[(a + 2) % 3]));
     const double stretchM = lengthM - voxelSizeM + bendingStretchM;
     double index = 0.0;
     if (stretchM >= 0.0) {
-        const double tensionIndex = stretchM / strength.peakStretchM;
+        const double tensionIndex = stretchM * terms.tensionIndexPerM;
         index = std::sqrt(tensionIndex * tensionIndex + shearIndex * shearIndex);
     } else {
-        // The compression across the bond: its spring's and its particles' volumetric share, as
-        // the last force pass left them (a substep behind; a function of the saved state).
-        const double normalTractionPa =
-            k.normalNPerM[a] * normalM / (voxelSizeM * voxelSizeM) + mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a];
-        index = std::max(0.0, shearTractionPa - strength.frictionCoefficient * std::max(0.0, -normalTractionPa)) / strength.shearStrengthPa;
+        // The compression across the bond, over the shear strength: its spring's and its
+        // particles' volumetric share, as the last force pass left them (a substep behind; a
+        // function of the saved state).
+        const double normalIndex =
+            terms.normalIndexPerM * normalM + terms.indexPerPa * (mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a]);
+        index = std::max(0.0, shearIndex - terms.frictionCoefficient * std::max(0.0, -normalIndex));
     }
-    return index * strength.peakStretchM;
+    return index * terms.peakStretchM;
 }
 
-void Lattice::growBondDamage(size_t b, double equivalentStretchNowM, double strainRatePerS, double dtS)
+bool Lattice::growBondDamage(size_t b, double equivalentStretchNowM, double strainRatePerS, double dtS)
 {
     BondHistory& history = bondHistory[b];
     const double increaseM = equivalentStretchNowM - history.maxEquivalentStretchM;
@@ -256,7 +280,11 @@ void Lattice::growBondDamage(size_t b, double equivalentStretchNowM, double stra
         history.damageDriverM +=
             stiffness.strengthRateLaw != StrengthRateLaw::None ? increaseM / dynamicIncreaseFactor(stiffness.strengthRateLaw, strainRatePerS) : increaseM;
     }
-    if (damageLaw == LatticeDamageLaw::DavisonStevens) history.rateDamage = rateDamageAfter(b, equivalentStretchNowM, dtS);
+    if (damageLaw == LatticeDamageLaw::DavisonStevens) {
+        history.rateDamage = rateDamageAfter(b, equivalentStretchNowM, dtS);
+        return true;
+    }
+    return increaseM > 0.0;
 }
 
 double Lattice::rateDamageAfter(size_t b, double equivalentStretchNowM, double dtS) const
@@ -281,11 +309,13 @@ double Lattice::rateDamageAfter(size_t b, double equivalentStretchNowM, double d
 
 void Lattice::refreshForces()
 {
+    updateFailureTerms();
     mBondTerms.resize(bondCount());
     bondForceN.resize(particleCount());
     bondMomentNm.resize(particleCount());
     forEach(bondCount(), [&](size_t b) { measureBond(b, 0.0, false); });
     computeVolumetricStrain();
+    forEach(bondCount(), [&](size_t b) { completeBondForce(b); });
     forEach(particleCount(), [&](size_t p) { gatherBondForces(p); });
 }
 
@@ -299,6 +329,7 @@ void Lattice::step(double dtS)
         velocityMS[p] += halfDt * invMass * (bondForceN[p] + externalForceN[p]);
         angularVelocityRadS[p] += halfDt * invInertia * bondMomentNm[p];
     };
+    updateFailureTerms();
     forEach(particleCount(), [&](size_t p) {
         kick(p);
         positionM[p] += dtS * velocityMS[p];
@@ -309,6 +340,7 @@ void Lattice::step(double dtS)
     // the strain rate), then the forces from the state.
     forEach(bondCount(), [&](size_t b) { measureBond(b, dtS, true); });
     computeVolumetricStrain();
+    forEach(bondCount(), [&](size_t b) { completeBondForce(b); });
     forEach(particleCount(), [&](size_t p) {
         gatherBondForces(p);
         kick(p);

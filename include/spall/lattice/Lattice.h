@@ -220,8 +220,11 @@ private:
     /// What the force pass takes from each bond, measured once per substep (measureBond).
     struct BondForceTerms {
         Eigen::Vector3d armM;             ///< high − low (unit: m)
-        Eigen::Vector3d elasticForceN;    ///< spring and dashpot, on high (unit: N)
+        /// On high: the spring and dashpot when measured, the whole force once completed with
+        /// the volumetric term (completeBondForce) (unit: N).
+        Eigen::Vector3d forceOnHighN;
         Eigen::Vector3d bendingMomentNm;  ///< bending and twisting, on high (unit: N m)
+        Eigen::Vector3d pairMomentNm;     ///< of the pair of forces about either centre, −(arm / 2) × force (unit: N m)
         /// Its stretch (length change) as the volumetric term counts it: in tension times
         /// √(1 − D), so the bond's own share of the volumetric force falls with 1 − D as its
         /// spring's does and the traction follows the softening line (unit: m).
@@ -237,17 +240,34 @@ private:
     /// A bond's strain, damage (grown over dtS when `growDamage`) and force terms, from the
     /// state; writes only the bond's own entries, so bonds measure in parallel.
     void measureBond(size_t b, double dtS, bool growDamage);
-    /// The failure index as a stretch (equivalentStretchM) from a measured strain.
-    double equivalentStretchM(size_t b, const BondStrain& strain, double lengthM) const;
+    /// The failure index's factors for a strength class and axis: its divisions done once a
+    /// step, not once a bond.
+    struct FailureTerms {
+        double peakStretchM = 0.0;        ///< u0
+        double tensionIndexPerM = 0.0;    ///< 1 / u0
+        double shearIndexPerM = 0.0;      ///< k_s / (h² c): shear displacement to index
+        double normalIndexPerM = 0.0;     ///< k_n / (h² c): normal displacement to traction over c
+        double indexPerPa = 0.0;          ///< 1 / c
+        double frictionCoefficient = 0.0;
+    };
+    std::array<std::array<FailureTerms, 3>, 2> mFailureTerms{};
+    FailureTerms failureTerms(int strengthClass, int axis) const;
+    /// From the stiffness (a public member), at the start of every step and force refresh.
+    void updateFailureTerms();
+    /// The failure index as a stretch (equivalentStretchM) from a measured strain and the
+    /// bond's damage.
+    double equivalentStretchM(size_t b, const BondStrain& strain, double lengthM, double damage) const;
     /// Damage grows with the damage driver (and under Davison–Stevens, over the step's
-    /// duration); what it takes away stays away.
-    void growBondDamage(size_t b, double equivalentStretchNowM, double strainRatePerS, double dtS);
+    /// duration); what it takes away stays away. Returns whether the damage may have changed.
+    bool growBondDamage(size_t b, double equivalentStretchNowM, double strainRatePerS, double dtS);
     /// 0 intact … 1 broken on the softening line, from the damage driver.
     double softeningDamage(size_t b) const;
     /// Davison–Stevens: a bond's damage after dtS, at its equivalent stretch now.
     double rateDamageAfter(size_t b, double equivalentStretchNowM, double dtS) const;
-    /// The bond's whole force on high (spring, dashpot, volumetric), from its measured terms.
-    Eigen::Vector3d bondForceOnHighN(size_t b) const;
+    /// Adds the volumetric term to the bond's force on high, once every particle's volumetric
+    /// strain is known, and takes the pair's moment (so a bond's force is found once, not once
+    /// from each end).
+    void completeBondForce(size_t b);
     /// A particle's bond force and moment: the sum over its faces, in face order.
     void gatherBondForces(size_t p);
     // Building (fromBody).
