@@ -363,7 +363,8 @@ void Lattice::keepAboveGround(size_t p)
 
 int64_t Lattice::advance(double dtS)
 {
-    const int64_t substeps = static_cast<int64_t>(std::ceil(dtS / stableTimeStepS()));
+    // A step of n stable steps to rounding (Simulation::inWholeLatticeSteps) takes n.
+    const int64_t substeps = static_cast<int64_t>(std::ceil(dtS / stableTimeStepS() * (1.0 - 1e-12)));
     for (int64_t i = 0; i < substeps; ++i) step(dtS / double(substeps));
     return substeps;
 }
