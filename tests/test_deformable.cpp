@@ -159,6 +159,30 @@ TEST(Deformable, BrickWallBreaksUnderAKilogramAt50cm)
     EXPECT_GT(sim.bodies().size(), 2u);
 }
 
+TEST(Deformable, ALatticeTakesOnlyFullSubstepsWhenTheRigidStepIsLonger)
+{
+    // Simulation::inWholeLatticeSteps: a rigid step longer than the lattice's stable step is a
+    // whole number of them, so each substep is a full stable step. (The 3 M-voxel wall's
+    // crossing steps were 1.06 stable steps and cost two half steps each.)
+    Simulation sim(wallScene(1.0, 0.5));
+    double dtS = 0.0;
+    sim.setStepObserver([&](const Simulation&, const StepRecord& r) { dtS = r.dtS; });
+    int longSteps = 0;
+    while (sim.timeS() < 0.05) {
+        sim.step();
+        const int64_t particleSteps = sim.takeStepStats().latticeParticleSteps;
+        const std::vector<DeformableBody>& stepped = sim.state().deformable;
+        if (stepped.empty()) continue;
+        int64_t particles = 0;
+        for (const DeformableBody& d : stepped) particles += int64_t(d.lattice.particleCount());
+        const double stableS = stepped.front().lattice.stableTimeStepS(), substeps = double(particleSteps) / double(particles);
+        if (dtS <= stableS) continue;
+        ++longSteps;
+        EXPECT_NEAR(dtS / substeps, stableS, 1e-9 * stableS) << "at t = " << sim.timeS() << " s: " << substeps << " substeps over " << dtS << " s";
+    }
+    EXPECT_GE(longSteps, 5);
+}
+
 TEST(Deformable, MoreExplosiveBreaksMore)
 {
     // Issue 17: with the pressure rule every link broke once a charge was big enough, whatever
