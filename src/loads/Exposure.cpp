@@ -56,6 +56,15 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     : mCovered(bodies.size()), mGroup(bodies.size()), mGroupBounds(bodies.size())
 {
     if (bodies.empty()) return;
+    collectCells(bodies, considered);
+    groupTouchingBodies(bodies, considered);
+    fillBlocks();
+    boundGroups(bodies, considered);
+    boundCells();
+}
+
+void Exposure::collectCells(const std::vector<Body>& bodies, const std::vector<char>& considered)
+{
     mVoxelSizeM = bodies.front().voxelSizeM;
     // The lattice goes through a voxel centre of the first body considered: the pieces of one
     // object then sit on it exactly, and each lookup is a single cell.
@@ -75,6 +84,10 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     });
     for (auto& cells : perBody) mCells.insert(mCells.end(), cells.begin(), cells.end());
     std::sort(mCells.begin(), mCells.end(), [](const Cell& a, const Cell& c) { return a.key != c.key ? a.key < c.key : a.body < c.body; });
+}
+
+void Exposure::groupTouchingBodies(const std::vector<Body>& bodies, const std::vector<char>& considered)
+{
     // Per face: is the cell across it another body's?
     std::vector<std::vector<uint32_t>> touching(bodies.size());
     forEachIndex(bodies.size(), [&](size_t b) {
@@ -96,6 +109,10 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
     for (size_t b = 0; b < bodies.size(); ++b)
         for (uint32_t other : touching[b]) groups.join(uint32_t(b), other);
     for (size_t b = 0; b < bodies.size(); ++b) mGroup[b] = groups.root(uint32_t(b));
+}
+
+void Exposure::fillBlocks()
+{
     // Blocks hold their cells and those next to them: a voxel can contain points of the
     // neighbouring cells (bodies need not share the world's lattice).
     for (const Cell& c : mCells) {
@@ -108,7 +125,10 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
         const int bit = int(i & 7) + 8 * int(j & 7) + 64 * int(k & 7);
         mBlocks[blockKey(i, j, k)].occupied[size_t(bit >> 6)] |= uint64_t(1) << (bit & 63);
     }
-    boundGroups(bodies, considered);
+}
+
+void Exposure::boundCells()
+{
     if (mCells.empty()) return;
     mCellsLo = mCellsHi = Eigen::Vector3d(mCells.front().centre[0], mCells.front().centre[1], mCells.front().centre[2]);
     mOnlyGroup = mGroup[mCells.front().body];

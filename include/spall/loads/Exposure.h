@@ -66,8 +66,17 @@ private:
         uint32_t body;
         float centre[3];  ///< centre of the voxel in cell units from the lattice origin
     };
+    /// The considered bodies' boundary voxels as sorted cells of a lattice through one of them.
+    void collectCells(const std::vector<Body>& bodies, const std::vector<char>& considered);
+    /// mCovered (faces whose neighbouring cell is another body's) and mGroup (bodies pressed
+    /// together).
+    void groupTouchingBodies(const std::vector<Body>& bodies, const std::vector<char>& considered);
+    /// mBlocks: each cell's occupancy bit, and which group owns each block and its neighbours.
+    void fillBlocks();
     /// mGroupBounds from the groups and the members' oriented boxes.
     void boundGroups(const std::vector<Body>& bodies, const std::vector<char>& considered);
+    /// mCellsLo, mCellsHi and mOnlyGroup: the cells' bounds and their one group, if one.
+    void boundCells();
     /// A body that `skip(body)` does not skip with a voxel that contains x (world, unit: m), or -1.
     template <typename Skip>
     int64_t bodyAt(const Eigen::Vector3d& xM, Skip&& skip) const;

@@ -1,0 +1,78 @@
+// The time step rule (docs/architecture.md, "Time step"): Simulation's choose-dt phase.
+#include <spall/sim/Simulation.h>
+
+#include <spall/dynamics/Integrate.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace spall {
+
+double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
+{
+    const TimeStepSettings& ts = mScene.timeStep;
+    const double h = mScene.voxelSizeM;
+    const double t = mState.timeS;
+    double dt = ts.maxTimeStepS;
+    // Per charge, for the body at hand: its nearest and farthest distance and the blast at the
+    // nearest point (looked up once, read by both rules below).
+    struct Reach {
+        double nearM, farM, arrivalNearS;
+        BlastParameters atNear;
+    };
+    std::vector<Reach> reach(mField->charges().size());
+    for (const Body& body : mState.bodies) {
+        for (size_t c = 0; c < reach.size(); ++c) {
+            const double d = (body.motion.positionM - mField->charges()[c].positionM).norm();
+            Reach& r = reach[c];
+            r.nearM = std::max(d - body.boundingRadiusM, h);
+            r.farM = d + body.boundingRadiusM;
+            r.atNear = mField->tableParameters(static_cast<int>(c), r.nearM);
+            r.arrivalNearS = mField->charges()[c].detonationTimeS + r.atNear.arrivalTimeS;
+        }
+        for (const OpenWindow& w : windows) {
+            const Reach& r = reach[w.charge];
+            if (r.farM < w.minDistanceM || r.nearM > w.maxDistanceM) continue;
+            // Where the front is, from the arrival times at the body's nearest and farthest
+            // points (the window's edge is padded by a table cell, which is metres wide far out).
+            if (t < r.arrivalNearS) continue;  // not there yet: the arrival rule below lands on it
+            if (t <= mField->window(w.charge, r.farM).first)
+                dt = std::min(dt, ts.frontFraction * h / mField->shockSpeedMS(w.charge, r.nearM));  // the front is crossing the body
+            else
+                dt = std::min(dt, ts.pulseFraction * r.atNear.positiveDurationS);  // behind it: resolve the pulse at the nearest point
+        }
+        // Never step far over the moment a front first reaches the body: land on it, or at most
+        // a crossing step past it (landing on every arrival of every charge at every fragment
+        // would take steps as short as the gaps between those moments).
+        for (size_t c = 0; c < reach.size(); ++c) {
+            const double arrival = reach[c].arrivalNearS;
+            if (arrival > t && arrival - t < dt)
+                dt = std::min(dt, std::max(arrival - t, ts.frontFraction * h / mField->shockSpeedMS(static_cast<int>(c), reach[c].nearM)));
+        }
+        if (!body.anchored && !body.motion.asleep) {
+            const double speed = maxVoxelSpeedMS(body);
+            if (speed > 0) dt = std::min(dt, ts.speedFraction * h / speed);
+        }
+    }
+    return inWholeLatticeSteps(std::max(dt * mState.penetrationStepScale, ts.minTimeStepS));
+}
+
+double Simulation::inWholeLatticeSteps(double dtS) const
+{
+    const Lattice* costliest = nullptr;
+    for (const DeformableBody& d : mState.deformable)
+        if (!costliest || d.lattice.particleCount() > costliest->particleCount()) costliest = &d.lattice;
+    if (!costliest) return dtS;
+    const double stableS = costliest->stableTimeStepS();
+    return dtS <= stableS ? dtS : std::floor(dtS / stableS) * stableS;
+}
+
+void Simulation::adaptStepToPenetration(double maxPenetrationM)
+{
+    if (maxPenetrationM > mScene.collisions.penetrationToleranceVoxels * mScene.voxelSizeM)
+        mState.penetrationStepScale = std::max(0.5 * mState.penetrationStepScale, 1.0 / 64.0);
+    else
+        mState.penetrationStepScale = std::min(2.0 * mState.penetrationStepScale, 1.0);
+}
+
+}  // namespace spall
