@@ -136,6 +136,39 @@ int64_t brokenBondsOf(const Simulation& sim)
 
 }  // namespace
 
+TEST(Deformable, APartHeldByAnotherFaceThanItsWholeStartsThatSupportAtRest)
+{
+    // Two voxels, A anchored, B beside it inside a static box. The whole's A has no free face
+    // into the box (B is there), so A is simply held. A on its own has: its part's lattice holds
+    // it by a support point where B was. That point is a held support, not B carrying on, so it
+    // starts at rest one voxel beyond A (it once took B's state, and drifted with B's velocity).
+    const double h = 0.1;
+    Body whole = test::boxBody(2, 1, 1, h, 2000.0, Eigen::Vector3d(1.0, 0, 0.5));
+    whole.grid->tree().setValue(openvdb::Coord(0, 0, 0), whole.grid->tree().getValue(openvdb::Coord(0, 0, 0)) | kAnchorBit);
+    refreshDerivedData(whole);
+    const Eigen::Vector3d a = whole.voxelWorldM(openvdb::Coord(0, 0, 0)), b = whole.voxelWorldM(openvdb::Coord(1, 0, 0));
+    LatticeSupports supports;
+    supports.boxes.push_back({b + Eigen::Vector3d(0.26, 0, 0), Eigen::Vector3d(0.3, 0.3, 0.3), Eigen::Quaterniond::Identity()});
+    const Material& material = findMaterialPreset("concrete");
+    DeformableBody deforming = enterDeformablePhase(whole, material, LatticeSettings(), supports, 0.0);
+    ASSERT_EQ(deforming.lattice.particleCount(), 2u) << "the whole's A is held, with no support point";
+    deforming.lattice.velocityMS[1] = Eigen::Vector3d(2.0, 0, 0);
+    deforming.lattice.positionM[1] += Eigen::Vector3d(0.01, 0, 0);
+
+    Body part = whole;
+    part.grid = whole.grid->deepCopy();
+    auto links = part.grid->getAccessor();
+    breakLink(links, openvdb::Coord(0, 0, 0), kPosX);
+    links.setValueOff(openvdb::Coord(1, 0, 0), 0);
+    refreshDerivedData(part);
+    part.motion.positionM = a;
+    const DeformableBody continued = continueDeformable(part, deforming, material, LatticeSettings(), supports);
+    ASSERT_EQ(continued.lattice.particleCount(), 2u) << "the part's A is held by a support point";
+    EXPECT_TRUE(continued.lattice.held[1]);
+    EXPECT_EQ(continued.lattice.velocityMS[1], Eigen::Vector3d::Zero());
+    EXPECT_LT((continued.lattice.positionM[1] - (a + Eigen::Vector3d(h, 0, 0))).norm(), 1e-12);
+}
+
 TEST(Deformable, BrickWallStandsAGramOfTntAt30cm)
 {
     // Issue 17: 1 g of TNT 0.3 m from a brick wall (about 80 kPa side-on for 0.3 ms, an impulse

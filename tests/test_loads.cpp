@@ -238,6 +238,8 @@ TEST(Loads, SmallCubeMatchesTheUfcFrontMinusRearProcedure)
                                               [](const ExposedFace& f) { return f.face == kNegX; });
     const double rearImpulse = faceImpulseOn(cube, field, LoadGeometry(), dt, rear.arrivalTimeS + rear.positiveDurationS,
                                              [](const ExposedFace& f) { return f.face == kPosX; });
+    std::printf("0.4 m cube: front %.3f N s (by hand %.3f), rear %.3f N s (by hand %.3f)\n", frontImpulse, frontByHand * side * side, rearImpulse,
+                rearByHand * side * side);
     EXPECT_NEAR(frontImpulse - rearImpulse, byHand, 0.2 * byHand) << "front " << frontImpulse << " rear " << rearImpulse;
 }
 

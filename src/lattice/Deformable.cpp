@@ -191,16 +191,27 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
     d.lastLoadedS = whole.lastLoadedS;
     const Lattice& from = whole.lattice;
     Lattice& to = d.lattice;
+    // The part's own lattice may hold a voxel by another face than the whole's did (a lone
+    // corner voxel has more free faces): a support point the whole lacked, or where the whole
+    // had a voxel, and its bond, start afresh.
+    const auto counterpart = [&](size_t p) {
+        const int32_t q = from.particleAt(to.voxel[p]);
+        const bool sameKind = q >= 0 && (size_t(q) < from.voxelParticleCount) == (p < to.voxelParticleCount);
+        return sameKind ? q : -1;
+    };
     for (size_t p = 0; p < to.particleCount(); ++p) {
-        const size_t q = size_t(from.particleAt(to.voxel[p]));
-        to.positionM[p] = from.positionM[q];
-        to.velocityMS[p] = from.velocityMS[q];
-        to.angularVelocityRadS[p] = from.angularVelocityRadS[q];
-        to.orientation[p] = from.orientation[q];
+        const int32_t q = counterpart(p);
+        if (q < 0) continue;
+        to.positionM[p] = from.positionM[size_t(q)];
+        to.velocityMS[p] = from.velocityMS[size_t(q)];
+        to.angularVelocityRadS[p] = from.angularVelocityRadS[size_t(q)];
+        to.orientation[p] = from.orientation[size_t(q)];
     }
     for (size_t b = 0; b < to.bondCount(); ++b) {
-        const size_t c = size_t(from.bondAcross(size_t(from.particleAt(to.voxel[to.bonds[b].low])), 2 * to.bonds[b].axis + 1));
-        to.bondHistory[b] = from.bondHistory[c];
+        const int32_t low = counterpart(to.bonds[b].low), high = counterpart(to.bonds[b].high);
+        if (low < 0 || high < 0) continue;
+        const int32_t c = from.bondAcross(size_t(low), 2 * to.bonds[b].axis + 1);
+        if (c >= 0) to.bondHistory[b] = from.bondHistory[size_t(c)];
     }
     // The forces of the part's own bonds; those of bonds to the pieces that left (broken, in
     // contact at most) are gone with them.

@@ -69,6 +69,7 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
         // Voxels too large to soften (snap-back) break at the peak: the strength, which decides
         // whether a body breaks, is kept, and a crack dissipates ft² h / (2E) per area, more than Gf.
         s.zeroTractionStretchM = std::max(2.0 * fractureEnergyJPerM2 / tensilePa, s.peakStretchM);
+        s.fractureEnergyJPerM2 = fractureEnergyJPerM2;
         s.shearStrengthPa = shearPa;
         s.frictionCoefficient = friction;
         return s;

@@ -53,6 +53,9 @@ struct LatticeStiffness {
         /// uf = u0: brittle at the full strength, dissipating ft² h / (2E) > Gf.
         double peakStretchM = 0.0;
         double zeroTractionStretchM = 0.0;
+        /// Gf, which a bond too large to soften returns its elastic energy above when it snaps
+        /// (Lattice::releaseSnapEnergy) (unit: J/m²).
+        double fractureEnergyJPerM2 = 0.0;
         /// Mohr–Coulomb with the tension cut-off (Material): the shear strength at no normal
         /// stress and the friction coefficient, the friction on the bond's normal traction.
         /// (The cut-off is on the normal strain, E ε = ft, exact in uniaxial stress and 11 %
@@ -233,14 +236,35 @@ private:
         /// The volumetric force on high per pascal of its particles' shares, along −arm:
         /// h² √(1 − D in tension) / |arm| (unit: m).
         double volumetricAreaPerArmM = 0.0;
+        /// It snapped at its peak in this substep (releaseSnapEnergies).
+        bool snapped = false;
     };
     std::vector<BondForceTerms> mBondTerms;
 
     /// Each particle's tr ε: per axis, the mean stretch (length change / h) of its bonds along it.
     void computeVolumetricStrain();
     /// A bond's strain, damage (grown over dtS when `growDamage`) and force terms, from the
-    /// state; writes only the bond's own entries, so bonds measure in parallel.
-    void measureBond(size_t b, double dtS, bool growDamage);
+    /// state; writes only the bond's own entries, so bonds measure in parallel. Returns whether
+    /// it snapped (releaseSnapEnergies).
+    bool measureBond(size_t b, double dtS, bool growDamage);
+    /// A bond's spring, bending and twisting energy at a strain, for its stiffness times
+    /// `intact` (unit: J).
+    double elasticEnergyJ(size_t b, const BondStrain& strain, double intact) const;
+    /// Whether a bond breaks at its peak: its strength class's voxels are too large to soften
+    /// (Strength::peakStretchM), whatever its own strength scale.
+    bool snapsAtPeak(size_t b) const;
+    /// A bond that snaps at its peak loses its whole elastic energy, where a crack dissipates
+    /// only Gf per area (ft² h / 2E against Gf: nine times more for glass at 5 mm). The rest is
+    /// what a running crack releases into the material around it: each bond that snapped this
+    /// substep pushes its two particles apart along it with exactly that kinetic energy (equal
+    /// and opposite impulses along their line, so momentum and angular momentum are unchanged),
+    /// so a crack dissipates Gf per area at any voxel size, as the crack band does below it.
+    /// One at a time in bond order, at the substep's end.
+    void releaseSnapEnergies();
+    /// One bond's release: its spring, bending and twisting energy (closed, less its normal
+    /// spring's, which stays as contact) and `volumetricJ`, its share of what its stretch held
+    /// in its particles' volumetric terms, at its failure surface, less Gf h².
+    void releaseSnapEnergy(size_t b, double volumetricJ);
     /// The failure index's factors for a strength class and axis: its divisions done once a
     /// step, not once a bond.
     struct FailureTerms {
