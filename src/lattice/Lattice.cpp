@@ -182,7 +182,8 @@ bool Lattice::measureBond(size_t b, double dtS, bool growDamage)
     double damage = damageBefore;
     if (growDamage && growBondDamage(b, equivalentStretchM(b, s, lengthM, damage), std::abs(openingRateMS) / voxelSizeM, dtS))
         damage = bondDamage(b);
-    terms.snapped = damage >= 1.0 && damageBefore < 1.0 && damageLaw == LatticeDamageLaw::Softening && snapsAtPeak(b);
+    const bool snapped = damage >= 1.0 && damageBefore < 1.0 && damageLaw == LatticeDamageLaw::Softening && snapsAtPeak(b);
+    if (snapped) mSnapped[b] = 1;
     const double intact = 1.0 - damage, sqrtIntact = std::sqrt(intact);
     const bool opening = lengthM > voxelSizeM;
     Eigen::Vector3d local = -intact * k.shearNPerM[a] * s.displacementM;
@@ -200,14 +201,17 @@ bool Lattice::measureBond(size_t b, double dtS, bool growDamage)
     terms.bendingMomentNm = s.frame * bending;
     terms.effectiveStretchM = opening ? sqrtIntact * (lengthM - voxelSizeM) : lengthM - voxelSizeM;
     terms.volumetricAreaPerArmM = (opening ? sqrtIntact : 1.0) * voxelSizeM * voxelSizeM / lengthM;
-    return terms.snapped;
+    return snapped;
 }
 
 void Lattice::releaseSnapEnergies()
 {
     std::vector<uint32_t> snapped;
     for (size_t b = 0; b < bondCount(); ++b)
-        if (mBondTerms[b].snapped) snapped.push_back(uint32_t(b));
+        if (mSnapped[b]) {
+            snapped.push_back(uint32_t(b));
+            mSnapped[b] = 0;
+        }
     // What the open ones' stretches held in each particle's tr ε, taken out together: the
     // particle's volumetric energy with them counted (tr ε now plus their shares) less without.
     std::unordered_map<uint32_t, double> removedTrace;
@@ -387,6 +391,7 @@ void Lattice::refreshForces()
 {
     updateFailureTerms();
     mBondTerms.resize(bondCount());
+    mSnapped.assign(bondCount(), 0);
     bondForceN.resize(particleCount());
     bondMomentNm.resize(particleCount());
     forEach(bondCount(), [&](size_t b) { measureBond(b, 0.0, false); });
