@@ -382,6 +382,41 @@ struct StopOnce : Interrupter {
 
 }  // namespace
 
+TEST(Run, ALongFrameReportsItsProgressBeforeItEnds)
+{
+    // A frame of the deformable phase can take minutes: the progress callback hears from within
+    // it (here after every step), by simulated time, before the frame is written.
+    nlohmann::json j = nlohmann::json::parse(kSmallScene);
+    j["duration_s"] = 0.125;
+    j["fracture"] = {{"algorithm", "lattice"}};
+    const Scene scene = parseScene(j.dump(), "small", ".");
+    RunOptions options;
+    options.outputDirectory = testing::TempDir() + "/spall-progress";
+    std::filesystem::remove_all(options.outputDirectory);
+    options.progressEveryS = 0.0;
+    options.maxFrames = 2;
+    std::vector<RunProgress> reports;
+    const RunReport report = runScene(scene, options, [&](const RunProgress& p) {
+        reports.push_back(p);
+        return true;
+    });
+    ASSERT_TRUE(report.complete);
+    const double frameS = 1.0 / scene.frameRateHz;
+    ASSERT_GE(reports.size(), 3u);
+    EXPECT_TRUE(reports.front().frameWritten);
+    EXPECT_TRUE(reports.back().frameWritten);
+    EXPECT_DOUBLE_EQ(reports.back().timeS, frameS);
+    int within = 0;
+    for (size_t i = 1; i + 1 < reports.size(); ++i) {
+        EXPECT_FALSE(reports[i].frameWritten);
+        EXPECT_EQ(reports[i].frame, 1);
+        EXPECT_GT(reports[i].timeS, reports[i - 1].timeS);
+        EXPECT_LE(reports[i].timeS, frameS);
+        ++within;
+    }
+    EXPECT_GT(within, 0);
+}
+
 TEST(Checkpoint, RunStoppedWithinAFrameResumesAndEndsAsTheUninterruptedOne)
 {
     // A frame of the deformable phase can take minutes, so a stop request (SIGTERM at a time

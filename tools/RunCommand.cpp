@@ -9,6 +9,7 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -16,20 +17,20 @@
 
 namespace {
 
-/// The per-frame callback: draws a progress bar with the time left (unless quiet) and says
-/// whether to go on (not after Ctrl-C or SIGTERM).
+/// The progress callback: draws a progress bar by simulated time with the time left at the pace
+/// so far (unless quiet) and says whether to go on (not after Ctrl-C or SIGTERM).
 std::function<bool(const spall::RunProgress&)> progressBar(bool quiet)
 {
-    return [quiet, firstFrame = -1](const spall::RunProgress& p) mutable {
-        if (firstFrame < 0) firstFrame = p.frame;
+    return [quiet, firstTimeS = -1.0](const spall::RunProgress& p) mutable {
+        if (firstTimeS < 0.0) firstTimeS = p.timeS;
         if (!quiet) {
             const int width = 30;
-            const int filled = p.frameCount > 0 ? width * (p.frame + 1) / p.frameCount : width;
-            const double perFrame = p.elapsedS / (p.frame + 1 - firstFrame);
-            const double left = perFrame * (p.frameCount - p.frame - 1);
-            std::fprintf(stderr, "\r[%-*s] frame %d/%d  t=%.3f s  bodies %zu  steps %lld  %.0f s left ", width,
-                         std::string(filled, '#').c_str(), p.frame + 1, p.frameCount, p.timeS, p.bodies,
-                         static_cast<long long>(p.totalSteps), left);
+            const double done = p.endTimeS > 0.0 ? std::min(1.0, p.timeS / p.endTimeS) : 1.0;
+            const double simulatedS = p.timeS - firstTimeS;
+            const double left = simulatedS > 0.0 ? p.elapsedS * (p.endTimeS - p.timeS) / simulatedS : 0.0;
+            std::fprintf(stderr, "\r[%-*s] frame %d/%d%s  t=%.4f s  bodies %zu  steps %lld  %.0f s left ", width,
+                         std::string(size_t(width * done), '#').c_str(), p.frame + 1, p.frameCount, p.frameWritten ? "" : " (computing)",
+                         p.timeS, p.bodies, static_cast<long long>(p.totalSteps), left);
             std::fflush(stderr);
         }
         return !stopRequested();

@@ -136,9 +136,19 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
     PreviewRecorder preview(options, frameCount, scene);
     RunReport report;
     report.totalSteps = stepsSoFar;
+    const double endTimeS = (frameCount - 1) / scene.frameRateHz;
+    auto lastReport = start;
+    const auto elapsedS = [&](std::chrono::steady_clock::time_point now) { return std::chrono::duration<double>(now - start).count(); };
     for (int f = firstFrame; f < frameCount; ++f) {
         const double t = f / scene.frameRateHz;
-        if (!sim.advanceTo(t, options.interrupter)) {
+        const auto reportWithinFrame = [&] {
+            const auto now = std::chrono::steady_clock::now();
+            if (!onFrame || std::chrono::duration<double>(now - lastReport).count() < options.progressEveryS) return;
+            lastReport = now;
+            const int64_t steps = report.totalSteps + sim.state().stepStats.steps;
+            onFrame({f, frameCount, sim.timeS(), sim.bodies().size(), steps, elapsedS(now), endTimeS, false});
+        };
+        if (!sim.advanceTo(t, options.interrupter, reportWithinFrame)) {
             // Asked to stop within the frame (a frame of the deformable phase can take minutes):
             // the state between two steps is saved, frame f still to write.
             if (scene.output.checkpointEveryS > 0)
@@ -152,7 +162,8 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
         preview.record(f, t, sim.bodies());
         report.framesWritten = f + 1;
         const auto now = std::chrono::steady_clock::now();
-        const RunProgress progress{f, frameCount, t, sim.bodies().size(), report.totalSteps, std::chrono::duration<double>(now - start).count()};
+        lastReport = now;
+        const RunProgress progress{f, frameCount, t, sim.bodies().size(), report.totalSteps, elapsedS(now), endTimeS, true};
         const bool stop = onFrame && !onFrame(progress) && f + 1 < frameCount;
         // The checkpoint goes after the frame's outputs: whatever it says is written, is.
         const double every = scene.output.checkpointEveryS;

@@ -197,11 +197,12 @@ StepStats Simulation::takeStepStats()
     return s;
 }
 
-bool Simulation::advanceTo(double targetS, Interrupter* interrupter)
+bool Simulation::advanceTo(double targetS, Interrupter* interrupter, const std::function<void()>& afterStep)
 {
     while (mState.timeS < targetS) {
         if (interrupter && interrupter->wasInterrupted()) return false;
         step(targetS);
+        if (afterStep) afterStep();
     }
     return true;
 }

@@ -24,16 +24,22 @@ struct RunOptions {
     /// Told what setting the scene up found that a user should know (mesh repairs, memory at
     /// risk), before the first step; may be empty.
     std::function<void(const std::string&)> onNote;
+    /// How often a frame that takes long reports its progress to the callback (unit: s of wall
+    /// clock; 0: after every step).
+    double progressEveryS = 1.0;
 };
 
-/// What the progress callback sees after each frame.
+/// What the progress callback sees after each frame, and about once a second within a long
+/// frame (a frame of the deformable phase can take many minutes).
 struct RunProgress {
-    int frame = 0;
+    int frame = 0;  ///< the frame written, or the one being computed
     int frameCount = 0;
-    double timeS = 0;
+    double timeS = 0;  ///< simulated (unit: s)
     size_t bodies = 0;
-    int64_t totalSteps = 0;
-    double elapsedS = 0;
+    int64_t totalSteps = 0;  ///< so far
+    double elapsedS = 0;     ///< wall clock since this run (or resume) began (unit: s)
+    double endTimeS = 0;     ///< the last frame's time (unit: s)
+    bool frameWritten = true;  ///< false: a report from within frame `frame`
 };
 
 struct RunReport {

@@ -86,7 +86,7 @@ public:
 
     /// Steps (adaptively) until time t exactly; returns false, between two steps and before t,
     /// when `interrupter` asks to stop (the state is then a whole step's, fit for a checkpoint).
-    bool advanceTo(double timeS, Interrupter* interrupter = nullptr);
+    bool advanceTo(double timeS, Interrupter* interrupter = nullptr, const std::function<void()>& afterStep = {});
 
     /// One step toward `targetS` (landing on it when it is near; by default the step is the one
     /// chosen). Its phases, in order: open windows, choose dt, fracture, split, hand off, enter
