@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <unordered_map>
 
 namespace spall {
 
@@ -157,16 +156,6 @@ bool Lattice::snapsAtPeak(size_t b) const
     return strength.zeroTractionStretchM <= strength.peakStretchM;
 }
 
-double Lattice::elasticEnergyJ(size_t b, const BondStrain& s, double intact) const
-{
-    const LatticeStiffness& k = stiffness;
-    const int a = bonds[b].axis;
-    const double normal = s.displacementM[a], twist = s.rotationRad[a];
-    return 0.5 * intact *
-           (k.normalNPerM[a] * normal * normal + k.shearNPerM[a] * (s.displacementM.squaredNorm() - normal * normal) +
-            k.bendingNmPerRad[a] * (s.rotationRad.squaredNorm() - twist * twist) + k.twistingNmPerRad[a] * twist * twist);
-}
-
 bool Lattice::measureBond(size_t b, double dtS, bool growDamage)
 {
     const LatticeBond& bond = bonds[b];
@@ -202,63 +191,6 @@ bool Lattice::measureBond(size_t b, double dtS, bool growDamage)
     terms.effectiveStretchM = opening ? sqrtIntact * (lengthM - voxelSizeM) : lengthM - voxelSizeM;
     terms.volumetricAreaPerArmM = (opening ? sqrtIntact : 1.0) * voxelSizeM * voxelSizeM / lengthM;
     return snapped;
-}
-
-void Lattice::releaseSnapEnergies()
-{
-    std::vector<uint32_t> snapped;
-    for (size_t b = 0; b < bondCount(); ++b)
-        if (mSnapped[b]) {
-            snapped.push_back(uint32_t(b));
-            mSnapped[b] = 0;
-        }
-    // What the open ones' stretches held in each particle's tr ε, taken out together: the
-    // particle's volumetric energy with them counted (tr ε now plus their shares) less without.
-    std::unordered_map<uint32_t, double> removedTrace;
-    const auto traceShare = [&](uint32_t b, uint32_t p) {
-        const double stretchM = mBondTerms[b].armM.norm() - voxelSizeM;
-        return stretchM > 0.0 ? stretchM / voxelSizeM * mInverseBondCount[p][bonds[b].axis] : 0.0;
-    };
-    for (const uint32_t b : snapped)
-        for (const uint32_t p : {bonds[b].low, bonds[b].high}) removedTrace[p] += traceShare(b, p);
-    const double h3 = voxelSizeM * voxelSizeM * voxelSizeM;
-    for (const uint32_t b : snapped) {
-        double volumetricJ = 0.0;
-        for (const uint32_t p : {bonds[b].low, bonds[b].high}) {
-            const double removed = removedTrace[p], trace = mVolumetricStrain[p];
-            if (removed > 0.0) volumetricJ += 0.5 * mLambdaPa[p] * h3 * ((trace + removed) * (trace + removed) - trace * trace) * traceShare(b, p) / removed;
-        }
-        releaseSnapEnergy(b, volumetricJ);
-    }
-}
-
-void Lattice::releaseSnapEnergy(size_t b, double volumetricJ)
-{
-    const LatticeBond& bond = bonds[b];
-    const int a = bond.axis;
-    const int freeEnds = int(!held[bond.low]) + int(!held[bond.high]);
-    if (freeEnds == 0) return;
-    const BondStrain strain = strainOf(bond);
-    const double lengthM = mBondTerms[b].armM.norm();
-    double lostJ = elasticEnergyJ(b, strain, 1.0) + volumetricJ;
-    // Closed, it still carries its compression as contact: its normal spring's energy stays.
-    if (lengthM < voxelSizeM) lostJ -= 0.5 * stiffness.normalNPerM[size_t(a)] * strain.displacementM[a] * strain.displacementM[a];
-    // A step carries a bond past its strength by up to a third of its peak stretch, and the
-    // energy of that overshoot was never paid for by the particles (their next kick would have
-    // paid it): what it held on its failure surface is the energy, quadratic in a strain the
-    // failure index is linear in, over the index squared (rate-free strength).
-    const LatticeStiffness::Strength& strength = stiffness.strength[bond.strengthClass];
-    const double index = equivalentStretchM(b, strain, lengthM, 0.0) / (bondHistory[b].strengthScale * strength.peakStretchM);
-    const double releasedJ = lostJ / std::max(1.0, index * index) - strength.fractureEnergyJPerM2 * voxelSizeM * voxelSizeM;
-    if (!(releasedJ > 0.0)) return;
-    // Kinetic energy added by dv apart, shared between the free ends (a held end takes none):
-    // E = m (dv w + dv² / 2) for one free end and m (dv w / 2 + dv² / 4) for two (each moving
-    // dv / 2), w the free ends' opening rate: dv = -w + sqrt(w² + 2 n E / m), n free ends.
-    const Eigen::Vector3d along = mBondTerms[b].armM / lengthM;
-    const double w = ((held[bond.high] ? Eigen::Vector3d::Zero() : velocityMS[bond.high]) - (held[bond.low] ? Eigen::Vector3d::Zero() : velocityMS[bond.low])).dot(along);
-    const double dv = -w + std::sqrt(w * w + 2.0 * freeEnds * releasedJ / particleMassKg);
-    if (!held[bond.high]) velocityMS[bond.high] += (dv / freeEnds) * along;
-    if (!held[bond.low]) velocityMS[bond.low] -= (dv / freeEnds) * along;
 }
 
 void Lattice::completeBondForce(size_t b)
@@ -453,49 +385,6 @@ int64_t Lattice::advance(double dtS)
     const int64_t substeps = static_cast<int64_t>(std::ceil(dtS / stableTimeStepS() * (1.0 - 1e-12)));
     for (int64_t i = 0; i < substeps; ++i) step(dtS / double(substeps));
     return substeps;
-}
-
-double Lattice::kineticEnergyJ() const
-{
-    double sum = 0.0;
-    for (size_t p = 0; p < particleCount(); ++p)
-        sum += 0.5 * particleMassKg * velocityMS[p].squaredNorm() + 0.5 * particleInertiaKgM2 * angularVelocityRadS[p].squaredNorm();
-    return sum;
-}
-
-double Lattice::bondStrainEnergyJ(size_t b) const
-{
-    const double intact = 1.0 - bondDamage(b);
-    const double overlapM = std::max(0.0, voxelSizeM - (positionM[bonds[b].high] - positionM[bonds[b].low]).norm());
-    return elasticEnergyJ(b, strainOf(bonds[b]), intact) + 0.5 * (1.0 - intact) * stiffness.normalNPerM[size_t(bonds[b].axis)] * overlapM * overlapM;
-}
-
-double Lattice::volumetricEnergyJ(size_t p) const
-{
-    return 0.5 * mLambdaPa[p] * voxelSizeM * voxelSizeM * voxelSizeM * mVolumetricStrain[p] * mVolumetricStrain[p];
-}
-
-double Lattice::strainEnergyJ() const
-{
-    double sum = 0.0;
-    for (size_t b = 0; b < bonds.size(); ++b) sum += bondStrainEnergyJ(b);
-    for (size_t p = 0; p < particleCount(); ++p) sum += volumetricEnergyJ(p);
-    return sum;
-}
-
-Eigen::Vector3d Lattice::linearMomentum() const
-{
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (const Eigen::Vector3d& v : velocityMS) sum += particleMassKg * v;
-    return sum;
-}
-
-Eigen::Vector3d Lattice::angularMomentumAboutOrigin() const
-{
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (size_t p = 0; p < particleCount(); ++p)
-        sum += positionM[p].cross(particleMassKg * velocityMS[p]) + particleInertiaKgM2 * angularVelocityRadS[p];
-    return sum;
 }
 
 }  // namespace spall

@@ -67,7 +67,8 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
         s.youngsModulusPa = youngsPa;
         s.peakStretchM = tensilePa * h / youngsPa;
         // Voxels too large to soften (snap-back) break at the peak: the strength, which decides
-        // whether a body breaks, is kept, and a crack dissipates ft² h / (2E) per area, more than Gf.
+        // whether a body breaks, is kept, and what the bond held beyond Gf goes back to its
+        // particles (Lattice::releaseSnapEnergies).
         s.zeroTractionStretchM = std::max(2.0 * fractureEnergyJPerM2 / tensilePa, s.peakStretchM);
         s.fractureEnergyJPerM2 = fractureEnergyJPerM2;
         s.shearStrengthPa = shearPa;

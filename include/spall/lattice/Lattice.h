@@ -50,11 +50,12 @@ struct LatticeStiffness {
         /// stretch peaks at u0 = ft h / E and its traction falls to nothing at uf = 2 Gf / ft,
         /// so a broken bond has dissipated Gf per unit of its face, whatever h. That needs
         /// uf > u0, h < 2 E Gf / ft² (0.55 mm for glass, 1.1 m for brick masonry); above it
-        /// uf = u0: brittle at the full strength, dissipating ft² h / (2E) > Gf.
+        /// uf = u0: brittle at the full strength, giving what it held beyond Gf back to its
+        /// particles (Lattice::releaseSnapEnergies).
         double peakStretchM = 0.0;
         double zeroTractionStretchM = 0.0;
-        /// Gf, which a bond too large to soften returns its elastic energy above when it snaps
-        /// (Lattice::releaseSnapEnergy) (unit: J/m²).
+        /// Gf, beyond which a bond too large to soften gives its elastic energy back when it
+        /// snaps (Lattice::releaseSnapEnergies) (unit: J/m²).
         double fractureEnergyJPerM2 = 0.0;
         /// Mohr–Coulomb with the tension cut-off (Material): the shear strength at no normal
         /// stress and the friction coefficient, the friction on the bond's normal traction.
