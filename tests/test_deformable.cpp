@@ -546,3 +546,102 @@ TEST(DefaultScene, BrickWallEndsInBricksClustersAndAStandingStump)
     EXPECT_GT(stumpFraction, 0.1) << "part of the wall stands where it stood";
     EXPECT_LT(stumpFraction, 0.8) << "heavily damaged";
 }
+
+namespace {
+
+/// A body whose outline does not follow 2 x 2 x 2 blocks (7 x 5 x 3 voxels), turned, moving
+/// and spinning.
+Body oddBodyInMotion()
+{
+    const Eigen::Quaterniond turned(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, -1, 2).normalized()));
+    Body body = test::boxBody(7, 5, 3, 0.02, 1900.0, Eigen::Vector3d(0.4, -0.3, 1.2), turned);
+    body.motion.linearVelocityMS = Eigen::Vector3d(2, -1, 0.5);
+    body.motion.angularVelocityRadS = Eigen::Vector3d(3, 1, -4);
+    return body;
+}
+
+LatticeSettings inBlocksOf(int particleVoxels)
+{
+    LatticeSettings settings;
+    settings.particleVoxels = particleVoxels;
+    return settings;
+}
+
+}  // namespace
+
+TEST(Deformable, ALatticeOfBlocksStartsWithTheBodysMomentaAndGivesItsMotionBack)
+{
+    // 2 x 2 x 2 blocks: 4 x 3 x 2 particles, heavier than the 105 voxels (the blocks on the far
+    // faces are partly empty), so the lattice carries the body's momenta, not its velocities.
+    const Body body = oddBodyInMotion();
+    const DeformableBody d = enterDeformablePhase(body, findMaterialPreset("brick-masonry"), inBlocksOf(2), LatticeSupports(), 0.0);
+    ASSERT_EQ(d.lattice.voxelParticleCount, 24u);
+    EXPECT_NEAR(d.lattice.voxelSizeM, 0.04, 1e-15);
+    const Eigen::Vector3d p = linearMomentum(body), l = angularMomentumAboutOrigin(body);
+    EXPECT_LT((d.lattice.linearMomentum() - p).norm(), 1e-12 * p.norm());
+    EXPECT_LT((d.lattice.angularMomentumAboutOrigin() - l).norm(), 1e-12 * l.norm());
+    // Undeformed, the lattice gives the body back its place and motion.
+    Body follower = body;
+    follower.motion = BodyMotion();
+    followLattice(follower, d.lattice);
+    EXPECT_LT((follower.motion.positionM - body.motion.positionM).norm(), 1e-12);
+    EXPECT_LT(Eigen::AngleAxisd(follower.motion.orientation.inverse() * body.motion.orientation).angle(), 1e-12);
+    EXPECT_LT((follower.motion.linearVelocityMS - body.motion.linearVelocityMS).norm(), 1e-12);
+    EXPECT_LT((follower.motion.angularVelocityRadS - body.motion.angularVelocityRadS).norm(), 1e-11);
+}
+
+TEST(Deformable, ALatticeOfBlocksTakesEveryFacesForceAndTheBodysWeight)
+{
+    const Body body = oddBodyInMotion();
+    DeformableBody d = enterDeformablePhase(body, findMaterialPreset("brick-masonry"), inBlocksOf(2), LatticeSupports(), 0.0);
+    std::vector<Eigen::Vector3d> faceForces;
+    Eigen::Vector3d total = Eigen::Vector3d::Zero();
+    for (size_t f = 0; f < body.exposedFaces.size(); ++f) {
+        faceForces.push_back(Eigen::Vector3d(std::sin(1.0 * f), std::cos(2.0 * f), 0.3) * 100.0);
+        total += faceForces.back();
+    }
+    const Eigen::Vector3d gravity(0, 0, -9.81);
+    setExternalForces(d.lattice, body, faceForces, gravity);
+    Eigen::Vector3d applied = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector3d& f : d.lattice.externalForceN) applied += f;
+    const Eigen::Vector3d expected = total + body.mass.massKg * gravity;
+    EXPECT_LT((applied - expected).norm(), 1e-12 * expected.norm());
+}
+
+TEST(Deformable, ALatticeOfBlocksHandsEveryPieceItsMomentaAndCutsTheVoxelsLinks)
+{
+    const Body body = oddBodyInMotion();
+    DeformableBody d = enterDeformablePhase(body, findMaterialPreset("brick-masonry"), inBlocksOf(2), LatticeSupports(), 0.0);
+    Lattice& lattice = d.lattice;
+    std::mt19937 random(11);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    for (size_t p = 0; p < lattice.particleCount(); ++p) {
+        lattice.velocityMS[p] += Eigen::Vector3d(normal(random), normal(random), normal(random));
+        lattice.angularVelocityRadS[p] += 10.0 * Eigen::Vector3d(normal(random), normal(random), normal(random));
+    }
+    // The bonds between block columns x = 1 and x = 2 (voxels x = 3 and 4) break: 3 x 2 bonds,
+    // which cut the 5 x 3 links between the voxels there.
+    for (size_t b = 0; b < lattice.bondCount(); ++b)
+        if (lattice.bonds[b].axis == 0 && lattice.voxel[lattice.bonds[b].low].x() == 1) lattice.bondHistory[b].damageDriverM = 1.0;
+    lattice.refreshForces();
+    const HandOff handed = handOff(body, lattice);
+    ASSERT_EQ(handed.parts.size(), 2u);
+    EXPECT_EQ(handed.brokenBonds, 6);
+    EXPECT_EQ(handed.brokenLinks, 15);
+    Eigen::Vector3d linear = Eigen::Vector3d::Zero(), angular = Eigen::Vector3d::Zero();
+    int64_t voxels = 0;
+    for (const Body& part : handed.parts) {
+        std::vector<uint32_t> mine;
+        for (uint32_t p = 0; p < lattice.voxelParticleCount; ++p)
+            if ((lattice.voxel[p].x() >= 2) == part.grid->tree().isValueOn(openvdb::Coord(6, 0, 0))) mine.push_back(p);
+        const auto [ownLinear, ownAngular] = momentaOf(lattice, mine);
+        EXPECT_LT((linearMomentum(part) - ownLinear).norm(), 1e-12 * ownLinear.norm());
+        EXPECT_LT((angularMomentumAboutOrigin(part) - ownAngular).norm(), 1e-12 * ownAngular.norm());
+        linear += linearMomentum(part);
+        angular += angularMomentumAboutOrigin(part);
+        voxels += part.mass.voxelCount;
+    }
+    EXPECT_EQ(voxels, body.mass.voxelCount);
+    EXPECT_LT((linear - lattice.linearMomentum()).norm(), 1e-12 * lattice.linearMomentum().norm());
+    EXPECT_LT((angular - lattice.angularMomentumAboutOrigin()).norm(), 1e-12 * lattice.angularMomentumAboutOrigin().norm());
+}

@@ -3,10 +3,13 @@
 #include <spall/core/DisjointSets.h>
 #include <spall/core/Error.h>
 #include <spall/fracture/Fracture.h>
+#include <spall/lattice/ParticleBlocks.h>
 
 #include <Eigen/SVD>
 
 #include <algorithm>
+#include <cmath>
+#include <map>
 #include <numeric>
 #include <stdexcept>
 
@@ -20,14 +23,71 @@ Eigen::Vector3d angularVelocityOf(const Eigen::Vector3d& angularMomentum, const 
     return (rotation * inertiaLocal * rotation.transpose()).ldlt().solve(angularMomentum);
 }
 
-/// A body's motion as a fit gives it, with the body's own inertia (so its angular momentum is
-/// exactly the particles').
-void setMotionFromFit(BodyMotion& motion, const RigidFit& fit, const Eigen::Matrix3d& inertiaLocal)
+/// Bodies (in the same frame) that leave a fit of particles as one rigid motion with exactly the
+/// particles' linear and angular momentum: the bodies' own mass and inertia, so a lattice of
+/// blocks (ParticleBlocks.h), heavier than its voxels at the surface, hands over its momenta, not
+/// its velocities. `blockOffsetM` places the fit's rest frame in the bodies' (blockCentreOffsetM).
+void setMotionsFromFit(const std::vector<Body*>& bodies, const RigidFit& fit, const Eigen::Vector3d& blockOffsetM)
 {
-    motion.positionM = fit.centreM;
-    motion.orientation = Eigen::Quaterniond(fit.rotation).normalized();
-    motion.linearVelocityMS = fit.velocityMS;
-    motion.angularVelocityRadS = angularVelocityOf(fit.angularMomentumKgM2S, inertiaLocal, motion.orientation.toRotationMatrix());
+    double mass = 0.0;
+    Eigen::Vector3d centreLocal = Eigen::Vector3d::Zero();
+    for (const Body* b : bodies) {
+        mass += b->mass.massKg;
+        centreLocal += b->mass.massKg * b->mass.centreOfMassLocalM;
+    }
+    centreLocal /= mass;
+    Eigen::Matrix3d inertiaLocal = Eigen::Matrix3d::Zero();
+    for (const Body* b : bodies) {
+        const Eigen::Vector3d d = b->mass.centreOfMassLocalM - centreLocal;
+        inertiaLocal += b->mass.inertiaKgM2 + b->mass.massKg * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
+    }
+    const Eigen::Vector3d centre = fit.centreM + fit.rotation * (centreLocal - fit.restCentreM - blockOffsetM);
+    const Eigen::Vector3d angularMomentum = fit.angularMomentumKgM2S + (fit.centreM - centre).cross(fit.linearMomentumKgMS);
+    const Eigen::Vector3d velocity = fit.linearMomentumKgMS / mass;
+    const Eigen::Vector3d spin = angularVelocityOf(angularMomentum, inertiaLocal, fit.rotation);
+    for (Body* b : bodies) {
+        const Eigen::Vector3d arm = fit.rotation * (b->mass.centreOfMassLocalM - centreLocal);
+        b->motion.positionM = centre + arm;
+        b->motion.orientation = Eigen::Quaterniond(fit.rotation).normalized();
+        b->motion.linearVelocityMS = velocity + spin.cross(arm);
+        b->motion.angularVelocityRadS = spin;
+    }
+}
+
+/// The edge of the lattice's particles in the body's voxels.
+int particleVoxelsOf(const Lattice& lattice, const Body& body) { return int(std::lround(lattice.voxelSizeM / body.voxelSizeM)); }
+
+/// The lattice particle of one of the body's voxels.
+uint32_t particleOfVoxel(const Lattice& lattice, const openvdb::Coord& voxel, int particleVoxels)
+{
+    const int32_t p = lattice.particleAt(particleCell(voxel, particleVoxels));
+    if (p < 0) throw std::logic_error("a voxel outside its body's lattice");
+    return uint32_t(p);
+}
+
+/// The lattice's particles grouped by the bonds that have not broken.
+DisjointSets intactPieces(const Lattice& lattice)
+{
+    DisjointSets sets(lattice.particleCount());
+    for (size_t b = 0; b < lattice.bondCount(); ++b)
+        if (lattice.bondDamage(b) < 1.0) sets.join(lattice.bonds[b].low, lattice.bonds[b].high);
+    return sets;
+}
+
+/// f(voxel) for the body's cells in a block: all k³ of them, or with `face` >= 0 the k² on
+/// that face.
+template <typename F>
+void forEachCellOfBlock(const openvdb::Coord& block, int k, int face, F&& f)
+{
+    openvdb::Coord low(block.x() * k, block.y() * k, block.z() * k);
+    openvdb::Coord high = low.offsetBy(k - 1);
+    if (face >= 0) {
+        const int axis = faceAxis(face);
+        low[axis] = high[axis] = faceSign(face) > 0 ? high[axis] : low[axis];
+    }
+    for (int x = low.x(); x <= high.x(); ++x)
+        for (int y = low.y(); y <= high.y(); ++y)
+            for (int z = low.z(); z <= high.z(); ++z) f(openvdb::Coord(x, y, z));
 }
 
 /// A particle's place in the body frame, index h (unit: m).
@@ -58,7 +118,10 @@ double rigidKineticEnergyJ(const Lattice& lattice, const std::vector<uint32_t>& 
 DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
                                     const LatticeSupports& supports, double timeS)
 {
-    DeformableBody d{body.id, Lattice::fromBody(body, material, supports, settings.seed), timeS, timeS};
+    DeformableBody d{body.id,
+                     settings.particleVoxels > 1 ? Lattice::fromBody(coarsenedBody(body, settings.particleVoxels), material, supports, settings.seed)
+                                                 : Lattice::fromBody(body, material, supports, settings.seed),
+                     timeS, timeS};
     d.lattice.bulkViscosity = settings.bulkViscosity;
     d.lattice.damageLaw = settings.damageLaw;
     return d;
@@ -88,14 +151,19 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
 
 void setExternalForces(Lattice& lattice, const Body& body, const std::vector<Eigen::Vector3d>& faceForcesN, const Eigen::Vector3d& gravityMS2)
 {
-    const Eigen::Vector3d weight = lattice.particleMassKg * gravityMS2;
+    // The body's weight, over its particles (blocks at the surface are heavier than its voxels).
+    const Eigen::Vector3d weight = body.mass.massKg / double(lattice.voxelParticleCount) * gravityMS2;
     for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = lattice.held[p] ? Eigen::Vector3d::Zero() : weight;
     if (faceForcesN.empty()) return;
-    // Faces and particles are both in the grid's leaf order: walk them side by side.
-    size_t p = 0;
+    const int k = particleVoxelsOf(lattice, body);
+    // Faces come in leaf order, a voxel's together: look a particle up once per voxel.
+    openvdb::Coord voxel = openvdb::Coord::max();
+    uint32_t p = 0;
     for (size_t f = 0; f < body.exposedFaces.size(); ++f) {
-        while (p < lattice.particleCount() && lattice.voxel[p] != body.exposedFaces[f].voxel) ++p;
-        if (p == lattice.particleCount()) throw std::logic_error("setExternalForces: the body's faces are not in its lattice's order");
+        if (body.exposedFaces[f].voxel != voxel) {
+            voxel = body.exposedFaces[f].voxel;
+            p = particleOfVoxel(lattice, voxel, k);
+        }
         if (!lattice.held[p]) lattice.externalForceN[p] += faceForcesN[f];
     }
 }
@@ -113,7 +181,9 @@ RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& par
     }
     fit.centreM /= n;
     fit.velocityMS /= n;
+    fit.linearMomentumKgMS = m * n * fit.velocityMS;
     restCentre /= n;
+    fit.restCentreM = restCentre;
     // Kabsch (1976): the rotation R minimising Σ |R r_i - d_i|² is U diag(1, 1, det) Vᵀ from the
     // SVD of Σ d_i r_iᵀ; over the points of each particle's cube too (their second moment, h²/12
     // per axis, times its orientation), so one particle or a row of them has a rotation as well.
@@ -136,15 +206,13 @@ void followLattice(Body& body, const Lattice& lattice)
     if (body.anchored) return;
     std::vector<uint32_t> voxels(lattice.voxelParticleCount);
     std::iota(voxels.begin(), voxels.end(), 0u);
-    setMotionFromFit(body.motion, fitRigidMotion(lattice, voxels), body.mass.inertiaKgM2);
+    setMotionsFromFit({&body}, fitRigidMotion(lattice, voxels), blockCentreOffsetM(body.voxelSizeM, particleVoxelsOf(lattice, body)));
 }
 
 LatticePieces latticePieces(const Lattice& lattice)
 {
     LatticePieces pieces;
-    DisjointSets sets(lattice.particleCount());
-    for (size_t b = 0; b < lattice.bondCount(); ++b)
-        if (lattice.bondDamage(b) < 1.0) sets.join(lattice.bonds[b].low, lattice.bonds[b].high);
+    DisjointSets sets = intactPieces(lattice);
     std::vector<int32_t> pieceOfRoot(lattice.particleCount(), -1);
     pieces.pieceOf.resize(lattice.particleCount());
     for (uint32_t p = 0; p < lattice.particleCount(); ++p) {
@@ -222,48 +290,61 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
 HandOff handOff(const Body& body, const Lattice& lattice)
 {
     HandOff result;
+    const int k = particleVoxelsOf(lattice, body);
     Body whole = body;
     whole.grid = body.grid->deepCopy();
     auto links = whole.grid->getAccessor();
     for (size_t b = 0; b < lattice.bondCount(); ++b) {
         if (lattice.bondDamage(b) < 1.0) continue;
         const LatticeBond& bond = lattice.bonds[b];
-        const uint32_t supportPoint = std::max(bond.low, bond.high);
-        if (supportPoint >= lattice.voxelParticleCount) {
-            // An anchor: its voxel lets go of its support.
-            const openvdb::Coord& v = lattice.voxel[std::min(bond.low, bond.high)];
-            links.setValueOn(v, links.getValue(v) & ~kAnchorBit);
+        if (std::max(bond.low, bond.high) >= lattice.voxelParticleCount) {
+            // An anchor: its voxels let go of their support.
+            forEachCellOfBlock(lattice.voxel[std::min(bond.low, bond.high)], k, -1, [&](const openvdb::Coord& v) {
+                if (links.isValueOn(v)) links.setValueOn(v, links.getValue(v) & ~kAnchorBit);
+            });
             ++result.brokenAnchors;
             continue;
         }
-        result.brokenBonds += breakLink(links, lattice.voxel[bond.low], 2 * bond.axis + 1) ? 1 : 0;
+        const int64_t linksBefore = result.brokenLinks;
+        forEachCellOfBlock(lattice.voxel[bond.low], k, 2 * bond.axis + 1, [&](const openvdb::Coord& v) {
+            result.brokenLinks += links.isValueOn(v) && breakLink(links, v, 2 * bond.axis + 1) ? 1 : 0;
+        });
+        result.brokenBonds += result.brokenLinks > linksBefore ? 1 : 0;
     }
     refreshDerivedData(whole);
     result.parts = splitBody(whole);
     if (result.parts.empty()) result.parts.push_back(std::move(whole));
+    // A fragment keeps its parent's index space: its voxels name their particles. Parts of one
+    // piece of the lattice (a block's voxels need not touch each other) share its motion.
+    DisjointSets pieces = intactPieces(lattice);
+    std::map<uint32_t, std::vector<Body*>> partsOfPiece;
     for (Body& part : result.parts) {
-        if (part.anchored) {
-            part.motion.linearVelocityMS = part.motion.angularVelocityRadS = Eigen::Vector3d::Zero();
-            continue;
-        }
-        // A fragment keeps its parent's index space: its voxels name their particles.
-        std::vector<uint32_t> particles;
-        for (auto it = part.grid->constTree().cbeginValueOn(); it; ++it) particles.push_back(uint32_t(lattice.particleAt(it.getCoord())));
-        setMotionFromFit(part.motion, fitRigidMotion(lattice, particles), part.mass.inertiaKgM2);
         part.motion.asleep = false;
         part.motion.restTimeS = 0.0;
+        if (part.anchored)
+            part.motion.linearVelocityMS = part.motion.angularVelocityRadS = Eigen::Vector3d::Zero();
+        else
+            partsOfPiece[pieces.root(particleOfVoxel(lattice, part.grid->cbeginValueOn().getCoord(), k))].push_back(&part);
+    }
+    for (const auto& [root, parts] : partsOfPiece) {
+        std::vector<uint32_t> particles;
+        for (const Body* part : parts)
+            for (auto it = part->grid->constTree().cbeginValueOn(); it; ++it) particles.push_back(particleOfVoxel(lattice, it.getCoord(), k));
+        std::sort(particles.begin(), particles.end());
+        particles.erase(std::unique(particles.begin(), particles.end()), particles.end());
+        setMotionsFromFit(parts, fitRigidMotion(lattice, particles), blockCentreOffsetM(body.voxelSizeM, k));
     }
     return result;
 }
 
-Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tolerancePerVoxelJ, bool timeUp)
+Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tolerancePerParticleJ, bool timeUp)
 {
     Departure departure;
     const LatticePieces pieces = latticePieces(lattice);
     std::vector<char> quiet(pieces.particles.size());
     bool freeAndQuiet = false;
     for (size_t k = 0; k < quiet.size(); ++k) {
-        quiet[k] = pieces.vibrationJ[k] <= tolerancePerVoxelJ * double(pieces.voxels[k]);
+        quiet[k] = pieces.vibrationJ[k] <= tolerancePerParticleJ * double(pieces.voxels[k]);
         freeAndQuiet = freeAndQuiet || (quiet[k] && !pieces.held[k]);
     }
     const bool allQuiet = std::all_of(quiet.begin(), quiet.end(), [](char q) { return q != 0; });
@@ -273,7 +354,7 @@ Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tole
     departure.handOff = handOff(body, lattice);
     for (Body& part : departure.handOff.parts) {
         // A part is a piece, or pieces joined through a support: its first voxel says which.
-        const uint32_t piece = pieces.pieceOf[size_t(lattice.particleAt(part.grid->cbeginValueOn().getCoord()))];
+        const uint32_t piece = pieces.pieceOf[particleOfVoxel(lattice, part.grid->cbeginValueOn().getCoord(), particleVoxelsOf(lattice, body))];
         part.motion.deformable = !all && !quiet[piece];
     }
     for (size_t k = 0; k < quiet.size(); ++k)

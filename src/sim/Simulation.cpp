@@ -380,7 +380,7 @@ void Simulation::handOffQuietBodies()
         const size_t i = indexOf.at(d.bodyId);
         const double sinceBlastS = mState.timeS - d.lastLoadedS;
         const double toleranceJ =
-            mScene.lattice.handoffEnergyFraction * elasticCapacityPerVoxelJ(mScene.materials[mState.bodies[i].materialIndex], mScene.voxelSizeM);
+            mScene.lattice.handoffEnergyFraction * elasticCapacityPerVoxelJ(mScene.materials[mState.bodies[i].materialIndex], d.lattice.voxelSizeM);
         Departure out;
         if (sinceBlastS > 0.0) out = leaveQuietPieces(mState.bodies[i], d.lattice, toleranceJ, sinceBlastS >= mScene.lattice.maxVibrationS);
         std::vector<Body>& leftParts = out.handOff.parts;
@@ -390,7 +390,7 @@ void Simulation::handOffQuietBodies()
         }
         mState.handOffs.push_back({mState.timeS, d.bodyId, int64_t(d.lattice.voxelParticleCount), out.handOff.brokenBonds,
                                    out.handOff.brokenAnchors, mState.timeS - d.enteredS, out.discardedEnergyJ, out.timedOut});
-        mState.stepStats.brokenLinks += out.handOff.brokenBonds;
+        mState.stepStats.brokenLinks += out.handOff.brokenLinks;
         if (leftParts.size() == 1) {
             leftParts.front().id = mState.bodies[i].id;
             leftParts.front().parentId = mState.bodies[i].parentId;

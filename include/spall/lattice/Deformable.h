@@ -20,7 +20,8 @@ struct DeformableBody {
     double lastLoadedS = 0.0;  ///< the end of the last step it spent inside an open blast window (unit: s)
 };
 
-/// The lattice of a body entering the phase, moving with the body.
+/// The lattice of a body entering the phase, moving with the body: a particle per voxel, or per
+/// block of settings.particleVoxels³ voxels (ParticleBlocks.h) with the body's momenta.
 DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
                                     const LatticeSupports& supports, double timeS);
 
@@ -31,7 +32,8 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
 
 /// Each particle's external force for the next step: the mean force on each of the body's exposed
 /// faces (body.exposedFaces order, from the loads phase; empty when nothing loads it) on the
-/// particle behind the face, and its weight.
+/// particle behind the face (its block's, ParticleBlocks.h), and an equal share of the body's
+/// weight.
 void setExternalForces(Lattice& lattice, const Body& body, const std::vector<Eigen::Vector3d>& faceForcesN, const Eigen::Vector3d& gravityMS2);
 
 /// Particles taken as one rigid body: the motion with their linear and angular momentum, at the
@@ -39,7 +41,10 @@ void setExternalForces(Lattice& lattice, const Body& body, const std::vector<Eig
 struct RigidFit {
     Eigen::Vector3d centreM = Eigen::Vector3d::Zero();
     Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< body frame (index h) to world
-    Eigen::Vector3d velocityMS = Eigen::Vector3d::Zero();
+    Eigen::Vector3d velocityMS = Eigen::Vector3d::Zero();  ///< of the centre
+    Eigen::Vector3d linearMomentumKgMS = Eigen::Vector3d::Zero();
+    /// The particles' mean rest place in the lattice's body frame (index × its h) (unit: m).
+    Eigen::Vector3d restCentreM = Eigen::Vector3d::Zero();
     Eigen::Vector3d angularMomentumKgM2S = Eigen::Vector3d::Zero();  ///< about the centre
     double kineticEnergyJ = 0.0;  ///< the particles' own, translation and spin
 };
@@ -73,19 +78,21 @@ double elasticCapacityPerVoxelJ(const Material& material, double voxelSizeM);
 DeformableBody continueDeformable(const Body& part, const DeformableBody& whole, const Material& material, const LatticeSettings& settings,
                                   const LatticeSupports& supports);
 
-/// The body back as rigid bodies: each bond that broke breaks its link (the frames' fracture
-/// surface), each support bond that broke clears its voxel's anchor bit, and each connected part
-/// gets its particles' momenta and best-fit pose; anchored parts stay where they are. Part ids
+/// The body back as rigid bodies: each bond that broke breaks the links across its face (the
+/// frames' fracture surface), each support bond that broke clears its voxels' anchor bits, and
+/// each connected part gets its particles' momenta and best-fit pose (parts that share a piece
+/// of the lattice, its rigid motion with the piece's momenta); anchored parts stay where they are. Part ids
 /// are left to the caller; with one part, it is the body.
 struct HandOff {
     std::vector<Body> parts;
     int64_t brokenBonds = 0;
+    int64_t brokenLinks = 0;    ///< the voxels' links the broken bonds cut (brokenBonds, with a particle per voxel)
     int64_t brokenAnchors = 0;  ///< bonds to supports (the ground, a box) that broke
 };
 HandOff handOff(const Body& body, const Lattice& lattice);
 
 /// Leaving the phase, for a body the blast has passed: nothing (no parts) while no free piece is
-/// quiet (vibration at most `tolerancePerVoxelJ` per voxel), not all are, and the time is not
+/// quiet (vibration at most `tolerancePerParticleJ` per particle of the lattice), not all are, and the time is not
 /// up; otherwise handOff's parts, each marked deformable when its piece must carry on in the
 /// phase, and the vibration of the pieces that leave.
 struct Departure {
@@ -93,6 +100,6 @@ struct Departure {
     double discardedEnergyJ = 0.0;  ///< (unit: J)
     bool timedOut = false;          ///< some piece leaves without being quiet
 };
-Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tolerancePerVoxelJ, bool timeUp);
+Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tolerancePerParticleJ, bool timeUp);
 
 }  // namespace spall

@@ -40,6 +40,10 @@ struct LatticeSettings {
     /// How bonds' damage grows: the crack band's softening line, or Davison–Stevens in rate form
     /// above it, with the material's B and C.
     LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;
+    /// The edge of a lattice particle, in voxels (lattice/ParticleBlocks.h): 1, a particle per
+    /// voxel; k > 1, blocks of k³ voxels, k⁴ times less work, cracks and fragments as a lattice of
+    /// k h resolves them, pieces in the voxels' shape (unit: voxels).
+    int particleVoxels = 1;
     /// The scene's seed (not a key of its own): it draws the bonds' strength scatter.
     uint64_t seed = 1;
 };

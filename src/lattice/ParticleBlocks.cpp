@@ -1,0 +1,60 @@
+#include <spall/lattice/ParticleBlocks.h>
+
+#include <spall/voxel/LinkBits.h>
+
+namespace spall {
+
+namespace {
+
+int floorDivide(int value, int divisor) { return value >= 0 ? value / divisor : -((-value + divisor - 1) / divisor); }
+
+}  // namespace
+
+openvdb::Coord particleCell(const openvdb::Coord& voxel, int particleVoxels)
+{
+    if (particleVoxels == 1) return voxel;
+    return {floorDivide(voxel.x(), particleVoxels), floorDivide(voxel.y(), particleVoxels), floorDivide(voxel.z(), particleVoxels)};
+}
+
+Eigen::Vector3d blockCentreOffsetM(double voxelSizeM, int particleVoxels)
+{
+    return Eigen::Vector3d::Constant(0.5 * voxelSizeM * (particleVoxels - 1));
+}
+
+Body coarsenedBody(const Body& body, int particleVoxels)
+{
+    const int k = particleVoxels;
+    Body coarse;
+    coarse.id = body.id;
+    coarse.parentId = body.parentId;
+    coarse.materialIndex = body.materialIndex;
+    coarse.voxelSizeM = k * body.voxelSizeM;
+    coarse.densityKgM3 = body.densityKgM3;
+    coarse.grid = LinkGrid::create(0);
+    auto blocks = coarse.grid->getAccessor();
+    for (auto it = body.grid->constTree().cbeginValueOn(); it; ++it) {
+        const openvdb::Coord voxel = it.getCoord();
+        const openvdb::Coord block = particleCell(voxel, k);
+        int32_t bits = blocks.isValueOn(block) ? blocks.getValue(block) : 0;
+        bits |= *it & kAnchorBit;
+        // A link from a voxel into another block is a link between the blocks (both voxels see
+        // it, so the blocks' links stay symmetric).
+        for (int face = 0; face < kFaceCount; ++face)
+            if ((*it & (1 << face)) && particleCell(voxel + faceOffset(face), k) != block) bits |= 1 << face;
+        blocks.setValueOn(block, bits);
+    }
+    refreshDerivedData(coarse);
+    // Placed where the body's motion puts the blocks, with the body's linear and angular
+    // momentum (so the phase starts with exactly the body's, and hands back its own).
+    const Eigen::Vector3d shift = body.motion.orientation *
+                                  (coarse.mass.centreOfMassLocalM + blockCentreOffsetM(body.voxelSizeM, k) - body.mass.centreOfMassLocalM);
+    const Eigen::Vector3d momentum = body.mass.massKg * body.motion.linearVelocityMS;
+    const Eigen::Vector3d angularMomentum = body.worldInertiaKgM2() * body.motion.angularVelocityRadS - shift.cross(momentum);
+    coarse.motion = body.motion;
+    coarse.motion.positionM = body.motion.positionM + shift;
+    coarse.motion.linearVelocityMS = momentum / coarse.mass.massKg;
+    coarse.motion.angularVelocityRadS = coarse.worldInertiaKgM2().ldlt().solve(angularMomentum);
+    return coarse;
+}
+
+}  // namespace spall
