@@ -10,15 +10,33 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <string>
 
 namespace {
 
-/// The progress callback: draws a progress bar by simulated time with the time left at the pace
-/// so far (unless quiet) and says whether to go on (not after Ctrl-C or SIGTERM).
+/// A duration as a person reads it: 42 s, 7 min 03 s, 2 h 05 min.
+std::string readableDuration(double seconds)
+{
+    const long long s = std::llround(std::max(0.0, seconds));
+    char text[48];
+    if (s < 60)
+        std::snprintf(text, sizeof text, "%lld s", s);
+    else if (s < 3600)
+        std::snprintf(text, sizeof text, "%lld min %02lld s", s / 60, s % 60);
+    else
+        std::snprintf(text, sizeof text, "%lld h %02lld min", s / 3600, (s % 3600) / 60);
+    return text;
+}
+
+/// The progress callback: draws a progress bar by simulated time with the time spent and the time
+/// left at the pace so far (unless quiet; the deformable phase is far slower per simulated second
+/// than the flight after it, so while it lasts that is an upper bound) and says whether to go on
+/// (not after Ctrl-C or SIGTERM).
 std::function<bool(const spall::RunProgress&)> progressBar(bool quiet)
 {
     return [quiet, firstTimeS = -1.0](const spall::RunProgress& p) mutable {
@@ -28,9 +46,10 @@ std::function<bool(const spall::RunProgress&)> progressBar(bool quiet)
             const double done = p.endTimeS > 0.0 ? std::min(1.0, p.timeS / p.endTimeS) : 1.0;
             const double simulatedS = p.timeS - firstTimeS;
             const double left = simulatedS > 0.0 ? p.elapsedS * (p.endTimeS - p.timeS) / simulatedS : 0.0;
-            std::fprintf(stderr, "\r[%-*s] frame %d/%d%s  t=%.4f s  bodies %zu  steps %lld  %.0f s left ", width,
+            std::fprintf(stderr, "\r[%-*s] frame %d/%d%s  t=%.4f s  bodies %zu  steps %lld  %s spent, %s left at this pace ", width,
                          std::string(size_t(width * done), '#').c_str(), p.frame + 1, p.frameCount, p.frameWritten ? "" : " (computing)",
-                         p.timeS, p.bodies, static_cast<long long>(p.totalSteps), left);
+                         p.timeS, p.bodies, static_cast<long long>(p.totalSteps), readableDuration(p.elapsedS).c_str(),
+                         readableDuration(left).c_str());
             std::fflush(stderr);
         }
         return !stopRequested();

@@ -54,13 +54,10 @@ void setMotionsFromFit(const std::vector<Body*>& bodies, const RigidFit& fit, co
     }
 }
 
-/// The edge of the lattice's particles in the body's voxels.
-int particleVoxelsOf(const Lattice& lattice, const Body& body) { return int(std::lround(lattice.voxelSizeM / body.voxelSizeM)); }
-
 /// The lattice particle of one of the body's voxels.
-uint32_t particleOfVoxel(const Lattice& lattice, const openvdb::Coord& voxel, int particleVoxels)
+uint32_t particleOfVoxel(const Lattice& lattice, const openvdb::Coord& voxel)
 {
-    const int32_t p = lattice.particleAt(particleCell(voxel, particleVoxels));
+    const int32_t p = lattice.particleAt(particleCell(voxel, lattice.blocks));
     if (p < 0) throw std::logic_error("a voxel outside its body's lattice");
     return uint32_t(p);
 }
@@ -77,9 +74,10 @@ DisjointSets intactPieces(const Lattice& lattice)
 /// f(voxel) for the body's cells in a block: all k³ of them, or with `face` >= 0 the k² on
 /// that face.
 template <typename F>
-void forEachCellOfBlock(const openvdb::Coord& block, int k, int face, F&& f)
+void forEachCellOfBlock(const openvdb::Coord& block, const VoxelBlocks& blocks, int face, F&& f)
 {
-    openvdb::Coord low(block.x() * k, block.y() * k, block.z() * k);
+    const int k = blocks.voxels;
+    openvdb::Coord low = openvdb::Coord(block.x() * k, block.y() * k, block.z() * k) + blocks.origin;
     openvdb::Coord high = low.offsetBy(k - 1);
     if (face >= 0) {
         const int axis = faceAxis(face);
@@ -115,22 +113,37 @@ double rigidKineticEnergyJ(const Lattice& lattice, const std::vector<uint32_t>& 
 
 }  // namespace
 
-DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
-                                    const LatticeSupports& supports, double timeS)
+namespace {
+
+/// A body's lattice in the given blocks, moving with the body.
+DeformableBody latticeInBlocks(const Body& body, const VoxelBlocks& blocks, const Material& material, const LatticeSettings& settings,
+                               const LatticeSupports& supports, double timeS)
 {
     DeformableBody d{body.id,
-                     settings.particleVoxels > 1 ? Lattice::fromBody(coarsenedBody(body, settings.particleVoxels), material, supports, settings.seed)
-                                                 : Lattice::fromBody(body, material, supports, settings.seed),
+                     blocks.voxels > 1 ? Lattice::fromBody(coarsenedBody(body, blocks), material, supports, settings.seed)
+                                       : Lattice::fromBody(body, material, supports, settings.seed),
                      timeS, timeS};
+    d.lattice.blocks = blocks;
     d.lattice.bulkViscosity = settings.bulkViscosity;
     d.lattice.damageLaw = settings.damageLaw;
     return d;
 }
 
+}  // namespace
+
+DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
+                                    const LatticeSupports& supports, double timeS)
+{
+    return latticeInBlocks(body, blocksFor(body, settings.particleVoxels), material, settings, supports, timeS);
+}
+
 void restoreDeformable(DeformableBody& saved, const Body& body, const Material& material, const LatticeSettings& settings,
                        const LatticeSupports& supports)
 {
-    DeformableBody fresh = enterDeformablePhase(body, material, settings, supports, saved.enteredS);
+    if (saved.lattice.blocks.voxels < 1 || saved.lattice.blocks.voxels > 8)
+        throw InputError("saved state: the lattice of body " + std::to_string(body.id) + " has particles of " +
+                         std::to_string(saved.lattice.blocks.voxels) + " voxels (1 to 8)");
+    DeformableBody fresh = latticeInBlocks(body, saved.lattice.blocks, material, settings, supports, saved.enteredS);
     fresh.lastLoadedS = saved.lastLoadedS;
     Lattice& to = fresh.lattice;
     Lattice& from = saved.lattice;
@@ -155,14 +168,13 @@ void setExternalForces(Lattice& lattice, const Body& body, const std::vector<Eig
     const Eigen::Vector3d weight = body.mass.massKg / double(lattice.voxelParticleCount) * gravityMS2;
     for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = lattice.held[p] ? Eigen::Vector3d::Zero() : weight;
     if (faceForcesN.empty()) return;
-    const int k = particleVoxelsOf(lattice, body);
     // Faces come in leaf order, a voxel's together: look a particle up once per voxel.
     openvdb::Coord voxel = openvdb::Coord::max();
     uint32_t p = 0;
     for (size_t f = 0; f < body.exposedFaces.size(); ++f) {
         if (body.exposedFaces[f].voxel != voxel) {
             voxel = body.exposedFaces[f].voxel;
-            p = particleOfVoxel(lattice, voxel, k);
+            p = particleOfVoxel(lattice, voxel);
         }
         if (!lattice.held[p]) lattice.externalForceN[p] += faceForcesN[f];
     }
@@ -206,7 +218,7 @@ void followLattice(Body& body, const Lattice& lattice)
     if (body.anchored) return;
     std::vector<uint32_t> voxels(lattice.voxelParticleCount);
     std::iota(voxels.begin(), voxels.end(), 0u);
-    setMotionsFromFit({&body}, fitRigidMotion(lattice, voxels), blockCentreOffsetM(body.voxelSizeM, particleVoxelsOf(lattice, body)));
+    setMotionsFromFit({&body}, fitRigidMotion(lattice, voxels), blockCentreOffsetM(body.voxelSizeM, lattice.blocks));
 }
 
 LatticePieces latticePieces(const Lattice& lattice)
@@ -255,7 +267,7 @@ double elasticCapacityPerVoxelJ(const Material& material, double voxelSizeM)
 DeformableBody continueDeformable(const Body& part, const DeformableBody& whole, const Material& material, const LatticeSettings& settings,
                                   const LatticeSupports& supports)
 {
-    DeformableBody d = enterDeformablePhase(part, material, settings, supports, whole.enteredS);
+    DeformableBody d = latticeInBlocks(part, whole.lattice.blocks, material, settings, supports, whole.enteredS);
     d.lastLoadedS = whole.lastLoadedS;
     const Lattice& from = whole.lattice;
     Lattice& to = d.lattice;
@@ -290,7 +302,6 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
 HandOff handOff(const Body& body, const Lattice& lattice)
 {
     HandOff result;
-    const int k = particleVoxelsOf(lattice, body);
     Body whole = body;
     whole.grid = body.grid->deepCopy();
     auto links = whole.grid->getAccessor();
@@ -299,14 +310,14 @@ HandOff handOff(const Body& body, const Lattice& lattice)
         const LatticeBond& bond = lattice.bonds[b];
         if (std::max(bond.low, bond.high) >= lattice.voxelParticleCount) {
             // An anchor: its voxels let go of their support.
-            forEachCellOfBlock(lattice.voxel[std::min(bond.low, bond.high)], k, -1, [&](const openvdb::Coord& v) {
+            forEachCellOfBlock(lattice.voxel[std::min(bond.low, bond.high)], lattice.blocks, -1, [&](const openvdb::Coord& v) {
                 if (links.isValueOn(v)) links.setValueOn(v, links.getValue(v) & ~kAnchorBit);
             });
             ++result.brokenAnchors;
             continue;
         }
         const int64_t linksBefore = result.brokenLinks;
-        forEachCellOfBlock(lattice.voxel[bond.low], k, 2 * bond.axis + 1, [&](const openvdb::Coord& v) {
+        forEachCellOfBlock(lattice.voxel[bond.low], lattice.blocks, 2 * bond.axis + 1, [&](const openvdb::Coord& v) {
             result.brokenLinks += links.isValueOn(v) && breakLink(links, v, 2 * bond.axis + 1) ? 1 : 0;
         });
         result.brokenBonds += result.brokenLinks > linksBefore ? 1 : 0;
@@ -324,15 +335,15 @@ HandOff handOff(const Body& body, const Lattice& lattice)
         if (part.anchored)
             part.motion.linearVelocityMS = part.motion.angularVelocityRadS = Eigen::Vector3d::Zero();
         else
-            partsOfPiece[pieces.root(particleOfVoxel(lattice, part.grid->cbeginValueOn().getCoord(), k))].push_back(&part);
+            partsOfPiece[pieces.root(particleOfVoxel(lattice, part.grid->cbeginValueOn().getCoord()))].push_back(&part);
     }
     for (const auto& [root, parts] : partsOfPiece) {
         std::vector<uint32_t> particles;
         for (const Body* part : parts)
-            for (auto it = part->grid->constTree().cbeginValueOn(); it; ++it) particles.push_back(particleOfVoxel(lattice, it.getCoord(), k));
+            for (auto it = part->grid->constTree().cbeginValueOn(); it; ++it) particles.push_back(particleOfVoxel(lattice, it.getCoord()));
         std::sort(particles.begin(), particles.end());
         particles.erase(std::unique(particles.begin(), particles.end()), particles.end());
-        setMotionsFromFit(parts, fitRigidMotion(lattice, particles), blockCentreOffsetM(body.voxelSizeM, k));
+        setMotionsFromFit(parts, fitRigidMotion(lattice, particles), blockCentreOffsetM(body.voxelSizeM, lattice.blocks));
     }
     return result;
 }
@@ -354,7 +365,7 @@ Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tole
     departure.handOff = handOff(body, lattice);
     for (Body& part : departure.handOff.parts) {
         // A part is a piece, or pieces joined through a support: its first voxel says which.
-        const uint32_t piece = pieces.pieceOf[particleOfVoxel(lattice, part.grid->cbeginValueOn().getCoord(), particleVoxelsOf(lattice, body))];
+        const uint32_t piece = pieces.pieceOf[particleOfVoxel(lattice, part.grid->cbeginValueOn().getCoord())];
         part.motion.deformable = !all && !quiet[piece];
     }
     for (size_t k = 0; k < quiet.size(); ++k)

@@ -98,6 +98,12 @@ Lattice Lattice::fromBody(const Body& body, const Material& material, const Latt
     lattice.stiffness = calibrateLattice(material, h);
     lattice.ground = supports.ground;
     lattice.addVoxelParticles(body);
+    // A body may rest a little below the plane (anchored within a quarter voxel of it; blocks of
+    // voxels reach lower than their voxels): the contact plane is then where its cubes rest, so
+    // a particle whose ground bond breaks is not thrown up onto the plane.
+    if (lattice.ground.enabled)
+        for (const Eigen::Vector3d& x : lattice.positionM)
+            lattice.ground.offsetM = std::min(lattice.ground.offsetM, lattice.ground.normal.dot(x) - 0.5 * h);
     lattice.addLinkBonds(body);
     lattice.addSupportBonds(body, supports);
     if (hasUnits(material)) lattice.classifyUnitBonds(material);

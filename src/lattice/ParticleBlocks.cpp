@@ -10,20 +10,29 @@ int floorDivide(int value, int divisor) { return value >= 0 ? value / divisor : 
 
 }  // namespace
 
-openvdb::Coord particleCell(const openvdb::Coord& voxel, int particleVoxels)
+VoxelBlocks blocksFor(const Body& body, int particleVoxels)
 {
-    if (particleVoxels == 1) return voxel;
-    return {floorDivide(voxel.x(), particleVoxels), floorDivide(voxel.y(), particleVoxels), floorDivide(voxel.z(), particleVoxels)};
+    if (particleVoxels == 1) return VoxelBlocks();
+    return {particleVoxels, body.indexBounds.min()};
 }
 
-Eigen::Vector3d blockCentreOffsetM(double voxelSizeM, int particleVoxels)
+openvdb::Coord particleCell(const openvdb::Coord& voxel, const VoxelBlocks& blocks)
 {
-    return Eigen::Vector3d::Constant(0.5 * voxelSizeM * (particleVoxels - 1));
+    const int k = blocks.voxels;
+    if (k == 1) return voxel;
+    const openvdb::Coord v = voxel - blocks.origin;
+    return {floorDivide(v.x(), k), floorDivide(v.y(), k), floorDivide(v.z(), k)};
 }
 
-Body coarsenedBody(const Body& body, int particleVoxels)
+Eigen::Vector3d blockCentreOffsetM(double voxelSizeM, const VoxelBlocks& blocks)
 {
-    const int k = particleVoxels;
+    const openvdb::Coord& o = blocks.origin;
+    return voxelSizeM * (Eigen::Vector3d(o.x(), o.y(), o.z()) + Eigen::Vector3d::Constant(0.5 * (blocks.voxels - 1)));
+}
+
+Body coarsenedBody(const Body& body, const VoxelBlocks& blocks)
+{
+    const int k = blocks.voxels;
     Body coarse;
     coarse.id = body.id;
     coarse.parentId = body.parentId;
@@ -31,23 +40,23 @@ Body coarsenedBody(const Body& body, int particleVoxels)
     coarse.voxelSizeM = k * body.voxelSizeM;
     coarse.densityKgM3 = body.densityKgM3;
     coarse.grid = LinkGrid::create(0);
-    auto blocks = coarse.grid->getAccessor();
+    auto cells = coarse.grid->getAccessor();
     for (auto it = body.grid->constTree().cbeginValueOn(); it; ++it) {
         const openvdb::Coord voxel = it.getCoord();
-        const openvdb::Coord block = particleCell(voxel, k);
-        int32_t bits = blocks.isValueOn(block) ? blocks.getValue(block) : 0;
+        const openvdb::Coord block = particleCell(voxel, blocks);
+        int32_t bits = cells.isValueOn(block) ? cells.getValue(block) : 0;
         bits |= *it & kAnchorBit;
         // A link from a voxel into another block is a link between the blocks (both voxels see
         // it, so the blocks' links stay symmetric).
         for (int face = 0; face < kFaceCount; ++face)
-            if ((*it & (1 << face)) && particleCell(voxel + faceOffset(face), k) != block) bits |= 1 << face;
-        blocks.setValueOn(block, bits);
+            if ((*it & (1 << face)) && particleCell(voxel + faceOffset(face), blocks) != block) bits |= 1 << face;
+        cells.setValueOn(block, bits);
     }
     refreshDerivedData(coarse);
     // Placed where the body's motion puts the blocks, with the body's linear and angular
     // momentum (so the phase starts with exactly the body's, and hands back its own).
     const Eigen::Vector3d shift = body.motion.orientation *
-                                  (coarse.mass.centreOfMassLocalM + blockCentreOffsetM(body.voxelSizeM, k) - body.mass.centreOfMassLocalM);
+                                  (coarse.mass.centreOfMassLocalM + blockCentreOffsetM(body.voxelSizeM, blocks) - body.mass.centreOfMassLocalM);
     const Eigen::Vector3d momentum = body.mass.massKg * body.motion.linearVelocityMS;
     const Eigen::Vector3d angularMomentum = body.worldInertiaKgM2() * body.motion.angularVelocityRadS - shift.cross(momentum);
     coarse.motion = body.motion;

@@ -121,6 +121,8 @@ void transferDeformable(Archive& a, D& d)
     a.pod(d.enteredS, "deformable since");
     a.pod(d.lastLoadedS, "deformable last loaded");
     auto& lattice = d.lattice;
+    a.pod(lattice.blocks.voxels, "particle voxels");
+    for (int axis = 0; axis < 3; ++axis) a.pod(lattice.blocks.origin[axis], "particle blocks' origin");
     a.sequence(lattice.positionM, "particle positions", [&](auto& v) { a.vec(v, "particle position"); });
     a.sequence(lattice.velocityMS, "particle velocities", [&](auto& v) { a.vec(v, "particle velocity"); });
     a.sequence(lattice.angularVelocityRadS, "particle spins", [&](auto& v) { a.vec(v, "particle spin"); });

@@ -12,6 +12,9 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
 {
     const TimeStepSettings& ts = mScene.timeStep;
     const double h = mScene.voxelSizeM;
+    // The finest a load's arrival needs resolving: a voxel, or a lattice particle when the
+    // lattice's particles are blocks of voxels (each step's impulse is exact either way).
+    const double front = mScene.fracture.algorithm == FractureAlgorithm::Lattice ? h * mScene.lattice.particleVoxels : h;
     const double t = mState.timeS;
     double dt = ts.maxTimeStepS;
     // Per charge, for the body at hand: its nearest and farthest distance and the blast at the
@@ -37,7 +40,7 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
             // points (the window's edge is padded by a table cell, which is metres wide far out).
             if (t < r.arrivalNearS) continue;  // not there yet: the arrival rule below lands on it
             if (t <= mField->window(w.charge, r.farM).first)
-                dt = std::min(dt, ts.frontFraction * h / mField->shockSpeedMS(w.charge, r.nearM));  // the front is crossing the body
+                dt = std::min(dt, ts.frontFraction * front / mField->shockSpeedMS(w.charge, r.nearM));  // the front is crossing the body
             else
                 dt = std::min(dt, ts.pulseFraction * r.atNear.positiveDurationS);  // behind it: resolve the pulse at the nearest point
         }
@@ -47,7 +50,7 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
         for (size_t c = 0; c < reach.size(); ++c) {
             const double arrival = reach[c].arrivalNearS;
             if (arrival > t && arrival - t < dt)
-                dt = std::min(dt, std::max(arrival - t, ts.frontFraction * h / mField->shockSpeedMS(static_cast<int>(c), reach[c].nearM)));
+                dt = std::min(dt, std::max(arrival - t, ts.frontFraction * front / mField->shockSpeedMS(static_cast<int>(c), reach[c].nearM)));
         }
         if (!body.anchored && !body.motion.asleep) {
             const double speed = maxVoxelSpeedMS(body);

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <spall/fracture/Material.h>
+#include <spall/lattice/ParticleBlocks.h>
 #include <spall/lattice/Settings.h>
 #include <spall/loads/LoadGeometry.h>
 #include <spall/voxel/Body.h>
@@ -201,7 +202,11 @@ public:
     LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;
     LatticeGround ground;
 
+    /// The particles' edge (unit: m): the body's voxel's, or its blocks' (`blocks`).
     double voxelSizeM = 0.0;
+    /// How the body's voxels make the particles (set by the deformable phase; a particle per
+    /// voxel by default): `voxel` above holds the blocks' cells.
+    VoxelBlocks blocks;
     double particleMassKg = 0.0;
     double particleInertiaKgM2 = 0.0;  ///< a cube's, m h² / 6, the same about every axis
     LatticeStiffness stiffness;

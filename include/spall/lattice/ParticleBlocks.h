@@ -11,8 +11,19 @@
 
 namespace spall {
 
-/// The block (a coarse voxel) holding a voxel: floor(ijk / k) per axis.
-openvdb::Coord particleCell(const openvdb::Coord& voxel, int particleVoxels);
+/// How a body's voxels make a lattice's particles: blocks of k³ voxels, counted from `origin`
+/// (the low corner of the body's voxels when it entered the phase, so a wall's lowest blocks sit
+/// on the ground as its voxels do; its parts keep the whole's blocks). k = 1: a particle per voxel.
+struct VoxelBlocks {
+    int voxels = 1;
+    openvdb::Coord origin{0};
+};
+
+/// The blocks a body entering the phase is cut into (settings' lattice.particle_voxels).
+VoxelBlocks blocksFor(const Body& body, int particleVoxels);
+
+/// The block (the coarsened body's voxel) holding a voxel: floor((ijk − origin) / k) per axis.
+openvdb::Coord particleCell(const openvdb::Coord& voxel, const VoxelBlocks& blocks);
 
 /// The body as blocks of k³ voxels: a block is in it when any of its voxels is, linked to a
 /// neighbouring block when any link joins their voxels, anchored when any of its voxels is;
@@ -20,10 +31,10 @@ openvdb::Coord particleCell(const openvdb::Coord& voxel, int particleVoxels);
 /// momentum. The blocks' mass is that of whole blocks: exact where the body's outline follows
 /// the blocks, heavier by up to a layer of k − 1 voxels over its surface elsewhere, so they move
 /// a little slower for the same momentum.
-Body coarsenedBody(const Body& body, int particleVoxels);
+Body coarsenedBody(const Body& body, const VoxelBlocks& blocks);
 
 /// Where a block's centre lies in the body's own frame (index × h), against the coarsened body's
-/// frame (index × k h): h (k − 1)/2 along each axis (unit: m).
-Eigen::Vector3d blockCentreOffsetM(double voxelSizeM, int particleVoxels);
+/// frame (index × k h): h (origin + (k − 1)/2) (unit: m).
+Eigen::Vector3d blockCentreOffsetM(double voxelSizeM, const VoxelBlocks& blocks);
 
 }  // namespace spall
