@@ -8,7 +8,6 @@
 #include <Eigen/SVD>
 
 #include <algorithm>
-#include <cmath>
 #include <map>
 #include <numeric>
 #include <stdexcept>
@@ -110,10 +109,6 @@ double rigidKineticEnergyJ(const Lattice& lattice, const std::vector<uint32_t>& 
     const Eigen::Vector3d omega = angularVelocityOf(fit.angularMomentumKgM2S, inertia, fit.rotation);
     return 0.5 * m * double(particles.size()) * fit.velocityMS.squaredNorm() + 0.5 * omega.dot(fit.angularMomentumKgM2S);
 }
-
-}  // namespace
-
-namespace {
 
 /// A body's lattice in the given blocks, moving with the body.
 DeformableBody latticeInBlocks(const Body& body, const VoxelBlocks& blocks, const Material& material, const LatticeSettings& settings,
