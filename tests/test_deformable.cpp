@@ -601,7 +601,7 @@ TEST(Deformable, ALatticeOfBlocksTakesEveryFacesForceAndTheBodysWeight)
         total += faceForces.back();
     }
     const Eigen::Vector3d gravity(0, 0, -9.81);
-    setExternalForces(d.lattice, body, faceForces, gravity);
+    setExternalForces(d, body, faceForces, gravity);
     Eigen::Vector3d applied = Eigen::Vector3d::Zero();
     for (const Eigen::Vector3d& f : d.lattice.externalForceN) applied += f;
     const Eigen::Vector3d expected = total + body.mass.massKg * gravity;

@@ -117,10 +117,16 @@ DeformableBody latticeInBlocks(const Body& body, const VoxelBlocks& blocks, cons
     DeformableBody d{body.id,
                      blocks.voxels > 1 ? Lattice::fromBody(coarsenedBody(body, blocks), material, supports, settings.seed)
                                        : Lattice::fromBody(body, material, supports, settings.seed),
-                     timeS, timeS};
+                     timeS, timeS, {}};
     d.lattice.blocks = blocks;
     d.lattice.bulkViscosity = settings.bulkViscosity;
     d.lattice.damageLaw = settings.damageLaw;
+    // Faces come in leaf order, a voxel's together: a particle is looked up once per voxel.
+    d.particleOfFace.reserve(body.exposedFaces.size());
+    for (size_t f = 0; f < body.exposedFaces.size(); ++f)
+        d.particleOfFace.push_back(f > 0 && body.exposedFaces[f].voxel == body.exposedFaces[f - 1].voxel
+                                       ? d.particleOfFace.back()
+                                       : particleOfVoxel(d.lattice, body.exposedFaces[f].voxel));
     return d;
 }
 
@@ -157,20 +163,17 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
     saved = std::move(fresh);
 }
 
-void setExternalForces(Lattice& lattice, const Body& body, const std::vector<Eigen::Vector3d>& faceForcesN, const Eigen::Vector3d& gravityMS2)
+void setExternalForces(DeformableBody& deformable, const Body& body, const std::vector<Eigen::Vector3d>& faceForcesN,
+                       const Eigen::Vector3d& gravityMS2)
 {
+    Lattice& lattice = deformable.lattice;
     // The body's weight, over its particles (blocks at the surface are heavier than its voxels).
     const Eigen::Vector3d weight = body.mass.massKg / double(lattice.voxelParticleCount) * gravityMS2;
     for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = lattice.held[p] ? Eigen::Vector3d::Zero() : weight;
     if (faceForcesN.empty()) return;
-    // Faces come in leaf order, a voxel's together: look a particle up once per voxel.
-    openvdb::Coord voxel = openvdb::Coord::max();
-    uint32_t p = 0;
-    for (size_t f = 0; f < body.exposedFaces.size(); ++f) {
-        if (body.exposedFaces[f].voxel != voxel) {
-            voxel = body.exposedFaces[f].voxel;
-            p = particleOfVoxel(lattice, voxel);
-        }
+    if (deformable.particleOfFace.size() != faceForcesN.size()) throw std::logic_error("setExternalForces: not the lattice's body's faces");
+    for (size_t f = 0; f < faceForcesN.size(); ++f) {
+        const uint32_t p = deformable.particleOfFace[f];
         if (!lattice.held[p]) lattice.externalForceN[p] += faceForcesN[f];
     }
 }

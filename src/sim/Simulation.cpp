@@ -362,7 +362,7 @@ void Simulation::deformBodies(const FaceForces& faces, const std::vector<OpenWin
     for (DeformableBody& d : mState.deformable) {
         const size_t i = indexOf.at(d.bodyId);
         Body& body = mState.bodies[i];
-        setExternalForces(d.lattice, body, faces.forceN[i], mScene.world.gravityMS2);
+        setExternalForces(d, body, faces.forceN[i], mScene.world.gravityMS2);
         mState.stepStats.latticeParticleSteps += d.lattice.advance(dtS) * static_cast<int64_t>(d.lattice.particleCount());
         followLattice(body, d.lattice);
         if (bodyInWindows(body, *mField, windows)) d.lastLoadedS = mState.timeS + dtS;

@@ -18,6 +18,9 @@ struct DeformableBody {
     Lattice lattice;
     double enteredS = 0.0;     ///< (unit: s)
     double lastLoadedS = 0.0;  ///< the end of the last step it spent inside an open blast window (unit: s)
+    /// Per exposed face of the body (body.exposedFaces order), the particle behind it: found once,
+    /// as the body keeps its faces while it is a lattice.
+    std::vector<uint32_t> particleOfFace;
 };
 
 /// The lattice of a body entering the phase, moving with the body: a particle per voxel, or per
@@ -34,7 +37,7 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
 /// faces (body.exposedFaces order, from the loads phase; empty when nothing loads it) on the
 /// particle behind the face (its block's, ParticleBlocks.h), and an equal share of the body's
 /// weight.
-void setExternalForces(Lattice& lattice, const Body& body, const std::vector<Eigen::Vector3d>& faceForcesN, const Eigen::Vector3d& gravityMS2);
+void setExternalForces(DeformableBody& deformable, const Body& body, const std::vector<Eigen::Vector3d>& faceForcesN, const Eigen::Vector3d& gravityMS2);
 
 /// Particles taken as one rigid body: the motion with their linear and angular momentum, at the
 /// pose that fits their places best (least squares; Kabsch's rotation).
