@@ -246,6 +246,38 @@ TEST(Collisions, NoTunnellingAt500MetresPerSecond)
     EXPECT_GE(t, 0.02);
 }
 
+TEST(Collisions, AnOverlapThatIsNotClosingIsLeftToThePositionCorrectionNotTheStep)
+{
+    // Pieces can be born overlapping (a lattice hands off pieces whose rigid fits overlap by a
+    // few millimetres at their crack): a shorter step does not separate them, the position
+    // correction does. Two cubes 0.4 voxel into each other (beyond the 0.25 tolerance).
+    const double h = 0.05;
+    auto pair = [&](double closingMS) {
+        std::vector<Body> bodies{test::boxBody(2, 2, 2, h, 2000.0), test::boxBody(2, 2, 2, h, 2000.0, Eigen::Vector3d(2 * h - 0.4 * h, 0, 0))};
+        bodies[0].motion.linearVelocityMS.x() = 0.5 * closingMS;
+        bodies[1].motion.linearVelocityMS.x() = -0.5 * closingMS;
+        return bodies;
+    };
+    const WorldSettings world = emptySpace();
+    for (const double closingMS : {0.0, -1.0, 2.0}) {
+        std::vector<Body> bodies = pair(closingMS);
+        const ContactSet contacts = detectContacts(bodies, world, CollisionSettings(), noSleep());
+        ASSERT_EQ(contacts.manifolds.size(), 1u);
+        EXPECT_NEAR(contacts.manifolds[0].maxDepthM, 0.4 * h, 1e-9);
+        const double closing = deepestClosingPenetrationM(bodies, contacts, impactSpeedMS(world, 1.0 / 240));
+        EXPECT_EQ(closing, closingMS > 0 ? contacts.manifolds[0].maxDepthM : 0.0) << closingMS << " m/s";
+    }
+    // At rest: full steps while the correction pushes them apart.
+    Simulation sim = rigidBodySimulation(pair(0.0), world, CollisionSettings(), noSleep(), 1.0 / 240);
+    double shortest = 1.0;
+    sim.setStepObserver([&](const Simulation&, const StepRecord& r) { shortest = std::min(shortest, r.dtS); });
+    for (int i = 0; i < 10; ++i) sim.step();
+    EXPECT_EQ(shortest, 1.0 / 240);
+    std::vector<Body> settled = sim.bodies();
+    const ContactSet after = detectContacts(settled, world, CollisionSettings(), noSleep());
+    for (const ContactManifold& m : after.manifolds) EXPECT_LT(m.maxDepthM, 0.25 * h);
+}
+
 TEST(Collisions, PileOfAThousandFragmentsSettlesAndSleeps)
 {
     // The generated pile loosened: layers 30 % further apart and every fragment tumbled, so it

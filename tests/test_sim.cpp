@@ -105,6 +105,10 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"max_vibration_s": "long"}})").find("lattice.max_vibration_s: must be a number"),
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"damage_law": "paper"}})").find("lattice.damage_law"), std::string::npos);
+    for (const char* blocks : {"0", "9", "2.5"})
+        EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"particle_voxels": )" + blocks + "}}").find("lattice.particle_voxels: must be"),
+                  std::string::npos)
+            << blocks;
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "solver": {"air_drag": "stokes"}})").find("solver.air_drag"), std::string::npos);
     const std::string stone = R"(}], "materials": {"stone": {)";
     for (const std::string bad : {R"("youngs_modulus_Pa": 0)", R"("poisson_ratio": 0.5)", R"("tensile_strength_Pa": -1)",

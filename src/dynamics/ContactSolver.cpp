@@ -293,7 +293,7 @@ std::vector<SolverContact> solverContacts(const std::vector<Body>& bodies, const
     const int worldIndex = static_cast<int>(bodies.size());
     auto velocityAt = [&](int i, const Eigen::Vector3d& arm) -> Eigen::Vector3d { return state[i].v + state[i].w.cross(arm); };
     // Bounce only above the speed gravity adds in a couple of steps, so resting contacts rest.
-    const double bounceThreshold = 2.0 * world.gravityMS2.norm() * dt + 0.05;
+    const double bounceThreshold = impactSpeedMS(world, dt);
     const Eigen::Vector3d up = upDirection(world);
     auto makeContact = [&](int a, int b, std::pair<int64_t, int64_t> key, const Eigen::Vector3d& armA, const Eigen::Vector3d& armB,
                            const Eigen::Vector3d& n, double depth, double restitution, double friction) {

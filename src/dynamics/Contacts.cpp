@@ -23,10 +23,30 @@ ContactSet detectContacts(std::vector<Body>& bodies, const WorldSettings& world,
     for (const ContactManifold& m : set.manifolds) {
         set.solverContacts += static_cast<int64_t>(m.points.size());
         set.bodyContacts += m.voxelContacts;
-        set.maxPenetrationM = std::max(set.maxPenetrationM, m.maxDepthM);
         set.touching.push_back({m.a, m.b});
     }
     return set;
+}
+
+double impactSpeedMS(const WorldSettings& world, double dtS) { return 2.0 * world.gravityMS2.norm() * dtS + 0.05; }
+
+double deepestClosingPenetrationM(const std::vector<Body>& bodies, const ContactSet& contacts, double impactSpeedMS)
+{
+    double deepestM = 0.0;
+    for (const ContactManifold& m : contacts.manifolds) {
+        if (m.maxDepthM <= deepestM) continue;
+        const BodyMotion& a = bodies[size_t(m.a)].motion;
+        const BodyMotion& b = bodies[size_t(m.b)].motion;
+        for (const VoxelContact& p : m.points) {
+            const Eigen::Vector3d va = a.linearVelocityMS + a.angularVelocityRadS.cross(p.pointM - a.positionM);
+            const Eigen::Vector3d vb = b.linearVelocityMS + b.angularVelocityRadS.cross(p.pointM - b.positionM);
+            if (m.normal.dot(va - vb) < -impactSpeedMS) {  // the normal points from b to a
+                deepestM = m.maxDepthM;
+                break;
+            }
+        }
+    }
+    return deepestM;
 }
 
 }  // namespace spall

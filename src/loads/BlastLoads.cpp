@@ -261,7 +261,12 @@ std::vector<Wrench> BlastLoads::stepWrenches(const std::vector<Body>& bodies, co
     std::vector<char> wanted = loaded;
     if (faces) {
         faces->forceN.assign(bodies.size(), {});
-        for (size_t i = 0; i < bodies.size(); ++i) wanted[i] = wanted[i] || faces->wanted[i];
+        // A body the wave is not crossing takes no force on any face: its zeros need no exposure.
+        for (size_t i = 0; i < bodies.size(); ++i) {
+            if (!faces->wanted[i]) continue;
+            faces->forceN[i].assign(bodies[i].exposedFaces.size(), Eigen::Vector3d::Zero());
+            wanted[i] = wanted[i] || bodyInWindows(bodies[i], mField, mWindows);
+        }
     }
     auto faceForcesOf = [&](size_t i) { return faces && faces->wanted[i] ? &faces->forceN[i] : nullptr; };
     if (std::find(wanted.begin(), wanted.end(), 1) == wanted.end()) return wrenches;  // the wave is past every body

@@ -237,10 +237,11 @@ void Simulation::step(double targetS)
     deformBodies(faces, windows, dt);
 
     const ContactSet contacts = detectContacts(mState.bodies, mScene.world, mScene.collisions, mScene.sleep);
+    const double closingPenetrationM = deepestClosingPenetrationM(mState.bodies, contacts, impactSpeedMS(mScene.world, dt));
     solveContacts(mState.bodies, contacts, mScene.world, mScene.collisions, dt, mState.contactCache);
     correctPositions(mState.bodies, contacts, mScene.world);
     updateSleep(mState.bodies, contacts.touching, loaded, mScene.sleep, dt);
-    adaptStepToPenetration(contacts.maxPenetrationM);
+    adaptStepToPenetration(closingPenetrationM);
     refuseNonFiniteMotion();
     if (mObserver) mRecord.solverContacts = contacts.solverContacts;
 

@@ -70,9 +70,9 @@ double Simulation::inWholeLatticeSteps(double dtS) const
     return dtS <= stableS ? dtS : std::floor(dtS / stableS) * stableS;
 }
 
-void Simulation::adaptStepToPenetration(double maxPenetrationM)
+void Simulation::adaptStepToPenetration(double closingPenetrationM)
 {
-    if (maxPenetrationM > mScene.collisions.penetrationToleranceVoxels * mScene.voxelSizeM)
+    if (closingPenetrationM > mScene.collisions.penetrationToleranceVoxels * mScene.voxelSizeM)
         mState.penetrationStepScale = std::max(0.5 * mState.penetrationStepScale, 1.0 / 64.0);
     else
         mState.penetrationStepScale = std::min(2.0 * mState.penetrationStepScale, 1.0);

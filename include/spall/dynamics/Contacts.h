@@ -21,8 +21,17 @@ struct ContactSet {
     int64_t staticContacts = 0;   ///< reduced points on the ground and static boxes
     int64_t bodyContacts = 0;     ///< voxel pairs between bodies, before reduction
     int64_t solverContacts = 0;   ///< points the solver works on (static ones and the manifolds')
-    double maxPenetrationM = 0;   ///< deepest body-body contact before correction (unit: m)
 };
+
+/// The speed along a contact's normal below which it rests rather than strikes: what gravity
+/// adds in a couple of steps, plus a margin (unit: m/s).
+double impactSpeedMS(const WorldSettings& world, double dtS);
+
+/// The deepest body-body contact whose bodies still close on each other faster than
+/// `impactSpeedMS` at one of its points (unit: m; 0 when none): a penetration the step is
+/// making, not one that rests (pieces born interlocked, which the position correction
+/// separates and a shorter step would not).
+double deepestClosingPenetrationM(const std::vector<Body>& bodies, const ContactSet& contacts, double impactSpeedMS);
 
 /// Contacts between bodies, then wakes sleeping bodies a moving one hits (they take part in the
 /// solve), then contacts of every movable body with the ground and the static boxes.

@@ -139,8 +139,9 @@ private:
     /// Throws SimulationError naming the first body whose pose or velocity is not finite: an
     /// unstable integration must stop the run, not reach the output as a broken transform.
     void refuseNonFiniteMotion() const;
-    /// The paper's adaptive step: halve while bodies interpenetrate beyond the tolerance.
-    void adaptStepToPenetration(double maxPenetrationM);
+    /// The paper's adaptive step: halve while bodies still closing on each other interpenetrate
+    /// beyond the tolerance.
+    void adaptStepToPenetration(double closingPenetrationM);
     std::pair<Eigen::Vector3d, Eigen::Vector3d> totalMomenta() const;
     /// A note when the memory available could not hold every voxel as a fragment of its own.
     void noteFragmentMemory();
