@@ -37,6 +37,9 @@ double deepestClosingPenetrationM(const std::vector<Body>& bodies, const Contact
         if (m.maxDepthM <= deepestM) continue;
         const BodyMotion& a = bodies[size_t(m.a)].motion;
         const BodyMotion& b = bodies[size_t(m.b)].motion;
+        // A lattice takes its motion from its particles, which do not feel other bodies: a
+        // shorter step would not stop it.
+        if (a.deformable || b.deformable) continue;
         for (const VoxelContact& p : m.points) {
             const Eigen::Vector3d va = a.linearVelocityMS + a.angularVelocityRadS.cross(p.pointM - a.positionM);
             const Eigen::Vector3d vb = b.linearVelocityMS + b.angularVelocityRadS.cross(p.pointM - b.positionM);

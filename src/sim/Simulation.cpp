@@ -222,7 +222,7 @@ void Simulation::step(double targetS)
 
     const std::vector<char> cracked = fractureBodies(windows, dt);
     splitBodies(cracked);
-    handOffQuietBodies();
+    handOffQuietBodies(dt);
     enterDeformablePhase(windows);
 
     LoadGeometry geometry{{mScene.world.ground.enabled, mScene.world.ground.normal.normalized(), mScene.world.ground.offsetM}, {}};
@@ -370,9 +370,12 @@ void Simulation::deformBodies(const FaceForces& faces, const std::vector<OpenWin
     }
 }
 
-void Simulation::handOffQuietBodies()
+void Simulation::handOffQuietBodies(double dtS)
 {
     if (mState.deformable.empty()) return;
+    // Once in each check interval: in the step that reaches one of its multiples.
+    const double interval = mScene.lattice.handoffCheckIntervalS;
+    const bool checkDue = std::floor((mState.timeS + dtS) / interval) > std::floor(mState.timeS / interval);
     std::unordered_map<int64_t, size_t> indexOf;
     for (size_t i = 0; i < mState.bodies.size(); ++i) indexOf[mState.bodies[i].id] = i;
     std::vector<std::vector<Body>> parts(mState.bodies.size());
@@ -382,8 +385,9 @@ void Simulation::handOffQuietBodies()
         const double sinceBlastS = mState.timeS - d.lastLoadedS;
         const double toleranceJ =
             mScene.lattice.handoffEnergyFraction * elasticCapacityPerVoxelJ(mScene.materials[mState.bodies[i].materialIndex], d.lattice.voxelSizeM);
+        const bool timeUp = sinceBlastS >= mScene.lattice.maxVibrationS;
         Departure out;
-        if (sinceBlastS > 0.0) out = leaveQuietPieces(mState.bodies[i], d.lattice, toleranceJ, sinceBlastS >= mScene.lattice.maxVibrationS);
+        if (sinceBlastS > 0.0 && (checkDue || timeUp)) out = leaveQuietPieces(mState.bodies[i], d.lattice, toleranceJ, timeUp);
         std::vector<Body>& leftParts = out.handOff.parts;
         if (leftParts.empty() || (leftParts.size() == 1 && leftParts.front().motion.deformable)) {
             staying.push_back(std::move(d));  // nothing leaves yet

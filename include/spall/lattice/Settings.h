@@ -37,6 +37,11 @@ struct LatticeSettings {
     /// once (a 2.5 m brick cantilever 0.3 m thick: 80 ms), since that swing is what breaks a
     /// wall at its base; vibration that outlasts it is rigid-body motion's loss (unit: s).
     double maxVibrationS = 0.1;
+    /// A body in the phase is looked at for pieces quiet enough to leave once in each interval
+    /// of this length (and when its time is up): a look measures every bond's energy and fits
+    /// every piece's rigid motion, as much work as several lattice steps, and a piece that
+    /// leaves a millisecond late has moved millimetres as a lattice instead (unit: s).
+    double handoffCheckIntervalS = 0.001;
     /// How bonds' damage grows: the crack band's softening line, or Davison–Stevens in rate form
     /// above it, with the material's B and C.
     LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;

@@ -127,8 +127,10 @@ private:
     /// Bodies the blast reaches become lattices (fracture.algorithm "lattice").
     void enterDeformablePhase(const std::vector<OpenWindow>& windows);
     /// Pieces of deformable bodies the blast has passed leave the phase once their vibration has
-    /// died down (all of them after lattice.max_vibration_s) and become rigid bodies again.
-    void handOffQuietBodies();
+    /// died down (all of them after lattice.max_vibration_s) and become rigid bodies again;
+    /// looked for once per lattice.handoff_check_interval_s, in the step of length dtS that
+    /// reaches a multiple of it.
+    void handOffQuietBodies(double dtS);
     /// Parts of bodies in `leaving` that are marked deformable (still vibrating) get lattices
     /// that carry on from their parent's.
     void continueVibratingParts(const std::vector<DeformableBody>& leaving);
