@@ -375,6 +375,31 @@ TEST(Checkpoint, ResumedInTheDeformablePhaseEndsBitForBitAsTheUninterruptedOne)
         EXPECT_EQ(straight.state().handOffs[i].discardedEnergyJ, resumed.state().handOffs[i].discardedEnergyJ);
 }
 
+TEST(Deformable, PiecesAreLookedAtForQuietnessOncePerCheckInterval)
+{
+    // A look at every piece costs several lattice steps, so it comes once per interval: every
+    // hand-off that is not the time running out happens in a step that reaches a multiple of it.
+    nlohmann::json j = nlohmann::json::parse(kSmallScene);
+    j["fracture"] = {{"algorithm", "lattice"}};
+    const double intervalS = 0.004;
+    j["lattice"] = {{"max_vibration_s", 0.5}, {"handoff_energy_fraction", 0.3}, {"handoff_check_interval_s", intervalS}};
+    j["solver"] = {{"max_time_step_s", intervalS / 8}};  // most steps reach no multiple of it
+    Simulation sim(parseScene(j.dump(), "small", "."));
+    std::map<double, double> stepFrom;  // start -> length
+    sim.setStepObserver([&](const Simulation&, const StepRecord& r) { stepFrom[r.timeS - r.dtS] = r.dtS; });
+    sim.advanceTo(0.1);
+    int quiet = 0;
+    for (const HandOffRecord& h : sim.state().handOffs) {
+        if (h.timedOut) continue;
+        ++quiet;
+        const auto step = stepFrom.lower_bound(h.timeS - 1e-12);
+        ASSERT_NE(step, stepFrom.end());
+        EXPECT_NEAR(step->first, h.timeS, 1e-12);
+        EXPECT_GT(std::floor((step->first + step->second) / intervalS + 1e-9), std::floor(step->first / intervalS + 1e-9)) << h.timeS;
+    }
+    EXPECT_GT(quiet, 0) << "the test needs pieces that leave because they are quiet";
+}
+
 namespace {
 
 /// Asks to stop on its nth question, once.

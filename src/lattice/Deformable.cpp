@@ -359,7 +359,7 @@ Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tole
     const bool allQuiet = std::all_of(quiet.begin(), quiet.end(), [](char q) { return q != 0; });
     if (!timeUp && !allQuiet && !freeAndQuiet) return departure;
     const bool all = timeUp || allQuiet;
-    departure.timedOut = !allQuiet;
+    departure.timedOut = timeUp && !allQuiet;
     departure.handOff = handOff(body, lattice);
     for (Body& part : departure.handOff.parts) {
         // A part is a piece, or pieces joined through a support: its first voxel says which.

@@ -101,7 +101,7 @@ HandOff handOff(const Body& body, const Lattice& lattice);
 struct Departure {
     HandOff handOff;
     double discardedEnergyJ = 0.0;  ///< (unit: J)
-    bool timedOut = false;          ///< some piece leaves without being quiet
+    bool timedOut = false;          ///< the time ran out with some piece not quiet: it leaves all the same
 };
 Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tolerancePerParticleJ, bool timeUp);
 
