@@ -264,8 +264,10 @@ std::vector<Wrench> BlastLoads::stepWrenches(const std::vector<Body>& bodies, co
         // A body the wave is not crossing takes no force on any face: its zeros need no exposure.
         for (size_t i = 0; i < bodies.size(); ++i) {
             if (!faces->wanted[i]) continue;
-            faces->forceN[i].assign(bodies[i].exposedFaces.size(), Eigen::Vector3d::Zero());
-            wanted[i] = wanted[i] || bodyInWindows(bodies[i], mField, mWindows);
+            if (wanted[i] || bodyInWindows(bodies[i], mField, mWindows))
+                wanted[i] = 1;
+            else
+                faces->forceN[i].assign(bodies[i].exposedFaces.size(), Eigen::Vector3d::Zero());
         }
     }
     auto faceForcesOf = [&](size_t i) { return faces && faces->wanted[i] ? &faces->forceN[i] : nullptr; };
