@@ -105,6 +105,11 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"max_vibration_s": "long"}})").find("lattice.max_vibration_s: must be a number"),
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"damage_law": "paper"}})").find("lattice.damage_law"), std::string::npos);
+    for (const char* interval : {"0", "-0.001", "2"})
+        EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"handoff_check_interval_s": )" + interval + "}}")
+                      .find("lattice.handoff_check_interval_s: must be in"),
+                  std::string::npos)
+            << interval;
     for (const char* blocks : {"0", "9", "2.5"})
         EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"particle_voxels": )" + blocks + "}}").find("lattice.particle_voxels: must be"),
                   std::string::npos)
