@@ -4,6 +4,8 @@
 //   build/spall_bench --benchmark_filter=Label  one group
 #include <spall/blast/Blast.h>
 #include <spall/dynamics/Integrate.h>
+#include <spall/dynamics/NarrowPhase.h>
+#include <spall/dynamics/StaticContacts.h>
 #include <spall/fracture/Fracture.h>
 #include <spall/io/VdbIo.h>
 #include <spall/lattice/Lattice.h>
@@ -335,6 +337,50 @@ BENCHMARK(BM_Integrate_Flight)->Unit(benchmark::kMicrosecond)->UseRealTime();
 void BM_Integrate_FlightWithAirDrag(benchmark::State& state) { integrateFlyingVoxels(state, AirDrag::HaiderLevenspiel); }
 BENCHMARK(BM_Integrate_FlightWithAirDrag)->Unit(benchmark::kMicrosecond)->UseRealTime();
 
+/// A 2 × 1 × 0.1 m slab of 1 cm voxels (200 000) resting flat, its centre `heightM` up, turned
+/// a little about z so that its voxels do not line up with another's.
+Body restingSlab(double heightM, double turnRad)
+{
+    initialiseOpenVdb();
+    LinkGrid::Ptr g = LinkGrid::create(0);
+    g->tree().denseFill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(199, 99, 9)), 0, true);
+    linkAllNeighbours(*g);
+    Body slab = makeBody(g, 0.01, 1800.0);
+    slab.motion.positionM = Eigen::Vector3d(0.0, 0.0, heightM);
+    slab.motion.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(turnRad, Eigen::Vector3d::UnitZ()));
+    return slab;
+}
+
+/// Baseline: each boundary voxel's centre in the world and its height, the least a search of
+/// a body's contacts must do.
+void BM_Contacts_BoundaryPass(benchmark::State& state)
+{
+    const Body slab = restingSlab(0.049, 0.0);
+    for (auto _ : state) {
+        double sum = 0.0;
+        for (const openvdb::Coord& v : slab.boundaryVoxels) sum += slab.voxelWorldM(v).z();
+        benchmark::DoNotOptimize(sum);
+    }
+}
+BENCHMARK(BM_Contacts_BoundaryPass)->Unit(benchmark::kMicrosecond)->UseRealTime();
+
+/// The slab lying on the ground, a millimetre into it: 80 000 corners, reduced to four.
+void BM_Contacts_SlabOnGround(benchmark::State& state)
+{
+    const Body slab = restingSlab(0.049, 0.0);
+    WorldSettings world;
+    for (auto _ : state) benchmark::DoNotOptimize(findStaticContacts(slab, world));
+}
+BENCHMARK(BM_Contacts_SlabOnGround)->Unit(benchmark::kMicrosecond)->UseRealTime();
+
+/// A second slab lying on the first (turned 0.1 rad): their voxel pairs, reduced to a manifold.
+void BM_Contacts_SlabOnSlab(benchmark::State& state)
+{
+    const std::vector<Body> bodies = {restingSlab(0.05, 0.0), restingSlab(0.1495, 0.1)};
+    for (auto _ : state) benchmark::DoNotOptimize(findBodyContacts(bodies, CollisionMethod::TreeLookup));
+}
+BENCHMARK(BM_Contacts_SlabOnSlab)->Unit(benchmark::kMicrosecond)->UseRealTime();
+
 /// Console output plus, at the end, each benchmark's time relative to its baseline.
 class RatioReporter : public benchmark::ConsoleReporter {
 public:
@@ -368,6 +414,8 @@ public:
             {"BM_Voxelise_TorusWindingNumber", "BM_Voxelise_TorusLevelSet"},
             {"BM_Lattice_Step", "BM_Lattice_TrivialPass"},
             {"BM_Integrate_FlightWithAirDrag", "BM_Integrate_Flight"},
+            {"BM_Contacts_SlabOnGround", "BM_Contacts_BoundaryPass"},
+            {"BM_Contacts_SlabOnSlab", "BM_Contacts_BoundaryPass"},
         };
         std::printf("\nRatios to the baseline in this run (time / baseline time):\n");
         for (auto [name, base] : pairs) {

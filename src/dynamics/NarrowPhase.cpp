@@ -46,10 +46,11 @@ bool boxesOverlap(const openvdb::CoordBBox& box, const Eigen::Matrix3d& m, const
 // ---- narrow phase: spall's tree lookup -------------------------------------------------------
 
 /// Boundary voxels of the body with fewer of them, moved into the other's index space and looked
-/// up in its tree: only the few voxels around the moved centre can be within reach.
-std::vector<VoxelContact> treeLookupContacts(const Body& a, const Body& b)
+/// up in its tree: only the few voxels around the moved centre can be within reach. Into `out`
+/// (emptied first).
+void treeLookupContacts(const Body& a, const Body& b, std::vector<VoxelContact>& out)
 {
-    std::vector<VoxelContact> out;
+    out.clear();
     const bool probeIsA = a.boundaryVoxels.size() <= b.boundaryVoxels.size();
     const Body& probe = probeIsA ? a : b;
     const Body& target = probeIsA ? b : a;
@@ -63,8 +64,7 @@ std::vector<VoxelContact> treeLookupContacts(const Body& a, const Body& b)
     const openvdb::CoordBBox& box = target.indexBounds;
     const Eigen::Vector3d lo = Eigen::Vector3d(box.min().x(), box.min().y(), box.min().z()).array() - kReach;
     const Eigen::Vector3d hi = Eigen::Vector3d(box.max().x(), box.max().y(), box.max().z()).array() + kReach;
-    if (!boxesOverlap(probe.indexBounds, m, t, lo, hi)) return out;  // no probe voxel can be within reach
-    out.reserve(32);
+    if (!boxesOverlap(probe.indexBounds, m, t, lo, hi)) return;  // no probe voxel can be within reach
     const ConstLinkAccessor targetAcc(target.grid->constTree());
     const CubePairAxes axes(a.motion.orientation.toRotationMatrix(), b.motion.orientation.toRotationMatrix(), h);
     constexpr double reach2 = kReach * kReach;
@@ -101,7 +101,6 @@ std::vector<VoxelContact> treeLookupContacts(const Body& a, const Body& b)
                 }
             }
     }
-    return out;
 }
 
 }  // namespace
@@ -165,8 +164,11 @@ std::vector<ContactManifold> findBodyContacts(const std::vector<Body>& bodies, C
     const std::vector<BodyPair> pairs = findCandidatePairs(bodies);
     std::vector<ContactManifold> found(pairs.size());
     forEachIndex(pairs.size(), [&](size_t i) {
-        found[i] = reduceManifold(pairs[i].a, pairs[i].b, treeLookupContacts(bodies[pairs[i].a], bodies[pairs[i].b]),
-                                  bodies[pairs[i].a].voxelSizeM);
+        // Two slabs lying on each other touch at ~10^5 voxel pairs: the list is kept per thread
+        // (as findStaticContacts' corners).
+        thread_local std::vector<VoxelContact> contacts;
+        treeLookupContacts(bodies[pairs[i].a], bodies[pairs[i].b], contacts);
+        found[i] = reduceManifold(pairs[i].a, pairs[i].b, contacts, bodies[pairs[i].a].voxelSizeM);
     });
     return withoutEmpty(std::move(found));
 }

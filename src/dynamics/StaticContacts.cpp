@@ -13,10 +13,11 @@ namespace {
 
 using narrow::kContactMarginVoxels;
 
-/// Corners of the body's boundary voxels inside the ground or a static box.
-std::vector<StaticContact> findCorners(const Body& body, const WorldSettings& world)
+/// Corners of the body's boundary voxels inside the ground or a static box, into `contacts`
+/// (emptied first).
+void findCorners(const Body& body, const WorldSettings& world, std::vector<StaticContact>& contacts)
 {
-    std::vector<StaticContact> contacts;
+    contacts.clear();
     const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
     const double h = body.voxelSizeM;
     const double margin = kContactMarginVoxels * h;
@@ -30,7 +31,7 @@ std::vector<StaticContact> findCorners(const Body& body, const WorldSettings& wo
         const Eigen::Vector3d outside = (local.cwiseAbs() - box.halfExtentM).cwiseMax(0.0);
         if (outside.norm() <= body.boundingRadiusM + margin) nearBoxes.push_back(static_cast<int>(b));
     }
-    if (!nearGround && nearBoxes.empty()) return contacts;
+    if (!nearGround && nearBoxes.empty()) return;
 
     for (const openvdb::Coord& voxel : body.boundaryVoxels) {
         const Eigen::Vector3d centreArm = rot * body.voxelOffsetM(voxel);
@@ -64,18 +65,19 @@ std::vector<StaticContact> findCorners(const Body& body, const WorldSettings& wo
             });
         }
     }
-    return contacts;
 }
 
-/// Per collider and normal, the corners reduced to at most four spanning points.
-std::vector<StaticContact> reduceStaticContacts(const std::vector<StaticContact>& all)
+/// Per collider and normal, the corners reduced to at most four spanning points. `done`,
+/// `group` and `points` are working space.
+std::vector<StaticContact> reduceStaticContacts(const std::vector<StaticContact>& all, std::vector<char>& done, std::vector<size_t>& group,
+                                                std::vector<VoxelContact>& points)
 {
     std::vector<StaticContact> reduced;
-    std::vector<char> done(all.size(), 0);
+    done.assign(all.size(), 0);
     for (size_t i = 0; i < all.size(); ++i) {
         if (done[i]) continue;
-        std::vector<size_t> group;
-        std::vector<VoxelContact> points;
+        group.clear();
+        points.clear();
         size_t deepest = 0;
         for (size_t j = i; j < all.size(); ++j)
             if (!done[j] && all[j].collider == all[i].collider && all[j].normal == all[i].normal) {
@@ -93,7 +95,15 @@ std::vector<StaticContact> reduceStaticContacts(const std::vector<StaticContact>
 
 std::vector<StaticContact> findStaticContacts(const Body& body, const WorldSettings& world)
 {
-    return reduceStaticContacts(findCorners(body, world));
+    // A slab lying on the ground has hundreds of thousands of corners on it: its working space
+    // is kept per thread, so that a step neither allocates it nor faults its pages in afresh
+    // (they were most of the flight of the 3 M-voxel wall's slabs, docs/performance.md).
+    thread_local std::vector<StaticContact> corners;
+    thread_local std::vector<char> done;
+    thread_local std::vector<size_t> group;
+    thread_local std::vector<VoxelContact> points;
+    findCorners(body, world, corners);
+    return reduceStaticContacts(corners, done, group, points);
 }
 
 }  // namespace spall
