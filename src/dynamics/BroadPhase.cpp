@@ -12,7 +12,7 @@
 
 namespace spall {
 
-bool pairCanInteract(const Body& a, const Body& b) { return movable(a) || movable(b); }
+bool pairCanInteract(const Body& a, const Body& b) { return takesContactImpulses(a) || takesContactImpulses(b); }
 
 namespace {
 

@@ -79,7 +79,7 @@ std::vector<int> solverSides(const std::vector<Body>& bodies, size_t contactCoun
     std::vector<int> side(bodies.size(), -1);
     std::vector<std::pair<double, int>> xs;
     for (size_t i = 0; i < bodies.size(); ++i)
-        if (movable(bodies[i])) xs.push_back({bodies[i].motion.positionM.x(), static_cast<int>(i)});
+        if (takesContactImpulses(bodies[i])) xs.push_back({bodies[i].motion.positionM.x(), static_cast<int>(i)});
     if (contactCount < kSplitSolverContacts) {
         for (const auto& [x, i] : xs) side[i] = 0;
         return side;
@@ -269,8 +269,8 @@ private:
     std::unique_ptr<SolverConstraint[]> mConstraints;  ///< in solve order
 };
 
-/// Solver state per body (velocities, inverse mass and world inverse inertia of movable
-/// bodies), then the world's immovable entry; and every body's rotation.
+/// Solver state per body (velocities, inverse mass and world inverse inertia of the bodies that
+/// take impulses), then the world's immovable entry; and every body's rotation.
 std::vector<SolverBody> solverBodies(const std::vector<Body>& bodies, std::vector<Eigen::Matrix3d>& rotation)
 {
     std::vector<SolverBody> state(bodies.size() + 1);
@@ -278,7 +278,7 @@ std::vector<SolverBody> solverBodies(const std::vector<Body>& bodies, std::vecto
     for (size_t i = 0; i < bodies.size(); ++i) {
         const Body& body = bodies[i];
         rotation[i] = body.motion.orientation.toRotationMatrix();
-        if (!movable(body)) continue;
+        if (!takesContactImpulses(body)) continue;
         state[i] = {body.motion.linearVelocityMS, body.motion.angularVelocityRadS, 1.0 / body.mass.massKg,
                     rotation[i] * body.mass.inertiaKgM2.inverse() * rotation[i].transpose()};
     }
@@ -350,7 +350,7 @@ void solveContacts(std::vector<Body>& bodies, const ContactSet& set, const World
     solver.warmStart(cache, bodies, rotation);
     solver.solve(collisions.solverIterations);
     for (size_t i = 0; i < bodies.size(); ++i) {
-        if (!movable(bodies[i])) continue;
+        if (!takesContactImpulses(bodies[i])) continue;
         bodies[i].motion.linearVelocityMS = state[i].v;
         bodies[i].motion.angularVelocityRadS = state[i].w;
     }
@@ -359,7 +359,8 @@ void solveContacts(std::vector<Body>& bodies, const ContactSet& set, const World
 
 namespace {
 
-/// Per body the inverse mass the solver used (0: immovable), then the world's immovable entry.
+/// Per body the inverse mass a correction moves it by (0: immovable, or a lattice, whose places
+/// are its particles'), then the world's immovable entry.
 std::vector<double> inverseMasses(const std::vector<Body>& bodies)
 {
     std::vector<double> inverse(bodies.size() + 1, 0.0);
@@ -383,6 +384,7 @@ void correctPositions(std::vector<Body>& bodies, const ContactSet& contacts, con
     const Eigen::Vector3d up = upDirection(world);
     std::vector<Constraint> constraints;
     for (size_t i = 0; i < bodies.size(); ++i) {
+        if (inverseMass[i] == 0.0) continue;  // a lattice's place is its particles'
         for (int collider = -1; collider < static_cast<int>(world.colliders.size()); ++collider) {
             const StaticContact* deepest = nullptr;
             for (const StaticContact& c : contacts.statics[i])

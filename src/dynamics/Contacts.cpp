@@ -15,8 +15,14 @@ ContactSet detectContacts(std::vector<Body>& bodies, const WorldSettings& world,
     set.manifolds = findBodyContacts(bodies, collisions.method);
     wakeBodiesHitByMovers(bodies, set.manifolds, sleep);
     set.statics.resize(bodies.size());
+    // A lattice keeps its particles above the ground itself; the boxes it meets as a rigid body.
+    WorldSettings boxesOnly = world;
+    boxesOnly.ground.enabled = false;
     forEachIndex(bodies.size(), [&](size_t i) {
-        if (movable(bodies[i])) set.statics[i] = findStaticContacts(bodies[i], world);
+        if (movable(bodies[i]))
+            set.statics[i] = findStaticContacts(bodies[i], world);
+        else if (takesContactImpulses(bodies[i]))
+            set.statics[i] = findStaticContacts(bodies[i], boxesOnly);
     });
     for (const std::vector<StaticContact>& s : set.statics) set.staticContacts += static_cast<int64_t>(s.size());
     set.solverContacts = set.staticContacts;
@@ -37,9 +43,6 @@ double deepestClosingPenetrationM(const std::vector<Body>& bodies, const Contact
         if (m.maxDepthM <= deepestM) continue;
         const BodyMotion& a = bodies[size_t(m.a)].motion;
         const BodyMotion& b = bodies[size_t(m.b)].motion;
-        // A lattice takes its motion from its particles, which do not feel other bodies: a
-        // shorter step would not stop it.
-        if (a.deformable || b.deformable) continue;
         for (const VoxelContact& p : m.points) {
             const Eigen::Vector3d va = a.linearVelocityMS + a.angularVelocityRadS.cross(p.pointM - a.positionM);
             const Eigen::Vector3d vb = b.linearVelocityMS + b.angularVelocityRadS.cross(p.pointM - b.positionM);

@@ -96,7 +96,7 @@ void testVoxelPair(const std::vector<WorldVoxel>& voxels, const std::vector<char
 std::vector<char> movableFlags(const std::vector<Body>& bodies)
 {
     std::vector<char> moves(bodies.size());
-    for (size_t i = 0; i < bodies.size(); ++i) moves[i] = movable(bodies[i]);
+    for (size_t i = 0; i < bodies.size(); ++i) moves[i] = takesContactImpulses(bodies[i]);
     return moves;
 }
 

@@ -25,7 +25,7 @@ void wakeLoadedBodies(std::vector<Body>& bodies, const std::vector<char>& loaded
 
 void wakeBodiesHitByMovers(std::vector<Body>& bodies, const std::vector<ContactManifold>& manifolds, const SleepSettings& sleep)
 {
-    auto wakes = [&](const Body& mover) { return movable(mover) && maxVoxelSpeedMS(mover) > sleep.speedMS; };
+    auto wakes = [&](const Body& mover) { return takesContactImpulses(mover) && maxVoxelSpeedMS(mover) > sleep.speedMS; };
     for (const ContactManifold& m : manifolds) {
         Body& a = bodies[m.a];
         Body& b = bodies[m.b];

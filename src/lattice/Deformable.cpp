@@ -219,6 +219,35 @@ void followLattice(Body& body, const Lattice& lattice)
     setMotionsFromFit({&body}, fitRigidMotion(lattice, voxels), blockCentreOffsetM(body.voxelSizeM, lattice.blocks));
 }
 
+void addRigidMomentum(Lattice& lattice, const Eigen::Vector3d& linearKgMS, const Eigen::Vector3d& angularAboutOriginKgM2S)
+{
+    const double m = lattice.particleMassKg;
+    double massKg = 0.0;
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (size_t p = 0; p < lattice.particleCount(); ++p) {
+        if (lattice.held[p]) continue;
+        massKg += m;
+        centre += m * lattice.positionM[p];
+    }
+    if (massKg == 0.0) return;
+    centre /= massKg;
+    // The free particles' inertia about their centre: their places' and each cube's own.
+    Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+    for (size_t p = 0; p < lattice.particleCount(); ++p) {
+        if (lattice.held[p]) continue;
+        const Eigen::Vector3d r = lattice.positionM[p] - centre;
+        inertia += m * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose()) + lattice.particleInertiaKgM2 * Eigen::Matrix3d::Identity();
+    }
+    // L about the origin = c × P + I ω about the centre, for the rigid field's increment.
+    const Eigen::Vector3d dv = linearKgMS / massKg;
+    const Eigen::Vector3d dw = inertia.ldlt().solve(angularAboutOriginKgM2S - centre.cross(linearKgMS));
+    for (size_t p = 0; p < lattice.particleCount(); ++p) {
+        if (lattice.held[p]) continue;
+        lattice.velocityMS[p] += dv + dw.cross(lattice.positionM[p] - centre);
+        lattice.angularVelocityRadS[p] += dw;
+    }
+}
+
 LatticePieces latticePieces(const Lattice& lattice)
 {
     LatticePieces pieces;

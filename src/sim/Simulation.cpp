@@ -238,7 +238,9 @@ void Simulation::step(double targetS)
 
     const ContactSet contacts = detectContacts(mState.bodies, mScene.world, mScene.collisions, mScene.sleep);
     const double closingPenetrationM = deepestClosingPenetrationM(mState.bodies, contacts, impactSpeedMS(mScene.world, dt));
+    const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> latticeMomenta = deformableBodyMomenta();
     solveContacts(mState.bodies, contacts, mScene.world, mScene.collisions, dt, mState.contactCache);
+    passContactImpulsesToLattices(latticeMomenta);
     correctPositions(mState.bodies, contacts, mScene.world);
     updateSleep(mState.bodies, contacts.touching, loaded, mScene.sleep, dt);
     adaptStepToPenetration(closingPenetrationM);
@@ -367,6 +369,35 @@ void Simulation::deformBodies(const FaceForces& faces, const std::vector<OpenWin
         mState.stepStats.latticeParticleSteps += d.lattice.advance(dtS) * static_cast<int64_t>(d.lattice.particleCount());
         followLattice(body, d.lattice);
         if (bodyInWindows(body, *mField, windows)) d.lastLoadedS = mState.timeS + dtS;
+    }
+}
+
+std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> Simulation::deformableBodyMomenta() const
+{
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> momenta;
+    if (mState.deformable.empty()) return momenta;
+    std::unordered_map<int64_t, size_t> indexOf;
+    for (size_t i = 0; i < mState.bodies.size(); ++i) indexOf[mState.bodies[i].id] = i;
+    for (const DeformableBody& d : mState.deformable) {
+        const Body& body = mState.bodies[indexOf.at(d.bodyId)];
+        momenta.emplace_back(linearMomentum(body), angularMomentumAboutOrigin(body));
+    }
+    return momenta;
+}
+
+void Simulation::passContactImpulsesToLattices(const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& before)
+{
+    if (mState.deformable.empty()) return;
+    std::unordered_map<int64_t, size_t> indexOf;
+    for (size_t i = 0; i < mState.bodies.size(); ++i) indexOf[mState.bodies[i].id] = i;
+    for (size_t k = 0; k < mState.deformable.size(); ++k) {
+        DeformableBody& d = mState.deformable[k];
+        Body& body = mState.bodies[indexOf.at(d.bodyId)];
+        if (!takesContactImpulses(body)) continue;
+        const Eigen::Vector3d linear = linearMomentum(body) - before[k].first, angular = angularMomentumAboutOrigin(body) - before[k].second;
+        if (linear.isZero(0.0) && angular.isZero(0.0)) continue;  // no contact moved it
+        addRigidMomentum(d.lattice, linear, angular);
+        followLattice(body, d.lattice);
     }
 }
 

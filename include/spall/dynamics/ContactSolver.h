@@ -30,8 +30,10 @@ struct ContactCache {
     std::vector<Point> points;
 };
 
-/// Solves the contacts together and writes the movable bodies' new velocities; `cache` warm
-/// starts the solve and keeps its impulses for the next step. Deterministic.
+/// Solves the contacts together and writes the new velocities of the bodies that take impulses
+/// (takesContactImpulses: a free body in the deformable phase as a rigid body, whose lattice
+/// the caller hands the change); `cache` warm starts the solve and keeps its impulses for the
+/// next step. Deterministic.
 void solveContacts(std::vector<Body>& bodies, const ContactSet& contacts, const WorldSettings& world,
                    const CollisionSettings& collisions, double dtS, ContactCache& cache);
 

@@ -27,15 +27,15 @@ struct ContactSet {
 /// adds in a couple of steps, plus a margin (unit: m/s).
 double impactSpeedMS(const WorldSettings& world, double dtS);
 
-/// The deepest contact between rigid bodies that still close on each other faster than
+/// The deepest contact between bodies that still close on each other faster than
 /// `impactSpeedMS` at one of its points (unit: m; 0 when none): a penetration the step is
 /// making, not one that rests (pieces born interlocked, which the position correction
-/// separates and a shorter step would not), nor one with a body in the deformable phase (its
-/// particles do not feel other bodies, so no step stops it).
+/// separates and a shorter step would not).
 double deepestClosingPenetrationM(const std::vector<Body>& bodies, const ContactSet& contacts, double impactSpeedMS);
 
 /// Contacts between bodies, then wakes sleeping bodies a moving one hits (they take part in the
-/// solve), then contacts of every movable body with the ground and the static boxes.
+/// solve), then contacts of every movable body with the ground and the static boxes, and of a
+/// free body in the deformable phase with the boxes (its lattice keeps itself above the ground).
 /// Deterministic for any thread count.
 ContactSet detectContacts(std::vector<Body>& bodies, const WorldSettings& world, const CollisionSettings& collisions,
                           const SleepSettings& sleep);

@@ -18,6 +18,11 @@ namespace spall {
 /// A body the solver may move: neither anchored, asleep nor deformable.
 inline bool movable(const Body& body) { return !body.anchored && !body.motion.asleep && !body.motion.deformable; }
 
+/// A body the contact solver moves: a movable one, or a free one in the deformable phase, which
+/// the solver moves as a rigid body and whose lattice then takes the change of its momenta
+/// (addRigidMomentum, lattice/Deformable.h).
+inline bool takesContactImpulses(const Body& body) { return !body.anchored && !body.motion.asleep; }
+
 /// Upper bound of the speed of any voxel of the body (unit: m/s).
 inline double maxVoxelSpeedMS(const Body& body)
 {

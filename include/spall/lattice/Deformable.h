@@ -57,6 +57,13 @@ RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& par
 /// history and the other bodies' contacts see where it is. An anchored body stays put.
 void followLattice(Body& body, const Lattice& lattice);
 
+/// Adds linear momentum and angular momentum (about the origin) to a lattice's free particles as
+/// a rigid velocity field about their centre of mass, so that the sums over the particles change
+/// by exactly these (the contact solver's impulses on its body, which it moves as a rigid body).
+/// A rigid field changes no bond's stretch, bend or opening rate: nothing inside the lattice
+/// feels it.
+void addRigidMomentum(Lattice& lattice, const Eigen::Vector3d& linearKgMS, const Eigen::Vector3d& angularAboutOriginKgM2S);
+
 /// A lattice's particles in pieces held together by bonds that have not broken (numbered by their
 /// lowest particle), each with its vibration: the strain energy of its bonds and particles plus
 /// its kinetic energy about its rigid motion, or all of it for a piece a support holds.

@@ -90,7 +90,8 @@ public:
 
     /// One step toward `targetS` (landing on it when it is near; by default the step is the one
     /// chosen). Its phases, in order: open windows, choose dt, fracture, split, hand off, enter
-    /// the deformable phase, loads, integrate, deform, detect, solve, correct, sleep.
+    /// the deformable phase, loads, integrate, deform, detect, solve (the lattices taking their
+    /// bodies' impulses), correct, sleep.
     void step(double targetS = std::numeric_limits<double>::infinity());
 
     double timeS() const { return mState.timeS; }
@@ -136,6 +137,12 @@ private:
     void continueVibratingParts(const std::vector<DeformableBody>& leaving);
     /// Each deformable body's lattice through the step under its face loads and gravity.
     void deformBodies(const FaceForces& faces, const std::vector<OpenWindow>& windows, double dtS);
+    /// Per deformable body (mState.deformable's order), its body's linear and angular momentum
+    /// (about the origin).
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> deformableBodyMomenta() const;
+    /// The contact solver moves a free lattice's body as a rigid body: its lattice takes the
+    /// change of momenta since `before` (deformableBodyMomenta), and the body follows it again.
+    void passContactImpulsesToLattices(const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& before);
     /// The ground and the colliders, as the lattices' anchors are bonded to them.
     LatticeSupports latticeSupports() const;
     /// Throws SimulationError naming the first body whose pose or velocity is not finite: an
