@@ -33,23 +33,36 @@ std::string readableDuration(double seconds)
     return text;
 }
 
+/// What the progress bar says of the time to come: while lattices run, how many (a simulated
+/// second of the deformable phase costs hours where the flight after it costs seconds, so the
+/// pace so far says nothing of the rest); after, the time left at the pace since they ended.
+std::string timeToCome(const spall::RunProgress& p, double& paceFromS, double& paceFromTimeS)
+{
+    if (p.latticeParticles > 0) {
+        paceFromS = -1.0;
+        return "in the deformable phase (" + std::to_string(p.latticeParticles) + " particles)";
+    }
+    if (paceFromS < 0.0) {
+        paceFromS = p.elapsedS;
+        paceFromTimeS = p.timeS;
+    }
+    const double simulatedS = p.timeS - paceFromTimeS;
+    if (simulatedS <= 0.0) return "pace not yet known";
+    return readableDuration((p.elapsedS - paceFromS) * (p.endTimeS - p.timeS) / simulatedS) + " left at this pace";
+}
+
 /// The progress callback: draws a progress bar by simulated time with the time spent and the time
-/// left at the pace so far (unless quiet; the deformable phase is far slower per simulated second
-/// than the flight after it, so while it lasts that is an upper bound) and says whether to go on
-/// (not after Ctrl-C or SIGTERM).
+/// to come (timeToCome), unless quiet, and says whether to go on (not after Ctrl-C or SIGTERM).
 std::function<bool(const spall::RunProgress&)> progressBar(bool quiet)
 {
-    return [quiet, firstTimeS = -1.0](const spall::RunProgress& p) mutable {
-        if (firstTimeS < 0.0) firstTimeS = p.timeS;
+    return [quiet, paceFromS = -1.0, paceFromTimeS = 0.0](const spall::RunProgress& p) mutable {
         if (!quiet) {
             const int width = 30;
             const double done = p.endTimeS > 0.0 ? std::min(1.0, p.timeS / p.endTimeS) : 1.0;
-            const double simulatedS = p.timeS - firstTimeS;
-            const double left = simulatedS > 0.0 ? p.elapsedS * (p.endTimeS - p.timeS) / simulatedS : 0.0;
-            std::fprintf(stderr, "\r[%-*s] frame %d/%d%s  t=%.4f s  bodies %zu  steps %lld  %s spent, %s left at this pace ", width,
+            std::fprintf(stderr, "\r[%-*s] frame %d/%d%s  t=%.4f s  bodies %zu  steps %lld  %s spent, %-36s", width,
                          std::string(size_t(width * done), '#').c_str(), p.frame + 1, p.frameCount, p.frameWritten ? "" : " (computing)",
                          p.timeS, p.bodies, static_cast<long long>(p.totalSteps), readableDuration(p.elapsedS).c_str(),
-                         readableDuration(left).c_str());
+                         timeToCome(p, paceFromS, paceFromTimeS).c_str());
             std::fflush(stderr);
         }
         return !stopRequested();

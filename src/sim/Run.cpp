@@ -118,6 +118,14 @@ private:
     std::vector<double> mTimes;
 };
 
+/// The particles of the simulation's lattices in the deformable phase.
+size_t latticeParticles(const Simulation& sim)
+{
+    size_t particles = 0;
+    for (const DeformableBody& d : sim.state().deformable) particles += d.lattice.particleCount();
+    return particles;
+}
+
 /// Writes frames firstFrame .. frameCount-1 of a simulation that stands at firstFrame's start.
 /// After each frame's outputs, a checkpoint when output.checkpoint_every_s of wall-clock time
 /// has passed since the last, or when the callback asks to stop.
@@ -146,7 +154,7 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
             if (!onFrame || std::chrono::duration<double>(now - lastReport).count() < options.progressEveryS) return;
             lastReport = now;
             const int64_t steps = report.totalSteps + sim.state().stepStats.steps;
-            onFrame({f, frameCount, sim.timeS(), sim.bodies().size(), steps, elapsedS(now), endTimeS, false});
+            onFrame({f, frameCount, sim.timeS(), sim.bodies().size(), steps, elapsedS(now), endTimeS, false, latticeParticles(sim)});
         };
         if (!sim.advanceTo(t, options.interrupter, reportWithinFrame)) {
             // Asked to stop within the frame (a frame of the deformable phase can take minutes):
@@ -163,7 +171,7 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
         report.framesWritten = f + 1;
         const auto now = std::chrono::steady_clock::now();
         lastReport = now;
-        const RunProgress progress{f, frameCount, t, sim.bodies().size(), report.totalSteps, elapsedS(now), endTimeS, true};
+        const RunProgress progress{f, frameCount, t, sim.bodies().size(), report.totalSteps, elapsedS(now), endTimeS, true, latticeParticles(sim)};
         const bool stop = onFrame && !onFrame(progress) && f + 1 < frameCount;
         // The checkpoint goes after the frame's outputs: whatever it says is written, is.
         const double every = scene.output.checkpointEveryS;

@@ -40,6 +40,9 @@ struct RunProgress {
     double elapsedS = 0;     ///< wall clock since this run (or resume) began (unit: s)
     double endTimeS = 0;     ///< the last frame's time (unit: s)
     bool frameWritten = true;  ///< false: a report from within frame `frame`
+    /// Particles of the lattices in the deformable phase: while there are any, a simulated
+    /// second costs far more than it will in the flight after it.
+    size_t latticeParticles = 0;
 };
 
 struct RunReport {
