@@ -238,9 +238,7 @@ void Simulation::step(double targetS)
 
     const ContactSet contacts = detectContacts(mState.bodies, mScene.world, mScene.collisions, mScene.sleep);
     const double closingPenetrationM = deepestClosingPenetrationM(mState.bodies, contacts, impactSpeedMS(mScene.world, dt));
-    const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> latticeMomenta = deformableBodyMomenta();
-    solveContacts(mState.bodies, contacts, mScene.world, mScene.collisions, dt, mState.contactCache);
-    passContactImpulsesToLattices(latticeMomenta);
+    solveContactsWithLattices(contacts, dt);
     correctPositions(mState.bodies, contacts, mScene.world);
     updateSleep(mState.bodies, contacts.touching, loaded, mScene.sleep, dt);
     adaptStepToPenetration(closingPenetrationM);
@@ -360,8 +358,7 @@ void Simulation::enterDeformablePhase(const std::vector<OpenWindow>& windows)
 void Simulation::deformBodies(const FaceForces& faces, const std::vector<OpenWindow>& windows, double dtS)
 {
     if (mState.deformable.empty()) return;
-    std::unordered_map<int64_t, size_t> indexOf;
-    for (size_t i = 0; i < mState.bodies.size(); ++i) indexOf[mState.bodies[i].id] = i;
+    const std::unordered_map<int64_t, size_t> indexOf = bodyIndexById();
     for (DeformableBody& d : mState.deformable) {
         const size_t i = indexOf.at(d.bodyId);
         Body& body = mState.bodies[i];
@@ -372,30 +369,32 @@ void Simulation::deformBodies(const FaceForces& faces, const std::vector<OpenWin
     }
 }
 
-std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> Simulation::deformableBodyMomenta() const
+std::unordered_map<int64_t, size_t> Simulation::bodyIndexById() const
 {
-    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> momenta;
-    if (mState.deformable.empty()) return momenta;
     std::unordered_map<int64_t, size_t> indexOf;
     for (size_t i = 0; i < mState.bodies.size(); ++i) indexOf[mState.bodies[i].id] = i;
-    for (const DeformableBody& d : mState.deformable) {
-        const Body& body = mState.bodies[indexOf.at(d.bodyId)];
-        momenta.emplace_back(linearMomentum(body), angularMomentumAboutOrigin(body));
-    }
-    return momenta;
+    return indexOf;
 }
 
-void Simulation::passContactImpulsesToLattices(const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& before)
+void Simulation::solveContactsWithLattices(const ContactSet& contacts, double dtS)
 {
-    if (mState.deformable.empty()) return;
-    std::unordered_map<int64_t, size_t> indexOf;
-    for (size_t i = 0; i < mState.bodies.size(); ++i) indexOf[mState.bodies[i].id] = i;
-    for (size_t k = 0; k < mState.deformable.size(); ++k) {
-        DeformableBody& d = mState.deformable[k];
-        Body& body = mState.bodies[indexOf.at(d.bodyId)];
+    std::vector<size_t> latticeBody;
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> before;
+    if (!mState.deformable.empty()) {
+        const std::unordered_map<int64_t, size_t> indexOf = bodyIndexById();
+        for (const DeformableBody& d : mState.deformable) {
+            latticeBody.push_back(indexOf.at(d.bodyId));
+            const Body& body = mState.bodies[latticeBody.back()];
+            before.emplace_back(linearMomentum(body), angularMomentumAboutOrigin(body));
+        }
+    }
+    solveContacts(mState.bodies, contacts, mScene.world, mScene.collisions, dtS, mState.contactCache);
+    for (size_t k = 0; k < latticeBody.size(); ++k) {
+        Body& body = mState.bodies[latticeBody[k]];
         if (!takesContactImpulses(body)) continue;
         const Eigen::Vector3d linear = linearMomentum(body) - before[k].first, angular = angularMomentumAboutOrigin(body) - before[k].second;
         if (linear.isZero(0.0) && angular.isZero(0.0)) continue;  // no contact moved it
+        DeformableBody& d = mState.deformable[k];
         addRigidMomentum(d.lattice, linear, angular);
         followLattice(body, d.lattice);
     }
@@ -407,8 +406,7 @@ void Simulation::handOffQuietBodies(double dtS)
     // Once in each check interval: in the step that reaches one of its multiples.
     const double interval = mScene.lattice.handoffCheckIntervalS;
     const bool checkDue = std::floor((mState.timeS + dtS) / interval) > std::floor(mState.timeS / interval);
-    std::unordered_map<int64_t, size_t> indexOf;
-    for (size_t i = 0; i < mState.bodies.size(); ++i) indexOf[mState.bodies[i].id] = i;
+    const std::unordered_map<int64_t, size_t> indexOf = bodyIndexById();
     std::vector<std::vector<Body>> parts(mState.bodies.size());
     std::vector<DeformableBody> staying, leaving;
     for (DeformableBody& d : mState.deformable) {

@@ -13,6 +13,7 @@
 
 #include <functional>
 #include <limits>
+#include <unordered_map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -137,12 +138,12 @@ private:
     void continueVibratingParts(const std::vector<DeformableBody>& leaving);
     /// Each deformable body's lattice through the step under its face loads and gravity.
     void deformBodies(const FaceForces& faces, const std::vector<OpenWindow>& windows, double dtS);
-    /// Per deformable body (mState.deformable's order), its body's linear and angular momentum
-    /// (about the origin).
-    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> deformableBodyMomenta() const;
-    /// The contact solver moves a free lattice's body as a rigid body: its lattice takes the
-    /// change of momenta since `before` (deformableBodyMomenta), and the body follows it again.
-    void passContactImpulsesToLattices(const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& before);
+    /// The solve phase: the contact solver moves a free lattice's body as a rigid body, its
+    /// lattice takes the change of the body's linear and angular momentum (addRigidMomentum),
+    /// and the body follows its lattice again.
+    void solveContactsWithLattices(const ContactSet& contacts, double dtS);
+    /// Each body's index in mState.bodies, by id.
+    std::unordered_map<int64_t, size_t> bodyIndexById() const;
     /// The ground and the colliders, as the lattices' anchors are bonded to them.
     LatticeSupports latticeSupports() const;
     /// Throws SimulationError naming the first body whose pose or velocity is not finite: an
