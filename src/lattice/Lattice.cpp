@@ -330,6 +330,9 @@ void Lattice::refreshForces()
     computeVolumetricStrain();
     forEach(bondCount(), [&](size_t b) { completeBondForce(b); });
     forEach(particleCount(), [&](size_t p) { gatherBondForces(p); });
+    mListedAtM.clear();  // the state may have been written from outside
+    updateContactCandidates();
+    addContactForces();
 }
 
 void Lattice::step(double dtS)
@@ -357,10 +360,10 @@ void Lattice::step(double dtS)
     });
     computeVolumetricStrain();
     forEach(bondCount(), [&](size_t b) { completeBondForce(b); });
-    forEach(particleCount(), [&](size_t p) {
-        gatherBondForces(p);
-        kick(p);
-    });
+    forEach(particleCount(), [&](size_t p) { gatherBondForces(p); });
+    updateContactCandidates();
+    addContactForces();
+    forEach(particleCount(), kick);
     // At the step's end, where velocity Verlet's energy is counted.
     if (snapped.load()) releaseSnapEnergies();
 }

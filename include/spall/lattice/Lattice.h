@@ -174,7 +174,8 @@ public:
     std::vector<openvdb::Coord> voxel;  ///< the body's index of each particle (a support point: the cell beyond its voxel)
     std::vector<Eigen::Vector3d> positionM, velocityMS, angularVelocityRadS, externalForceN;
     std::vector<Eigen::Quaterniond> orientation;
-    /// The bonds' force and moment on each particle as the last step left them (unit: N, N m):
+    /// The bonds' force and moment on each particle, with the contacts' between particles that
+    /// share no bond, as the last step left them (unit: N, N m):
     /// velocity Verlet's first half kick of the next step uses them. They depend on the
     /// velocities half-way through that step (the dashpots), so a checkpoint saves them.
     std::vector<Eigen::Vector3d> bondForceN, bondMomentNm;
@@ -336,6 +337,24 @@ private:
     /// compression side of a bent base rigid, stiffening and strengthening it.
     bool bondedToGround(size_t p) const;
     BondStrain strainOf(const LatticeBond& bond) const;
+
+    // Contact between particles that share no bond (LatticeContact.cpp): pieces of one lattice
+    // that were never neighbours meet as the broken bonds' pieces do, by a normal spring along
+    // the line of centres while their cubes' centres are closer than an edge.
+    /// Particle pairs sharing no bond whose centres were within an edge plus kContactSkin
+    /// edges when last listed, p < q, sorted: a Verlet list, listed again once a particle has
+    /// moved half the skin, so it holds every pair that can touch.
+    std::vector<std::pair<uint32_t, uint32_t>> mContactCandidates;
+    /// Where the particles were when the candidates were listed (empty: list them afresh).
+    std::vector<Eigen::Vector3d> mListedAtM;
+    /// Lists the candidates again if a particle has moved half the skin since they were listed.
+    void updateContactCandidates();
+    void listContactCandidates();
+    /// Whether particles p and q share a bond (intact or broken: a broken bond carries their
+    /// compression itself).
+    bool shareABond(uint32_t p, uint32_t q) const;
+    /// Adds the contacts' forces to bondForceN.
+    void addContactForces();
 };
 
 }  // namespace spall
