@@ -107,26 +107,35 @@ void treeLookupContacts(const Body& a, const Body& b, std::vector<VoxelContact>&
 
 // A quadrilateral spanning the patch resists tipping as well as all of them,
 // and fewer, distinct points let the solver converge faster.
-std::vector<size_t> spanningPoints(const std::vector<VoxelContact>& contacts, const Eigen::Vector3d& normal, size_t deepest)
+std::vector<size_t> spanningPoints(const std::vector<VoxelContact>& contacts, const Eigen::Vector3d& normal)
 {
     if (contacts.size() <= 4) {
         std::vector<size_t> all(contacts.size());
         for (size_t i = 0; i < all.size(); ++i) all[i] = i;
         return all;
     }
-    const Eigen::Vector3d p0 = contacts[deepest].pointM;
-    size_t i1 = deepest;
+    // Start from the patch's extreme along a fixed oblique tangent, a corner, not from its deepest
+    // point: depths across a resting patch differ by rounding, so the deepest jumps across it
+    // from step to step, the points with it, and the warm start (which matches points within a
+    // quarter voxel) lost the impulses; a heavy slab on a jagged patch then rocked by millimetres.
+    const Eigen::Vector3d oblique(0.3713, 0.8122, 0.4498);
+    const Eigen::Vector3d tangent = oblique - oblique.dot(normal) * normal;
+    size_t first = 0;
+    for (size_t i = 1; i < contacts.size(); ++i)
+        if (contacts[i].pointM.dot(tangent) < contacts[first].pointM.dot(tangent)) first = i;
+    const Eigen::Vector3d p0 = contacts[first].pointM;
+    size_t i1 = first;
     for (size_t i = 0; i < contacts.size(); ++i)
         if ((contacts[i].pointM - p0).squaredNorm() > (contacts[i1].pointM - p0).squaredNorm()) i1 = i;
     const Eigen::Vector3d edge = contacts[i1].pointM - p0;
     auto side = [&](size_t i) { return normal.dot(edge.cross(contacts[i].pointM - p0)); };
-    size_t i2 = deepest, i3 = deepest;
+    size_t i2 = first, i3 = first;
     for (size_t i = 0; i < contacts.size(); ++i) {
         if (side(i) > side(i2)) i2 = i;
         if (side(i) < side(i3)) i3 = i;
     }
     std::vector<size_t> chosen;
-    for (size_t i : {deepest, i1, i2, i3}) {
+    for (size_t i : {first, i1, i2, i3}) {
         const bool seen = std::any_of(chosen.begin(), chosen.end(), [&](size_t j) { return contacts[j].pointM == contacts[i].pointM; });
         if (!seen) chosen.push_back(i);
     }
@@ -149,7 +158,7 @@ ContactManifold reduceManifold(int a, int b, const std::vector<VoxelContact>& co
     }
     m.maxDepthM = contacts[deepest].depthM;
     m.normal = sum.norm() > 1e-12 * voxelSizeM ? Eigen::Vector3d(sum.normalized()) : contacts[deepest].normal;
-    for (size_t i : spanningPoints(contacts, m.normal, deepest)) m.points.push_back(contacts[i]);
+    for (size_t i : spanningPoints(contacts, m.normal)) m.points.push_back(contacts[i]);
     return m;
 }
 

@@ -67,7 +67,7 @@ void findCorners(const Body& body, const WorldSettings& world, std::vector<Stati
     }
 }
 
-/// Per collider and normal, the corners reduced to at most four spanning points. `done`,
+/// Per collider and normal, the corners reduced to at most four spanning points and the deepest. `done`,
 /// `group` and `points` are working space.
 std::vector<StaticContact> reduceStaticContacts(const std::vector<StaticContact>& all, std::vector<char>& done, std::vector<size_t>& group,
                                                 std::vector<VoxelContact>& points)
@@ -86,7 +86,10 @@ std::vector<StaticContact> reduceStaticContacts(const std::vector<StaticContact>
                 group.push_back(j);
                 points.push_back({all[j].arm, all[j].normal, all[j].depth});
             }
-        for (size_t k : spanningPoints(points, all[i].normal, deepest)) reduced.push_back(all[group[k]]);
+        // The deepest too: the position correction works on each collider's deepest contact.
+        std::vector<size_t> chosen = spanningPoints(points, all[i].normal);
+        if (std::find(chosen.begin(), chosen.end(), deepest) == chosen.end()) chosen.push_back(deepest);
+        for (size_t k : chosen) reduced.push_back(all[group[k]]);
     }
     return reduced;
 }

@@ -229,7 +229,7 @@ const char* defaultSceneJson()
     {"position_m": [0.0, -0.4, 0.6], "tnt_kg": 0.4, "detonation_time_s": 0.0, "burst": "free-air"}
   ],
   "fracture": {"algorithm": "lattice"},
-  "lattice": {"max_vibration_s": 0.03}
+  "lattice": {"max_vibration_s": 0.03, "handoff_energy_fraction": 0.2}
 }
 )";
 }

@@ -38,11 +38,13 @@ std::vector<ContactManifold> findBodyContacts(const std::vector<Body>& bodies, C
 
 /// Reduces a pair's voxel contacts to a manifold: the normal is the depth-weighted mean of the
 /// voxel normals (their tangential parts cancel across a flat contact, which is what keeps
-/// stacked debris from sliding), the points the deepest one and three that span the patch.
+/// stacked debris from sliding), the points four that span the patch (spanningPoints), its
+/// depth the deepest pair's.
 ContactManifold reduceManifold(int a, int b, const std::vector<VoxelContact>& contacts, double voxelSizeM);
 
-/// At most four of the contacts: the deepest, the farthest from it, and the farthest from their
-/// line on each side (indices into `contacts`).
-std::vector<size_t> spanningPoints(const std::vector<VoxelContact>& contacts, const Eigen::Vector3d& normal, size_t deepest);
+/// At most four of the contacts: the patch's extreme along a fixed tangent (a corner, which
+/// stays put while depths change), the farthest from it, and the farthest from their line on
+/// each side (indices into `contacts`).
+std::vector<size_t> spanningPoints(const std::vector<VoxelContact>& contacts, const Eigen::Vector3d& normal);
 
 }  // namespace spall
