@@ -67,8 +67,8 @@ void findCorners(const Body& body, const WorldSettings& world, std::vector<Stati
     }
 }
 
-/// Per collider and normal, the corners reduced to at most four spanning points and the deepest. `done`,
-/// `group` and `points` are working space.
+/// Per collider and normal, the corners reduced to at most four spanning points and the
+/// deepest. `done`, `group` and `points` are working space.
 std::vector<StaticContact> reduceStaticContacts(const std::vector<StaticContact>& all, std::vector<char>& done, std::vector<size_t>& group,
                                                 std::vector<VoxelContact>& points)
 {

@@ -126,6 +126,14 @@ size_t latticeParticles(const Simulation& sim)
     return particles;
 }
 
+/// Where a run stands at simulated time `timeS` within (or at the end of) `frame`, for the
+/// progress callback.
+RunProgress progressOf(const Simulation& sim, int frame, int frameCount, double timeS, int64_t steps, double elapsedS, bool frameWritten)
+{
+    const double endTimeS = (frameCount - 1) / sim.scene().frameRateHz;
+    return {frame, frameCount, timeS, sim.bodies().size(), steps, elapsedS, endTimeS, frameWritten, latticeParticles(sim)};
+}
+
 /// Writes frames firstFrame .. frameCount-1 of a simulation that stands at firstFrame's start.
 /// After each frame's outputs, a checkpoint when output.checkpoint_every_s of wall-clock time
 /// has passed since the last, or when the callback asks to stop.
@@ -144,7 +152,9 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
     PreviewRecorder preview(options, frameCount, scene);
     RunReport report;
     report.totalSteps = stepsSoFar;
-    const double endTimeS = (frameCount - 1) / scene.frameRateHz;
+    const auto saveCheckpoint = [&](int framesDone) {
+        writeCheckpoint(checkpointPath.string(), {framesDone, frameCount, report.totalSteps, checkpointScene, sim.state()});
+    };
     auto lastReport = start;
     const auto elapsedS = [&](std::chrono::steady_clock::time_point now) { return std::chrono::duration<double>(now - start).count(); };
     for (int f = firstFrame; f < frameCount; ++f) {
@@ -154,13 +164,12 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
             if (!onFrame || std::chrono::duration<double>(now - lastReport).count() < options.progressEveryS) return;
             lastReport = now;
             const int64_t steps = report.totalSteps + sim.state().stepStats.steps;
-            onFrame({f, frameCount, sim.timeS(), sim.bodies().size(), steps, elapsedS(now), endTimeS, false, latticeParticles(sim)});
+            onFrame(progressOf(sim, f, frameCount, sim.timeS(), steps, elapsedS(now), false));
         };
         if (!sim.advanceTo(t, options.interrupter, reportWithinFrame)) {
             // Asked to stop within the frame (a frame of the deformable phase can take minutes):
             // the state between two steps is saved, frame f still to write.
-            if (scene.output.checkpointEveryS > 0)
-                writeCheckpoint(checkpointPath.string(), {f, frameCount, report.totalSteps, checkpointScene, sim.state()});
+            if (scene.output.checkpointEveryS > 0) saveCheckpoint(f);
             break;
         }
         const StepStats stats = sim.takeStepStats();
@@ -171,12 +180,11 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
         report.framesWritten = f + 1;
         const auto now = std::chrono::steady_clock::now();
         lastReport = now;
-        const RunProgress progress{f, frameCount, t, sim.bodies().size(), report.totalSteps, elapsedS(now), endTimeS, true, latticeParticles(sim)};
-        const bool stop = onFrame && !onFrame(progress) && f + 1 < frameCount;
+        const bool stop = onFrame && !onFrame(progressOf(sim, f, frameCount, t, report.totalSteps, elapsedS(now), true)) && f + 1 < frameCount;
         // The checkpoint goes after the frame's outputs: whatever it says is written, is.
         const double every = scene.output.checkpointEveryS;
         if (every > 0 && f + 1 < frameCount && (stop || std::chrono::duration<double>(now - lastCheckpoint).count() >= every)) {
-            writeCheckpoint(checkpointPath.string(), {f + 1, frameCount, report.totalSteps, checkpointScene, sim.state()});
+            saveCheckpoint(f + 1);
             lastCheckpoint = std::chrono::steady_clock::now();
         }
         if (stop) break;

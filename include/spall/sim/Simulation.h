@@ -13,9 +13,9 @@
 
 #include <functional>
 #include <limits>
-#include <unordered_map>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace spall {
