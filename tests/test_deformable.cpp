@@ -572,12 +572,14 @@ LatticeSettings inBlocksOf(int particleVoxels)
 namespace {
 
 /// A free 0.4 m brick bar in empty space (no gravity, ground or drag), which a small charge 1 m
-/// away sets ringing without breaking it; it stays in the deformable phase.
+/// away sets ringing without breaking it; undamped, it stays in the deformable phase.
 nlohmann::json freeBarInEmptySpace()
 {
     return {
         {"voxel_size_m", kH}, {"duration_s", 0.3}, {"frame_rate_hz", 24}, {"gravity_m_s2", {0, 0, 0}}, {"ground", {{"enabled", false}}},
-        {"objects", {{{"name", "bar"}, {"primitive", {{"shape", "box"}, {"size_m", {0.4, 0.1, 0.1}}}}, {"position_m", {0, 0, 0}}}}},
+        {"materials", {{"undamped-brick", {{"base", "brick-masonry"}, {"damping_ratio", 0.0}}}}},
+        {"objects",
+         {{{"name", "bar"}, {"primitive", {{"shape", "box"}, {"size_m", {0.4, 0.1, 0.1}}}}, {"position_m", {0, 0, 0}}, {"material", "undamped-brick"}}}},
         {"charges", {{{"position_m", {0, -1.0, 0}}, {"tnt_kg", 0.001}}}},
         {"fracture", {{"algorithm", "lattice"}}},
         {"lattice", {{"max_vibration_s", 1.0}, {"handoff_energy_fraction", 0.0}}},

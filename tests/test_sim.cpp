@@ -179,7 +179,7 @@ const char* kEveryKeyScene = R"({
                           "orientation_factor": 0.05, "damage_rate_per_s": 200, "damage_stress_scale_per_Pa": 1e-5,
                           "youngs_modulus_Pa": 2e10, "poisson_ratio": 0.25, "tensile_strength_Pa": 4e6, "fracture_energy_J_per_m2": 90,
                           "shear_strength_Pa": 5e6, "friction_coefficient": 0.6, "strength_rate_law": "fib-mc2010",
-                          "strength_cov": 0.15, "strength_correlation_length_m": 0.03,
+                          "strength_cov": 0.15, "strength_correlation_length_m": 0.03, "damping_ratio": 0.04,
                           "unit_length_m": 0.3, "unit_width_m": 0.1, "unit_height_m": 0.1, "joint_thickness_m": 0.012,
                           "unit_length_axis": "y", "unit_bond_pattern": "flemish", "unit_tensile_strength_Pa": 3e6, "unit_fracture_energy_J_per_m2": 60,
                           "unit_shear_strength_Pa": 2.5e6, "unit_friction_coefficient": 0.45},

@@ -55,6 +55,14 @@ Material withElasticity(Material m, double youngsModulusPa, double poissonRatio,
     return m;
 }
 
+/// `m` with its own damping ratio (Material::dampingRatio) and the source.
+Material withDamping(Material m, double dampingRatio, const std::string& source)
+{
+    m.dampingRatio = dampingRatio;
+    m.source += "; damping: " + source;
+    return m;
+}
+
 /// `m` with bonds that scatter in strength, correlated over `correlationLengthM`, and the source.
 Material withScatter(Material m, double coefficientOfVariation, double correlationLengthM, const std::string& source)
 {
@@ -126,6 +134,10 @@ std::pair<double, double> mohrCoulombThrough(double compressiveStrengthPa, doubl
 // Reinforced concrete has no entry there (see reinforcedConcretePreset). Densities: typical
 // values; concrete and reinforced concrete from EN 1991-1-1 Table A.1 (24 and 25 kN/m^3). Each
 // preset below gives the sources of what the deformable phase reads (issues 17 and 18).
+// Damping ratios: ENV 1998-6:2003 Annex B puts concrete elements at 2-7 % of critical and
+// brickwork at 3-10 %; the lattice resolves the cracks and joints behind the upper ends, so the
+// presets take the lower. Glass and wood: half the flexural loss factors Cremer & Heckl
+// (Structure-Borne Sound, 1988) tabulate, 0.6-2 x 10^-3 for glass, about 10^-2 for wood.
 
 /// EN 572-1 (E 70 GPa, ν 0.2, characteristic bending strength 45 MPa), Gf = KIc²/E with KIc =
 /// 0.75 MPa m^0.5 (soda-lime glass, e.g. Wiederhorn 1969): 8 J/m². Glass fails by principal
@@ -133,9 +145,10 @@ std::pair<double, double> mohrCoulombThrough(double compressiveStrengthPa, doubl
 /// adds half the compression: c = ft, μ = 0.5.
 Material glassPreset()
 {
-    return withShear(withElasticity(calibrateMaterial("glass", 2500.0, 3.4e3, 6.9e3, "Clancey 1972: windows shatter at 3.4-6.9 kPa"), 70e9,
-                                    0.2, 45e6, 8.0, "EN 572-1 (E, strength); Gf = KIc^2/E, KIc 0.75 MPa m^0.5"),
-                     45e6, 0.5, StrengthRateLaw::None, "Rankine (principal tension) linearised: c = ft, mu 0.5");
+    return withDamping(withShear(withElasticity(calibrateMaterial("glass", 2500.0, 3.4e3, 6.9e3, "Clancey 1972: windows shatter at 3.4-6.9 kPa"),
+                                                70e9, 0.2, 45e6, 8.0, "EN 572-1 (E, strength); Gf = KIc^2/E, KIc 0.75 MPa m^0.5"),
+                                 45e6, 0.5, StrengthRateLaw::None, "Rankine (principal tension) linearised: c = ft, mu 0.5"),
+                       0.001, "half the flexural loss factor of glass, 0.6-2 x 10^-3 (Cremer & Heckl 1988)");
 }
 
 /// Spruce, transversely isotropic about its grain (along z: a post): USDA Wood Handbook
@@ -152,14 +165,15 @@ Material glassPreset()
 Material woodPreset()
 {
     constexpr double kAlongGrainPa = 10e9;
-    return withGrain(withShear(withElasticity(calibrateMaterial("wood", 500.0, 6.9e3, 13.8e3, "Clancey 1972: wood panels fail at 6.9-13.8 kPa"),
+    return withDamping(withGrain(withShear(withElasticity(calibrateMaterial("wood", 500.0, 6.9e3, 13.8e3, "Clancey 1972: wood panels fail at 6.9-13.8 kPa"),
                                               0.06 * kAlongGrainPa, 0.35, 2.5e6, 250.0,
                                               "across the grain: Wood Handbook FPL-GTR-190 tables 5-1, 5-2, 5-3 (E_T, nu, tension); "
                                               "Stanzl-Tschegg et al. 1995 (Gf)"),
                                7.9e6, 0.0, StrengthRateLaw::None, "Wood Handbook table 5-3b, Sitka spruce shear parallel to grain; no friction"),
                      GrainAxis::Z, kAlongGrainPa, 0.0625 * kAlongGrainPa, 70e6, 10e3, 3.0 * 7.9e6,
                      "along the grain: Wood Handbook tables 5-1 (E_L, G_LT) and 5-3a (modulus of rupture as tensile strength); "
-                     "Ashby & Jones table 13.1 (Gf across the fibres); Kollmann & Cote 1968 (shear across the fibres)");
+                     "Ashby & Jones table 13.1 (Gf across the fibres); Kollmann & Cote 1968 (shear across the fibres)"),
+                       0.005, "half the flexural loss factor of wood, about 10^-2 (Cremer & Heckl 1988)");
 }
 
 /// Bricks in mortar. The joints (the material's own values): E = 1000 fk with fk 5 MPa (EN
@@ -171,13 +185,14 @@ Material woodPreset()
 /// J. Eng. Mech. 123(7), the potential cracks in the units of the TU Eindhoven shear walls).
 Material brickMasonryPreset()
 {
-    return withUnits(withShear(withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
+    return withDamping(withUnits(withShear(withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
                                                                 "Clancey 1972: unreinforced brick panels 8-12 in fail at 48.2-55.1 kPa"),
                                               5e9, 0.2, 0.3e6, 12.0, "EN 1996-1-1 (E = 1000 fk); van der Pluijm via Lourenco 1996 (bond strength, Gf)"),
                                0.3e6, 0.4, StrengthRateLaw::None, "EN 1996-1-1 table 3.4 and eq. 3.5 (fvko 0.3 MPa, 0.4 sigma_d)"),
                      0.215, 0.1025, 0.065, 0.01, 2.0e6, 80.0,
                      "215 x 102.5 x 65 mm bricks, 10 mm joints, running bond; potential cracks in units ft 2.0 MPa, Gf 80 J/m^2 "
-                     "(Lourenco & Rots 1997, TU Eindhoven shear walls)");
+                     "(Lourenco & Rots 1997, TU Eindhoven shear walls)"),
+                       0.03, "ENV 1998-6:2003 Annex B, brickwork 3-10 % (the lower end: joints and cracks are resolved)");
 }
 
 /// Concrete C30/37 with the given density and failure range: fib Model Code 2010 5.1: Eci =
@@ -192,12 +207,13 @@ Material c30ConcretePreset(const std::string& name, double densityKgM3, double f
                            const std::string& failureSource, const std::string& elasticityNote)
 {
     const auto [cohesionPa, friction] = mohrCoulombThrough(38e6, 2.9e6);
-    return withScatter(withShear(withElasticity(calibrateMaterial(name, densityKgM3, failureLowPa, failureHighPa, failureSource), 33.6e9, 0.2,
+    return withDamping(withScatter(withShear(withElasticity(calibrateMaterial(name, densityKgM3, failureLowPa, failureHighPa, failureSource), 33.6e9, 0.2,
                                                 2.9e6, 141.0, "fib Model Code 2010, C30/37: E 33.6 GPa, fctm 2.9 MPa, Gf 141 J/m^2" + elasticityNote),
                                  cohesionPa, friction, StrengthRateLaw::FibModelCode2010,
                                  "Mohr-Coulomb through fcm 38 MPa and fctm (Jaeger, Cook & Zimmerman 2007); rate: fib MC2010 5.1.11"),
                        0.3 / 1.645, 0.016,
-                       "strength CoV 0.18 from EN 1992-1-1 table 3.1 (fctk,0.05 = 0.7 fctm), correlated over 16 mm (maximum aggregate size)");
+                       "strength CoV 0.18 from EN 1992-1-1 table 3.1 (fctk,0.05 = 0.7 fctm), correlated over 16 mm (maximum aggregate size)"),
+                       0.02, "ENV 1998-6:2003 Annex B, concrete elements 2-7 % (the lower end: cracks are resolved)");
 }
 
 /// Reinforced concrete: the same concrete (its steel is not modelled). Its failure range's high
@@ -254,6 +270,7 @@ const std::vector<Field<Material>>& fieldTable<Material>()
         {"strength_rate_law", choice(&Material::strengthRateLaw)},
         {"strength_cov", &Material::strengthCoefficientOfVariation, closed(0.0, 1.0)},
         {"strength_correlation_length_m", &Material::strengthCorrelationLengthM, aboveZeroUpTo(100.0)},
+        {"damping_ratio", &Material::dampingRatio, closed(0.0, 0.3)},
         {"unit_length_m", &Material::unitLengthM, closed(0.0, 100.0)},
         {"unit_width_m", &Material::unitWidthM, closed(0.0, 100.0)},
         {"unit_height_m", &Material::unitHeightM, closed(0.0, 100.0)},

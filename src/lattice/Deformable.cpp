@@ -61,15 +61,6 @@ uint32_t particleOfVoxel(const Lattice& lattice, const openvdb::Coord& voxel)
     return uint32_t(p);
 }
 
-/// The lattice's particles grouped by the bonds that have not broken.
-DisjointSets intactPieces(const Lattice& lattice)
-{
-    DisjointSets sets(lattice.particleCount());
-    for (size_t b = 0; b < lattice.bondCount(); ++b)
-        if (lattice.bondDamage(b) < 1.0) sets.join(lattice.bonds[b].low, lattice.bonds[b].high);
-    return sets;
-}
-
 /// f(voxel) for the body's cells in a block: all k³ of them, or with `face` >= 0 the k² on
 /// that face.
 template <typename F>
@@ -121,6 +112,7 @@ DeformableBody latticeInBlocks(const Body& body, const VoxelBlocks& blocks, cons
     d.lattice.blocks = blocks;
     d.lattice.bulkViscosity = settings.bulkViscosity;
     d.lattice.damageLaw = settings.damageLaw;
+    d.lattice.dampingRatio = material.dampingRatio;
     // Faces come in leaf order, a voxel's together: a particle is looked up once per voxel.
     d.particleOfFace.reserve(body.exposedFaces.size());
     for (size_t f = 0; f < body.exposedFaces.size(); ++f)
@@ -251,7 +243,7 @@ void addRigidMomentum(Lattice& lattice, const Eigen::Vector3d& linearKgMS, const
 LatticePieces latticePieces(const Lattice& lattice)
 {
     LatticePieces pieces;
-    DisjointSets sets = intactPieces(lattice);
+    DisjointSets sets = lattice.intactPieces();
     std::vector<int32_t> pieceOfRoot(lattice.particleCount(), -1);
     pieces.pieceOf.resize(lattice.particleCount());
     for (uint32_t p = 0; p < lattice.particleCount(); ++p) {
@@ -354,7 +346,7 @@ HandOff handOff(const Body& body, const Lattice& lattice)
     if (result.parts.empty()) result.parts.push_back(std::move(whole));
     // A fragment keeps its parent's index space: its voxels name their particles. Parts of one
     // piece of the lattice (a block's voxels need not touch each other) share its motion.
-    DisjointSets pieces = intactPieces(lattice);
+    DisjointSets pieces = lattice.intactPieces();
     std::map<uint32_t, std::vector<Body*>> partsOfPiece;
     for (Body& part : result.parts) {
         part.motion.asleep = false;

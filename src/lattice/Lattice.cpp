@@ -156,7 +156,7 @@ bool Lattice::snapsAtPeak(size_t b) const
     return strength.zeroTractionStretchM <= strength.peakStretchM;
 }
 
-bool Lattice::measureBond(size_t b, double dtS, bool growDamage)
+uint8_t Lattice::measureBond(size_t b, double dtS, bool growDamage)
 {
     const LatticeBond& bond = bonds[b];
     const LatticeStiffness& k = stiffness;
@@ -171,7 +171,8 @@ bool Lattice::measureBond(size_t b, double dtS, bool growDamage)
     double damage = damageBefore;
     if (growDamage && growBondDamage(b, equivalentStretchM(b, s, lengthM, damage), std::abs(openingRateMS) / voxelSizeM, dtS))
         damage = bondDamage(b);
-    const bool snapped = damage >= 1.0 && damageBefore < 1.0 && damageLaw == LatticeDamageLaw::Softening && snapsAtPeak(b);
+    const bool broke = damage >= 1.0 && damageBefore < 1.0;
+    const bool snapped = broke && damageLaw == LatticeDamageLaw::Softening && snapsAtPeak(b);
     if (snapped) mSnapped[b] = 1;
     const double intact = 1.0 - damage, sqrtIntact = std::sqrt(intact);
     const bool opening = lengthM > voxelSizeM;
@@ -190,7 +191,7 @@ bool Lattice::measureBond(size_t b, double dtS, bool growDamage)
     terms.bendingMomentNm = s.frame * bending;
     terms.effectiveStretchM = opening ? sqrtIntact * (lengthM - voxelSizeM) : lengthM - voxelSizeM;
     terms.volumetricAreaPerArmM = (opening ? sqrtIntact : 1.0) * voxelSizeM * voxelSizeM / lengthM;
-    return snapped;
+    return uint8_t((snapped ? kSnapped : 0) | (broke ? kBroke : 0));
 }
 
 void Lattice::completeBondForce(size_t b)
@@ -354,10 +355,11 @@ void Lattice::step(double dtS)
     });
     // Damage first, from the new positions (and the velocities half-way through the step, for
     // the strain rate), then the forces from the state.
-    std::atomic<bool> snapped{false};
+    std::atomic<uint8_t> events{0};
     forEach(bondCount(), [&](size_t b) {
-        if (measureBond(b, dtS, true)) snapped.store(true, std::memory_order_relaxed);
+        if (const uint8_t bondEvents = measureBond(b, dtS, true)) events.fetch_or(bondEvents, std::memory_order_relaxed);
     });
+    if (events.load() & kBroke) mPiecesStale = true;
     computeVolumetricStrain();
     forEach(bondCount(), [&](size_t b) { completeBondForce(b); });
     forEach(particleCount(), [&](size_t p) { gatherBondForces(p); });
@@ -365,7 +367,8 @@ void Lattice::step(double dtS)
     addContactForces();
     forEach(particleCount(), kick);
     // At the step's end, where velocity Verlet's energy is counted.
-    if (snapped.load()) releaseSnapEnergies();
+    if (events.load() & kSnapped) releaseSnapEnergies();
+    dampVibration(dtS);
 }
 
 bool Lattice::bondedToGround(size_t p) const

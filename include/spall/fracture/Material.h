@@ -81,6 +81,11 @@ struct Material {
     /// (unit: fraction).
     double strengthCoefficientOfVariation = 0.0;
     double strengthCorrelationLengthM = 0.02;  ///< (unit: m)
+    /// The material's own damping as a fraction of critical, at a piece's fundamental mode: in
+    /// the deformable phase each piece's vibration about its rigid motion decays at this ratio
+    /// (Lattice::dampVibration); cracks and joints dissipate on their own, so it is the
+    /// uncracked material's. 0: undamped (unit: 1).
+    double dampingRatio = 0.0;
     // Masonry: an object of the material is built of units (bricks) laid in a bond pattern, in
     // courses along z from z = 0, the length axis along the wall (BondPattern). The
     // strengths above are then the joints' (the unit–mortar bond), those below the units'; a

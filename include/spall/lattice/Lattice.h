@@ -10,6 +10,7 @@
 // C12 = λ, C44 = μ; docs/accuracy.md measures it where surfaces break the bulk).
 #pragma once
 
+#include <spall/core/DisjointSets.h>
 #include <spall/fracture/Material.h>
 #include <spall/lattice/ParticleBlocks.h>
 #include <spall/lattice/Settings.h>
@@ -192,6 +193,13 @@ public:
     /// 0 intact … 1 broken: the secant stiffness lost in tension, shear and bending (compression
     /// still carries, as contact).
     double bondDamage(size_t b) const;
+    /// The particles grouped by the bonds that have not broken.
+    DisjointSets intactPieces() const;
+    /// A piece's fundamental angular frequency, estimated as an Euler–Bernoulli beam's with
+    /// the piece's box in the lattice's index space: bending about its thinnest side t over its
+    /// longest L, free at both ends, ω = 22.37 √(EI / ρAL⁴) = 6.458 c t / L², or clamped at one
+    /// when a support holds it, 3.516 √(EI / ρAL⁴) = 1.015 c t / L² (c = √(E / ρ)) (unit: rad/s).
+    double fundamentalFrequencyRadS(const openvdb::Coord& boxLow, const openvdb::Coord& boxHigh, bool held) const;
 
     /// Linear bulk viscosity: a dashpot along each bond of ζ ρ c h² (c the P-wave speed), as
     /// explicit codes damp the ringing of a discretised shock front (von Neumann & Richtmyer 1950;
@@ -200,6 +208,10 @@ public:
     /// free face's reflection puts spurious tension a few voxels deep (docs/accuracy.md). 0 turns
     /// it off.
     double bulkViscosity = 0.1;
+    /// The material's damping ratio (Material::dampingRatio): after each step every piece's
+    /// velocities about its rigid motion decay as mass-proportional damping of that ratio at the
+    /// piece's fundamental frequency would make them (dampVibration). 0 turns it off.
+    double dampingRatio = 0.0;
     LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;
     LatticeGround ground;
 
@@ -245,6 +257,28 @@ private:
         double volumetricAreaPerArmM = 0.0;
     };
     std::vector<BondForceTerms> mBondTerms;
+    // Damping (dampVibration): the pieces as the last bond to break left them, each with the
+    // decay rate of its velocities about its rigid motion, 2 ζ ω (Clough & Penzien, Dynamics
+    // of Structures, 1993, §12-4: mass-proportional damping a0 M damps mode n at a0 / 2 ω_n).
+    struct DampedPiece {
+        bool held = false;
+        double decayPerS = 0.0;
+        uint32_t firstParticle = 0;  ///< the origin of its sums
+    };
+    /// A run of one piece's particles in mPieceParticles, [begin, end).
+    struct DampingChunk {
+        uint32_t piece = 0, begin = 0, end = 0;
+    };
+    static constexpr size_t kDampingChunk = 4096;
+    bool mPiecesStale = true;
+    std::vector<DampedPiece> mDampedPieces;
+    std::vector<uint32_t> mPieceParticles;  ///< the particles piece by piece, each in particle order
+    std::vector<DampingChunk> mDampingChunks;
+    void findDampedPieces();
+    /// Each free piece's particles' velocities and spins about the piece's rigid motion (the
+    /// motion with their linear and angular momentum, about their centre, with their present
+    /// inertia) decay by exp(−2 ζ ω dt); so do a held piece's velocities. Momenta are unchanged.
+    void dampVibration(double dtS);
     /// Per bond, 1 while it has snapped at its peak in this substep and not yet given back its
     /// energy (releaseSnapEnergies); apart from the terms, which it would make 7 % larger.
     std::vector<uint8_t> mSnapped;
@@ -252,9 +286,12 @@ private:
     /// Each particle's tr ε: per axis, the mean stretch (length change / h) of its bonds along it.
     void computeVolumetricStrain();
     /// A bond's strain, damage (grown over dtS when `growDamage`) and force terms, from the
-    /// state; writes only the bond's own entries, so bonds measure in parallel. Returns whether
-    /// it snapped (releaseSnapEnergies).
-    bool measureBond(size_t b, double dtS, bool growDamage);
+    /// state; writes only the bond's own entries, so bonds measure in parallel. Returns what
+    /// happened to it (kSnapped, kBroke).
+    uint8_t measureBond(size_t b, double dtS, bool growDamage);
+    /// What measureBond reports: the bond snapped at its peak (releaseSnapEnergies), or broke
+    /// by any law (the pieces may have changed).
+    static constexpr uint8_t kSnapped = 1, kBroke = 2;
     /// A bond's spring, bending and twisting energy at a strain, for its stiffness times
     /// `intact` (unit: J).
     double elasticEnergyJ(size_t b, const BondStrain& strain, double intact) const;
