@@ -108,7 +108,7 @@ DeformableBody latticeInBlocks(const Body& body, const VoxelBlocks& blocks, cons
     DeformableBody d{body.id,
                      blocks.voxels > 1 ? Lattice::fromBody(coarsenedBody(body, blocks), material, supports, settings.seed)
                                        : Lattice::fromBody(body, material, supports, settings.seed),
-                     timeS, timeS, {}};
+                     timeS, timeS, {}, 0.0, {}};
     d.lattice.blocks = blocks;
     d.lattice.bulkViscosity = settings.bulkViscosity;
     d.lattice.damageLaw = settings.damageLaw;
@@ -142,8 +142,14 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
     Lattice& from = saved.lattice;
     const size_t n = to.particleCount(), bonds = to.bondCount();
     if (from.positionM.size() != n || from.velocityMS.size() != n || from.angularVelocityRadS.size() != n || from.orientation.size() != n ||
-        from.bondHistory.size() != bonds || from.bondForceN.size() != n || from.bondMomentNm.size() != n)
+        from.bondHistory.size() != bonds || from.bondForceN.size() != n || from.bondMomentNm.size() != n ||
+        (!saved.pendingImpulseNs.empty() && saved.pendingImpulseNs.size() != n))
         throw InputError("saved state: the lattice of body " + std::to_string(body.id) + " does not fit its voxels and links");
+    if (!(saved.pendingS >= 0.0 && saved.pendingS < 1.0) || (saved.pendingS > 0.0) != !saved.pendingImpulseNs.empty())
+        throw InputError("saved state: the lattice of body " + std::to_string(body.id) + " has a gathered time of " +
+                         std::to_string(saved.pendingS) + " s that does not fit its gathered impulses");
+    fresh.pendingS = saved.pendingS;
+    fresh.pendingImpulseNs = std::move(saved.pendingImpulseNs);
     to.positionM = std::move(from.positionM);
     to.velocityMS = std::move(from.velocityMS);
     to.angularVelocityRadS = std::move(from.angularVelocityRadS);
@@ -168,6 +174,43 @@ void setExternalForces(DeformableBody& deformable, const Body& body, const std::
         const uint32_t p = deformable.particleOfFace[f];
         if (!lattice.held[p]) lattice.externalForceN[p] += faceForcesN[f];
     }
+}
+
+int64_t catchUpDeformable(DeformableBody& deformable)
+{
+    if (deformable.pendingS <= 0.0) return 0;
+    Lattice& lattice = deformable.lattice;
+    for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = deformable.pendingImpulseNs[p] / deformable.pendingS;
+    lattice.step(deformable.pendingS);  // shorter than a stable step
+    deformable.pendingS = 0.0;
+    deformable.pendingImpulseNs.clear();
+    return static_cast<int64_t>(lattice.particleCount());
+}
+
+int64_t advanceDeformable(DeformableBody& deformable, double dtS)
+{
+    Lattice& lattice = deformable.lattice;
+    const size_t n = lattice.particleCount();
+    deformable.pendingImpulseNs.resize(n, Eigen::Vector3d::Zero());
+    for (size_t p = 0; p < n; ++p) deformable.pendingImpulseNs[p] += dtS * lattice.externalForceN[p];
+    deformable.pendingS += dtS;
+    // Whole stable steps of what is gathered (within rounding of a whole number of them counts
+    // as it), under the gathered impulse's mean force; the rest stays gathered with its share of
+    // the impulse.
+    const double stableS = lattice.stableTimeStepS();
+    const int64_t steps = static_cast<int64_t>(std::floor(deformable.pendingS / stableS * (1.0 + 1e-12)));
+    if (steps == 0) return 0;
+    for (size_t p = 0; p < n; ++p) lattice.externalForceN[p] = deformable.pendingImpulseNs[p] / deformable.pendingS;
+    for (int64_t i = 0; i < steps; ++i) lattice.step(stableS);
+    const double leftS = deformable.pendingS - double(steps) * stableS;
+    if (leftS <= 1e-12 * stableS) {
+        deformable.pendingS = 0.0;
+        deformable.pendingImpulseNs.clear();
+    } else {
+        for (size_t p = 0; p < n; ++p) deformable.pendingImpulseNs[p] *= leftS / deformable.pendingS;
+        deformable.pendingS = leftS;
+    }
+    return steps * static_cast<int64_t>(n);
 }
 
 RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& particles)

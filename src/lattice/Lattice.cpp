@@ -385,12 +385,4 @@ void Lattice::keepAboveGround(size_t p)
     if (into < 0.0) velocityMS[p] -= into * ground.normal;
 }
 
-int64_t Lattice::advance(double dtS)
-{
-    // A step of n stable steps to rounding (Simulation::inWholeLatticeSteps) takes n.
-    const int64_t substeps = static_cast<int64_t>(std::ceil(dtS / stableTimeStepS() * (1.0 - 1e-12)));
-    for (int64_t i = 0; i < substeps; ++i) step(dtS / double(substeps));
-    return substeps;
-}
-
 }  // namespace spall

@@ -129,6 +129,8 @@ void transferDeformable(Archive& a, D& d)
     a.sequence(lattice.orientation, "particle orientations", [&](auto& q) { a.doubles(q.coeffs().data(), 4, "particle orientation"); });
     a.sequence(lattice.bondForceN, "particle bond forces", [&](auto& v) { a.vec(v, "particle bond force"); });
     a.sequence(lattice.bondMomentNm, "particle bond moments", [&](auto& v) { a.vec(v, "particle bond moment"); });
+    a.pod(d.pendingS, "deformable gathered time");
+    a.sequence(d.pendingImpulseNs, "particle gathered impulses", [&](auto& v) { a.vec(v, "particle gathered impulse"); });
     a.sequence(lattice.bondHistory, "bond histories", [&](auto& h) {
         a.pod(h.strengthScale, "bond strength");
         a.pod(h.maxEquivalentStretchM, "bond stretch");

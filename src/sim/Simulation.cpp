@@ -363,7 +363,7 @@ void Simulation::deformBodies(const FaceForces& faces, const std::vector<OpenWin
         const size_t i = indexOf.at(d.bodyId);
         Body& body = mState.bodies[i];
         setExternalForces(d, body, faces.forceN[i], mScene.world.gravityMS2);
-        mState.stepStats.latticeParticleSteps += d.lattice.advance(dtS) * static_cast<int64_t>(d.lattice.particleCount());
+        mState.stepStats.latticeParticleSteps += advanceDeformable(d, dtS);
         followLattice(body, d.lattice);
         if (bodyInWindows(body, *mField, windows)) d.lastLoadedS = mState.timeS + dtS;
     }
@@ -416,7 +416,11 @@ void Simulation::handOffQuietBodies(double dtS)
             mScene.lattice.handoffEnergyFraction * elasticCapacityPerVoxelJ(mScene.materials[mState.bodies[i].materialIndex], d.lattice.voxelSizeM);
         const bool timeUp = sinceBlastS >= mScene.lattice.maxVibrationS;
         Departure out;
-        if (sinceBlastS > 0.0 && (checkDue || timeUp)) out = leaveQuietPieces(mState.bodies[i], d.lattice, toleranceJ, timeUp);
+        if (sinceBlastS > 0.0 && (checkDue || timeUp)) {
+            mState.stepStats.latticeParticleSteps += catchUpDeformable(d);
+            followLattice(mState.bodies[i], d.lattice);
+            out = leaveQuietPieces(mState.bodies[i], d.lattice, toleranceJ, timeUp);
+        }
         std::vector<Body>& leftParts = out.handOff.parts;
         if (leftParts.empty() || (leftParts.size() == 1 && leftParts.front().motion.deformable)) {
             staying.push_back(std::move(d));  // nothing leaves yet

@@ -57,17 +57,7 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
             if (speed > 0) dt = std::min(dt, ts.speedFraction * h / speed);
         }
     }
-    return inWholeLatticeSteps(std::max(dt * mState.penetrationStepScale, ts.minTimeStepS));
-}
-
-double Simulation::inWholeLatticeSteps(double dtS) const
-{
-    const Lattice* costliest = nullptr;
-    for (const DeformableBody& d : mState.deformable)
-        if (!costliest || d.lattice.particleCount() > costliest->particleCount()) costliest = &d.lattice;
-    if (!costliest) return dtS;
-    const double stableS = costliest->stableTimeStepS();
-    return dtS <= stableS ? dtS : std::floor(dtS / stableS) * stableS;
+    return std::max(dt * mState.penetrationStepScale, ts.minTimeStepS);
 }
 
 void Simulation::adaptStepToPenetration(double closingPenetrationM)

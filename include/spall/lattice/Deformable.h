@@ -21,6 +21,12 @@ struct DeformableBody {
     /// Per exposed face of the body (body.exposedFaces order), the particle behind it: found once,
     /// as the body keeps its faces while it is a lattice.
     std::vector<uint32_t> particleOfFace;
+    /// The lattice keeps its own clock: rigid steps shorter than its stable step are gathered,
+    /// their time and each particle's external impulse, and stepped as one (advanceDeformable),
+    /// so a lattice steps no more often than it must while the blast front holds the rigid step
+    /// short. What is gathered and not yet stepped (unit: s, N s):
+    double pendingS = 0.0;
+    std::vector<Eigen::Vector3d> pendingImpulseNs;
 };
 
 /// The lattice of a body entering the phase, moving with the body: a particle per voxel, or per
@@ -38,6 +44,18 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
 /// particle behind the face (its block's, ParticleBlocks.h), and an equal share of the body's
 /// weight.
 void setExternalForces(DeformableBody& deformable, const Body& body, const std::vector<Eigen::Vector3d>& faceForcesN, const Eigen::Vector3d& gravityMS2);
+
+/// Advances a body's lattice over a rigid step of dtS under the external forces setExternalForces
+/// left, on its own clock: the step's time and impulse are gathered, and the lattice takes as
+/// many whole stable steps as the gathered time holds, under the gathered impulse's mean force;
+/// the rest (less than a stable step, with its share of the impulse) waits for the next. So a
+/// lattice steps no more often than it must while the blast front holds the rigid step short,
+/// lagging the simulation by less than a stable step. Returns the particle-steps taken.
+int64_t advanceDeformable(DeformableBody& deformable, double dtS);
+
+/// Steps what a lattice has gathered (advanceDeformable), so that its state is that of the
+/// simulation's time. Returns the particle-steps taken.
+int64_t catchUpDeformable(DeformableBody& deformable);
 
 /// Particles taken as one rigid body: the motion with their linear and angular momentum, at the
 /// pose that fits their places best (least squares; Kabsch's rotation).

@@ -155,9 +155,6 @@ public:
     /// The bonds' forces from the state, leaving their damage as it is (after the state arrays
     /// were written from outside, as a checkpoint does).
     void refreshForces();
-    /// Steps over dtS in equal substeps no longer than stableTimeStepS() (to 1e-12 relative);
-    /// returns how many.
-    int64_t advance(double dtS);
 
     double kineticEnergyJ() const;
     /// Of the strains as the last step (or construction) left them: the bonds' and the

@@ -112,10 +112,6 @@ public:
     /// Chooses the next step: fine while a front crosses a body, coarse in free flight, never
     /// letting a voxel travel more than a fraction of a voxel, shorter while contacts are deep.
     double chooseTimeStep(const std::vector<OpenWindow>& windows) const;
-    /// A step longer than the costliest lattice's stable step rounded down to a whole number of
-    /// them, so that lattice takes full substeps: 1.06 stable steps would be two substeps of
-    /// 0.53, twice the work, where rounding down costs the rigid phase one step in n + 1.
-    double inWholeLatticeSteps(double dtS) const;
 
 private:
     /// The paper's fracture rules on every body the blast reaches; per body, whether it lost a
