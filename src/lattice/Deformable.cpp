@@ -145,7 +145,7 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
         from.bondHistory.size() != bonds || from.bondForceN.size() != n || from.bondMomentNm.size() != n ||
         (!saved.pendingImpulseNs.empty() && saved.pendingImpulseNs.size() != n))
         throw InputError("saved state: the lattice of body " + std::to_string(body.id) + " does not fit its voxels and links");
-    if (!(saved.pendingS >= 0.0 && saved.pendingS < 1.0) || (saved.pendingS > 0.0) != !saved.pendingImpulseNs.empty())
+    if (!(saved.pendingS >= 0.0 && saved.pendingS < to.stableTimeStepS()) || (saved.pendingS > 0.0) != !saved.pendingImpulseNs.empty())
         throw InputError("saved state: the lattice of body " + std::to_string(body.id) + " has a gathered time of " +
                          std::to_string(saved.pendingS) + " s that does not fit its gathered impulses");
     fresh.pendingS = saved.pendingS;
