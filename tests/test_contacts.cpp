@@ -269,6 +269,29 @@ TEST(Collisions, NoTunnellingAt500MetresPerSecond)
     EXPECT_GE(t, 0.02);
 }
 
+TEST(Collisions, AStepIsShortenedOnlyWhileItWouldDeepenAnOverlap)
+{
+    // tunnellingSpeedMS: a pair 0.4 voxel into each other closing at 0.1 m/s (a piece wedged in
+    // a notch of another, jittering) goes 0.008 voxel deeper in a 1/240 s step, so a shorter step
+    // does nothing for it; at 2 m/s it goes 0.17 voxel deeper, and the step halves until it
+    // would go no more than a twentieth of a voxel deeper (1/960 s).
+    const double h = 0.05;
+    const WorldSettings world = emptySpace();
+    for (const double closingMS : {0.1, 2.0}) {
+        std::vector<Body> bodies{test::boxBody(2, 2, 2, h, 2000.0), test::boxBody(2, 2, 2, h, 2000.0, Eigen::Vector3d(2 * h - 0.4 * h, 0, 0))};
+        bodies[0].motion.linearVelocityMS.x() = 0.5 * closingMS;
+        bodies[1].motion.linearVelocityMS.x() = -0.5 * closingMS;
+        const ContactSet contacts = detectContacts(bodies, world, CollisionSettings(), noSleep());
+        ASSERT_EQ(contacts.manifolds.size(), 1u);
+        const double depthM = contacts.manifolds[0].maxDepthM;
+        // Faster than a resting contact either way:
+        EXPECT_EQ(deepestClosingPenetrationM(bodies, contacts, impactSpeedMS(world, 1.0 / 240)), depthM) << closingMS;
+        // ... but only the faster one deepens the overlap enough in a step to shorten it:
+        EXPECT_EQ(deepestClosingPenetrationM(bodies, contacts, tunnellingSpeedMS(world, 1.0 / 240, h)), closingMS > 1.0 ? depthM : 0.0) << closingMS;
+        EXPECT_EQ(deepestClosingPenetrationM(bodies, contacts, tunnellingSpeedMS(world, 1.0 / 960, h)), 0.0) << closingMS;
+    }
+}
+
 TEST(Collisions, AnOverlapThatIsNotClosingIsLeftToThePositionCorrectionNotTheStep)
 {
     // Pieces can be born overlapping (a lattice hands off pieces whose rigid fits overlap by a

@@ -36,7 +36,13 @@ ContactSet detectContacts(std::vector<Body>& bodies, const WorldSettings& world,
 
 double impactSpeedMS(const WorldSettings& world, double dtS) { return 2.0 * world.gravityMS2.norm() * dtS + 0.05; }
 
-double deepestClosingPenetrationM(const std::vector<Body>& bodies, const ContactSet& contacts, double impactSpeedMS)
+double tunnellingSpeedMS(const WorldSettings& world, double dtS, double voxelSizeM)
+{
+    constexpr double kDeepeningPerStepVoxels = 0.05;
+    return std::max(impactSpeedMS(world, dtS), kDeepeningPerStepVoxels * voxelSizeM / dtS);
+}
+
+double deepestClosingPenetrationM(const std::vector<Body>& bodies, const ContactSet& contacts, double closingSpeedMS)
 {
     double deepestM = 0.0;
     for (const ContactManifold& m : contacts.manifolds) {
@@ -46,7 +52,7 @@ double deepestClosingPenetrationM(const std::vector<Body>& bodies, const Contact
         for (const VoxelContact& p : m.points) {
             const Eigen::Vector3d va = a.linearVelocityMS + a.angularVelocityRadS.cross(p.pointM - a.positionM);
             const Eigen::Vector3d vb = b.linearVelocityMS + b.angularVelocityRadS.cross(p.pointM - b.positionM);
-            if (m.normal.dot(va - vb) < -impactSpeedMS) {  // the normal points from b to a
+            if (m.normal.dot(va - vb) < -closingSpeedMS) {  // the normal points from b to a
                 deepestM = m.maxDepthM;
                 break;
             }

@@ -237,7 +237,7 @@ void Simulation::step(double targetS)
     deformBodies(faces, windows, dt);
 
     const ContactSet contacts = detectContacts(mState.bodies, mScene.world, mScene.collisions, mScene.sleep);
-    const double closingPenetrationM = deepestClosingPenetrationM(mState.bodies, contacts, impactSpeedMS(mScene.world, dt));
+    const double closingPenetrationM = deepestClosingPenetrationM(mState.bodies, contacts, tunnellingSpeedMS(mScene.world, dt, mScene.voxelSizeM));
     solveContactsWithLattices(contacts, dt);
     correctPositions(mState.bodies, contacts, mScene.world);
     updateSleep(mState.bodies, contacts.touching, loaded, mScene.sleep, dt);
