@@ -119,7 +119,8 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
     for (const std::string bad : {R"("youngs_modulus_Pa": 0)", R"("poisson_ratio": 0.5)", R"("tensile_strength_Pa": -1)",
                                   R"("fracture_energy_J_per_m2": 0)", R"("shear_strength_Pa": 0)", R"("friction_coefficient": -0.2)",
                                   R"("unit_length_m": -0.2)", R"("joint_thickness_m": 2)", R"("unit_tensile_strength_Pa": -1)",
-                                  R"("unit_friction_coefficient": 20)", R"("strength_cov": 1.5)", R"("strength_correlation_length_m": 0)"}) {
+                                  R"("unit_friction_coefficient": 20)", R"("strength_cov": 1.5)", R"("strength_correlation_length_m": 0)",
+                                  R"("damping_ratio": -0.1)", R"("damping_ratio": 0.5)"}) {
         const std::string key = bad.substr(1, bad.find('"', 1) - 1);
         EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + bad + "}}}").find("materials.stone." + key + ": must be"), std::string::npos) << bad;
     }

@@ -122,6 +122,13 @@ DeformableBody latticeInBlocks(const Body& body, const VoxelBlocks& blocks, cons
     return d;
 }
 
+/// The gathered impulse's mean force over the gathered time, as each particle's external force.
+void applyGatheredForces(DeformableBody& deformable)
+{
+    Lattice& lattice = deformable.lattice;
+    for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = deformable.pendingImpulseNs[p] / deformable.pendingS;
+}
+
 }  // namespace
 
 DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
@@ -180,7 +187,7 @@ int64_t catchUpDeformable(DeformableBody& deformable)
 {
     if (deformable.pendingS <= 0.0) return 0;
     Lattice& lattice = deformable.lattice;
-    for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = deformable.pendingImpulseNs[p] / deformable.pendingS;
+    applyGatheredForces(deformable);
     lattice.step(deformable.pendingS);  // shorter than a stable step
     deformable.pendingS = 0.0;
     deformable.pendingImpulseNs.clear();
@@ -200,7 +207,7 @@ int64_t advanceDeformable(DeformableBody& deformable, double dtS)
     const double stableS = lattice.stableTimeStepS();
     const int64_t steps = static_cast<int64_t>(std::floor(deformable.pendingS / stableS * (1.0 + 1e-12)));
     if (steps == 0) return 0;
-    for (size_t p = 0; p < n; ++p) lattice.externalForceN[p] = deformable.pendingImpulseNs[p] / deformable.pendingS;
+    applyGatheredForces(deformable);
     for (int64_t i = 0; i < steps; ++i) lattice.step(stableS);
     const double leftS = deformable.pendingS - double(steps) * stableS;
     if (leftS <= 1e-12 * stableS) {
