@@ -319,6 +319,76 @@ TEST(Lattice, ABeamHeldByTwoBoxesBendsAtTheClampedClampedFrequency)
     EXPECT_NEAR(frequency, expected, 0.05 * expected);
 }
 
+namespace {
+
+/// A square pane of glass, `side` voxels of 5 mm across (in x and z) and `layers` thick (in y),
+/// its edge voxels held by four boxes beyond its edges, set moving in the shape of a simply
+/// supported plate's first mode, sin(πx/a) sin(πz/a) with a the span between the edge voxels'
+/// centres. Returns its frequency, measured at its centre (unit: Hz), and the span (unit: m).
+std::pair<double, double> paneFrequencyHz(int side, int layers, bool pinned)
+{
+    const Material glass = findMaterialPreset("glass");
+    const double h = 0.005;
+    Body body = test::boxBody(side, layers, side, h, glass.densityKgM3);
+    for (auto it = body.grid->beginValueOn(); it; ++it) {
+        const openvdb::Coord c = it.getCoord();
+        if (c.x() == 0 || c.x() == side - 1 || c.z() == 0 || c.z() == side - 1) it.setValue(*it | kAnchorBit);
+    }
+    const double halfM = 0.5 * side * h;
+    LatticeSupports supports;
+    for (const double sign : {-1.0, 1.0}) {
+        supports.boxes.push_back({Eigen::Vector3d(sign * (halfM + 0.5), 0, 0), Eigen::Vector3d(0.5, 1, 1), Eigen::Quaterniond::Identity()});
+        supports.boxes.push_back({Eigen::Vector3d(0, 0, sign * (halfM + 0.5)), Eigen::Vector3d(1, 1, 0.5), Eigen::Quaterniond::Identity()});
+    }
+    supports.pinned.assign(supports.boxes.size(), pinned ? 1 : 0);
+    Lattice lattice = Lattice::fromBody(body, glass, supports);
+    lattice.bulkViscosity = 0.0;
+    const double spanM = (side - 1) * h;
+    size_t centre = 0;
+    for (size_t p = 0; p < lattice.voxelParticleCount; ++p) {
+        const Eigen::Vector3d fromEdgeM = lattice.positionM[p] + Eigen::Vector3d::Constant(halfM - 0.5 * h);
+        lattice.velocityMS[p] = Eigen::Vector3d(0, 0.01 * std::sin(M_PI * fromEdgeM.x() / spanM) * std::sin(M_PI * fromEdgeM.z() / spanM), 0);
+        if (lattice.voxel[p] == openvdb::Coord(side / 2, 0, side / 2)) centre = p;
+    }
+    const double dt = lattice.stableTimeStepS();
+    // Simply supported (Leissa, Vibration of Plates, NASA SP-160, 1969, eq. 4.20): ω = 2π² / a²
+    // √(D / ρt); the run lasts 2.2 of its periods, or of the clamped plate's, shorter.
+    const double thicknessM = layers * h;
+    const double plateD = glass.youngsModulusPa * std::pow(thicknessM, 3) / (12 * (1 - glass.poissonRatio * glass.poissonRatio));
+    const double simplySupportedHz = M_PI / (spanM * spanM) * std::sqrt(plateD / (glass.densityKgM3 * thicknessM));
+    const std::vector<double> upCrossings = upCrossingTimesS(lattice, centre, dt, int(2.2 / simplySupportedHz / dt));
+    if (upCrossings.size() < 2) return {0.0, spanM};
+    return {1.0 / (upCrossings[1] - upCrossings[0]), spanM};
+}
+
+}  // namespace
+
+TEST(Lattice, APanePinnedAtItsEdgesVibratesAsASimplySupportedPlate)
+{
+    // Kirchhoff plates, square, side a, D = E t³ / 12(1 − ν²) (Leissa 1969, table 4.22 and eq.
+    // 4.20): simply supported ω a² √(ρt/D) = 2π² = 19.74, clamped 35.99. A pane held by boxes
+    // that hold by a pin must ring at the first; held by a bond of its own, near the second.
+    // One layer of voxels has no Poisson coupling in bending and a square beam's torsion (0.84
+    // of a plate strip's): its D is (1 − ν²) and its twisting stiffness 0.67 of the plate's, so
+    // it rings about 10 % low; two layers bend by stretching and are closer.
+    const int side = 40;
+    const Material glass = findMaterialPreset("glass");
+    for (const int layers : {1, 2}) {
+        const auto [pinnedHz, spanM] = paneFrequencyHz(side, layers, true);
+        const auto [clampedHz, unusedSpanM] = paneFrequencyHz(side, layers, false);
+        const double t = layers * 0.005;
+        const double plateD = glass.youngsModulusPa * t * t * t / (12 * (1 - glass.poissonRatio * glass.poissonRatio));
+        const double unitHz = std::sqrt(plateD / (glass.densityKgM3 * t)) / (2 * M_PI * spanM * spanM);
+        const double simplySupportedHz = 2 * M_PI * M_PI * unitHz, clampedPlateHz = 35.99 * unitHz;
+        std::printf("pane %d x %d voxels, %d thick: pinned %.1f Hz against simply supported %.1f Hz (%+.1f %%); held by bonds %.1f Hz "
+                    "against clamped %.1f Hz (%+.1f %%)\n",
+                    side, side, layers, pinnedHz, simplySupportedHz, 100 * (pinnedHz / simplySupportedHz - 1), clampedHz, clampedPlateHz,
+                    100 * (clampedHz / clampedPlateHz - 1));
+        EXPECT_NEAR(pinnedHz, simplySupportedHz, (layers == 1 ? 0.12 : 0.05) * simplySupportedHz);
+        EXPECT_GT(clampedHz, 1.5 * pinnedHz) << "a bond of the material's own clamps";
+    }
+}
+
 TEST(Lattice, LongitudinalPulseTravelsAtTheBarSpeed)
 {
     // A half-sine force pulse on one end of a 160 × 4 × 4 bar, 30 voxels long (far above the

@@ -66,6 +66,7 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "colliders": [{"colour": 1}]})").find("colliders[0].colour: unknown key"),
               std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "colliders": [{"holds": "glued"}]})").find("colliders[0].holds"), std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"checkpoint_every_frames": 1}})")
                   .find("output.checkpoint_every_frames: unknown key, replaced by output.checkpoint_every_s"),
               std::string::npos);
@@ -162,7 +163,7 @@ TEST(Scene, ShippedScenesParseAndTheDefaultMatchesItsAsset)
     EXPECT_EQ(sceneToJson(asset), sceneToJson(builtIn));
     EXPECT_EQ(sceneToJson(loadScene(dir + "brick-wall-yield-limit.json")), sceneToJson(parseScene(paperWallSceneJson(), "built-in", ".")));
     for (const char* name : {"two-charges-concrete.json", "pillar-davison-stevens.json", "brick-wall-lattice.json", "timber-post.json",
-                             "concrete-slab-spall.json", "house-wall.json"})
+                             "concrete-slab-spall.json", "house-wall.json", "glass-pane.json"})
         EXPECT_NO_THROW(loadScene(dir + name)) << name;
 }
 
@@ -175,7 +176,7 @@ const char* kEveryKeyScene = R"({
   "gravity_m_s2": [0.1, 0.2, -9.7],
   "atmosphere": {"pressure_Pa": 90000, "temperature_K": 300},
   "ground": {"enabled": false, "normal": [0, 0.6, 0.8], "height_m": 0.5, "restitution": 0.3, "friction": 0.7},
-  "colliders": [{"position_m": [1, 2, 3], "size_m": [1, 2, 0.5], "rotation_deg": [0, 0, 10], "restitution": 0.1, "friction": 0.2}],
+  "colliders": [{"position_m": [1, 2, 3], "size_m": [1, 2, 0.5], "rotation_deg": [0, 0, 10], "restitution": 0.1, "friction": 0.2, "holds": "pinned"}],
   "materials": {"stone": {"density_kg_m3": 2500, "mean_yield_Pa": 60000, "yield_variation": 0.2, "weakening_fraction": 0.3,
                           "orientation_factor": 0.05, "damage_rate_per_s": 200, "damage_stress_scale_per_Pa": 1e-5,
                           "youngs_modulus_Pa": 2e10, "poisson_ratio": 0.25, "tensile_strength_Pa": 4e6, "fracture_energy_J_per_m2": 90,

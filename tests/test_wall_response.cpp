@@ -3,6 +3,7 @@
 // models of the same wall built from the same E, ρ, tensile strength and geometry: blast
 // engineering's single-degree-of-freedom model, and the Euler–Bernoulli beam solved by modal
 // superposition, which holds the higher modes a short pulse excites.
+#include "PulseResponse.h"
 #include "TestUtil.h"
 
 #include <spall/lattice/Lattice.h>
@@ -84,10 +85,7 @@ struct CantileverSdof {
 /// φ_n''(0) = 2β_n². Each mode answers a triangular pulse in closed form (Duhamel's integral);
 /// the base moment is EI Σ q_n φ_n''(0). Twelve modes: more change the answer by under 0.1 %.
 struct CantileverModes {
-    struct Mode {
-        double angularFrequencyRadS, loadPerPaMS2, baseCurvaturePerM2;  // ω, q̈ per pascal, φ''(0)
-    };
-    std::vector<Mode> modes;
+    std::vector<test::ModalTerm> modes;  ///< their base moments, EI φ''(0) per unit of deflection
     double flexuralRigidity, crackingMomentNm;
 
     explicit CantileverModes(const WallStrip& wall)
@@ -107,35 +105,14 @@ struct CantileverModes {
             const double betaL = 0.5 * (lo + hi), beta = betaL / L;
             const double sigma = (std::cosh(betaL) + std::cos(betaL)) / (std::sinh(betaL) + std::sin(betaL));
             modes.push_back({beta * beta * std::sqrt(flexuralRigidity / massPerLength),
-                             (2.0 * sigma / beta) / L * wall.widthM / massPerLength, 2.0 * beta * beta});
+                             (2.0 * sigma / beta) / L * wall.widthM / massPerLength, flexuralRigidity * 2.0 * beta * beta});
         }
     }
     double periodS() const { return 2.0 * M_PI / modes.front().angularFrequencyRadS; }
 
     /// The largest base moment under a triangular pulse of peak 1 Pa falling to 0 at durationS,
     /// over runS, on a grid of 40 points per period of the highest mode (unit: N m/Pa).
-    double peakBaseMomentPerPascalNm(double durationS, double runS) const
-    {
-        const double dt = 2.0 * M_PI / modes.back().angularFrequencyRadS / 40.0;
-        double peak = 0.0;
-        for (double t = 0.0; t <= runS; t += dt) {
-            double moment = 0.0;
-            for (const Mode& mode : modes) moment += flexuralRigidity * mode.baseCurvaturePerM2 * modalDeflection(mode, durationS, t);
-            peak = std::max(peak, std::abs(moment));
-        }
-        return peak;
-    }
-
-    /// q(t) of a mode under f0 (1 − t/td) from rest: f0/ω² (1 − cos ωt + sin ωt/(ω td) − t/td)
-    /// while the pulse lasts, then free vibration from where it left the mode.
-    static double modalDeflection(const Mode& mode, double td, double t)
-    {
-        const double w = mode.angularFrequencyRadS, scale = mode.loadPerPaMS2 / (w * w);
-        if (t <= td) return scale * (1.0 - std::cos(w * t) + std::sin(w * t) / (w * td) - t / td);
-        const double qEnd = scale * (std::sin(w * td) / (w * td) - std::cos(w * td));
-        const double vEnd = scale * (w * std::sin(w * td) + (std::cos(w * td) - 1.0) / td);
-        return qEnd * std::cos(w * (t - td)) + vEnd / w * std::sin(w * (t - td));
-    }
+    double peakBaseMomentPerPascalNm(double durationS, double runS) const { return test::peakModalResponsePerPascal(modes, durationS, runS); }
 };
 
 /// What the lattice wall did under one pulse.
@@ -159,30 +136,17 @@ LatticeResponse loadWall(const WallStrip& wall, double peakPa, double durationS,
         if (it.getCoord().z() == 0) it.setValue(*it | kAnchorBit);
     refreshDerivedData(body);
     body.motion.positionM = Eigen::Vector3d(0.0, 0.0, 0.5 * wall.heightM);  // the base's faces on z = 0
-    Lattice lattice = Lattice::fromBody(body, wall.material, LatticeSupports{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}});
-    // The pulse's impulse up to t, so each step takes exactly the pulse's share.
-    auto impulsePerPa = [&](double t) {
-        const double s = std::min(t, durationS);
-        return s - s * s / (2.0 * durationS);
-    };
-    const double dt = lattice.stableTimeStepS(), faceAreaM2 = h * h;
-    for (double t = 0.0; t < runS; t += dt) {
-        const double meanPa = peakPa * (impulsePerPa(t + dt) - impulsePerPa(t)) / dt;
-        for (size_t p = 0; p < lattice.voxelParticleCount; ++p)
-            if (lattice.voxel[p].y() == 0) lattice.externalForceN[p] = Eigen::Vector3d(0.0, meanPa * faceAreaM2, 0.0);
-        lattice.step(dt);
-    }
+    Lattice lattice = Lattice::fromBody(body, wall.material, LatticeSupports{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}});
+    std::vector<size_t> front;
+    for (size_t p = 0; p < lattice.voxelParticleCount; ++p)
+        if (lattice.voxel[p].y() == 0) front.push_back(p);
+    test::stepUnderTriangularPulse(lattice, front, Eigen::Vector3d::UnitY(), peakPa, durationS, runS);
+    const test::ClosestToFailing worst = test::closestToFailing(lattice);
+    const LatticeBond& bond = lattice.bonds[worst.bond];
     LatticeResponse r;
-    for (size_t b = 0; b < lattice.bondCount(); ++b) {
-        const LatticeBond& bond = lattice.bonds[b];
-        const double u0 = lattice.bondHistory[b].strengthScale * lattice.stiffness.strength[bond.strengthClass].peakStretchM;
-        const double index = lattice.bondHistory[b].maxEquivalentStretchM / u0;
-        r.damaged = r.damaged || lattice.bondDamage(b) > 0.0;
-        if (index <= r.peakFailureIndex) continue;
-        r.peakFailureIndex = index;
-        const double faceZ = bond.axis == 2 ? 0.5 * (lattice.positionM[bond.low].z() + lattice.positionM[bond.high].z()) : lattice.positionM[bond.low].z();
-        r.worstBondHeightM = faceZ;
-    }
+    r.peakFailureIndex = worst.peakFailureIndex;
+    r.damaged = worst.damaged;
+    r.worstBondHeightM = bond.axis == 2 ? 0.5 * (lattice.positionM[bond.low].z() + lattice.positionM[bond.high].z()) : lattice.positionM[bond.low].z();
     return r;
 }
 

@@ -31,6 +31,7 @@ const std::vector<Field<StaticBox>>& fieldTable<StaticBox>()
         {"rotation_deg", &StaticBox::rotationDeg},
         {"restitution", &StaticBox::restitution, closed(0, kMaxRestitution)},
         {"friction", &StaticBox::friction, closed(0, kMaxFriction)},
+        {"holds", choice(&StaticBox::holds)},
     };
     return table;
 }

@@ -88,6 +88,14 @@ BondStrain Lattice::strainOf(const LatticeBond& bond) const
     const Eigen::Quaterniond& qa = orientation[bond.low];
     const Eigen::Quaterniond& qb = orientation[bond.high];
     BondStrain s;
+    if (bond.pinned) {
+        // A pin measures its voxel's centre in the held point's frame, across its axis only: the
+        // voxel may turn on it and slide toward or away from the support (glazing's clearance).
+        s.frame = rotationMatrixOf(held[bond.low] ? qa : qb);
+        s.displacementM = s.frame.transpose() * (positionM[bond.high] - positionM[bond.low]);
+        s.displacementM[bond.axis] = 0.0;
+        return s;
+    }
     // Half-way between two orientations: their normalised sum (slerp at ½, as qb is near qa).
     const double sameHemisphere = qa.coeffs().dot(qb.coeffs()) >= 0.0 ? 1.0 : -1.0;
     Eigen::Quaterniond half;
@@ -172,13 +180,20 @@ uint8_t Lattice::measureBond(size_t b, double dtS, bool growDamage)
     if (growDamage && growBondDamage(b, equivalentStretchM(b, s, lengthM, damage), std::abs(openingRateMS) / voxelSizeM, dtS))
         damage = bondDamage(b);
     const bool broke = damage >= 1.0 && damageBefore < 1.0;
-    const bool snapped = broke && damageLaw == LatticeDamageLaw::Softening && snapsAtPeak(b);
+    // What a pin held is lost where it fails (the glazing's own dissipation).
+    const bool snapped = broke && damageLaw == LatticeDamageLaw::Softening && snapsAtPeak(b) && !bond.pinned;
     if (snapped) mSnapped[b] = 1;
     const double intact = 1.0 - damage, sqrtIntact = std::sqrt(intact);
     const bool opening = lengthM > voxelSizeM;
     Eigen::Vector3d local = -intact * k.shearNPerM[a] * s.displacementM;
     local[a] = -intact * k.normalNPerM[a] * s.displacementM[a];
     terms.forceOnHighN = s.frame * local;
+    if (bond.pinned) {
+        // Across its axis only: no contact, dashpot, moment or volumetric share.
+        terms.bendingMomentNm.setZero();
+        terms.effectiveStretchM = terms.volumetricAreaPerArmM = 0.0;
+        return uint8_t(broke ? kBroke : 0);
+    }
     // What damage took still carries compression, as contact: along the line of centres, and
     // only while the two cubes overlap. (In the bond's frame it would push apart particles that
     // have slid past each other or turned over, which feeds energy into a shattered lattice.)
@@ -202,8 +217,8 @@ void Lattice::completeBondForce(size_t b)
     const double sharesPa = mVolumetricStressShare[bond.low][bond.axis] + mVolumetricStressShare[bond.high][bond.axis];
     terms.forceOnHighN -= (terms.volumetricAreaPerArmM * sharesPa) * terms.armM;
     // The bond acts at the face between its particles: the pair's moment about either centre
-    // is the same, -(arm / 2) × force.
-    terms.pairMomentNm = -0.5 * terms.armM.cross(terms.forceOnHighN);
+    // is the same, -(arm / 2) × force. A pin acts at its voxel's centre (its other end is held).
+    terms.pairMomentNm = bond.pinned ? Eigen::Vector3d::Zero() : Eigen::Vector3d(-0.5 * terms.armM.cross(terms.forceOnHighN));
 }
 
 void Lattice::gatherBondForces(size_t p)
@@ -268,7 +283,7 @@ double Lattice::equivalentStretchM(size_t b, const BondStrain& strain, double le
     // opening alone carries it to the end of the softening line, so it still dissipates Gf.
     const Eigen::Vector3d& rotation = strain.rotationRad;
     const double bendingStretchM = 0.5 * voxelSizeM * (1.0 - damage) * (std::abs(rotation[(a + 1) % 3]) + std::abs(rotation[(a + 2) % 3]));
-    const double stretchM = lengthM - voxelSizeM + bendingStretchM;
+    const double stretchM = bond.pinned ? 0.0 : lengthM - voxelSizeM + bendingStretchM;  // a pin fails in shear
     double index = 0.0;
     if (stretchM >= 0.0) {
         const double tensionIndex = stretchM * terms.tensionIndexPerM;

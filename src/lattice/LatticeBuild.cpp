@@ -173,7 +173,8 @@ void Lattice::addSupportBonds(const Body& body, const LatticeSupports& supports)
     mGroundBond.assign(voxelParticleCount, -1);
     for (uint32_t p = 0; p < voxelParticleCount; ++p) {
         if (!held[p]) continue;
-        const int face = supportedFace(body, p, groundFace, supports.boxes);
+        const FaceInBox hold = supportedFace(body, p, groundFace, supports.boxes);
+        const int face = hold.face;
         if (face < 0) continue;
         // The support point: a held particle a voxel beyond, as if the support were more of the
         // material, joined by a bond of the material's own stiffness and strength.
@@ -184,17 +185,18 @@ void Lattice::addSupportBonds(const Body& body, const LatticeSupports& supports)
         held[p] = 0;
         if (face & 1) addBond(p, supportPoint, axis);
         else addBond(supportPoint, p, axis);
-        if (face == groundFace) mGroundBond[p] = int32_t(bonds.size() - 1);
+        if (hold.box < 0) mGroundBond[p] = int32_t(bonds.size() - 1);
+        else if (size_t(hold.box) < supports.pinned.size()) bonds.back().pinned = supports.pinned[size_t(hold.box)];
     }
 }
 
-int Lattice::supportedFace(const Body& body, uint32_t p, int groundFace, const std::vector<ObstacleBox>& boxes) const
+FaceInBox Lattice::supportedFace(const Body& body, uint32_t p, int groundFace, const std::vector<ObstacleBox>& boxes) const
 {
     // Anchors were set within a quarter voxel of the ground (Simulation); half a voxel here only
     // tells the ground's anchors from the boxes'.
     if (groundFace >= 0 && body.voxelHeightAbovePlaneM(voxel[p], ground.normal, ground.offsetM) <= 0.5 * voxelSizeM)
-        return body.grid->tree().isValueOn(voxel[p] + faceOffset(groundFace)) ? -1 : groundFace;
-    return freeFaceDeepestInBoxes(body, voxel[p], boxes).face;
+        return body.grid->tree().isValueOn(voxel[p] + faceOffset(groundFace)) ? FaceInBox() : FaceInBox{groundFace, 0.0, -1};
+    return freeFaceDeepestInBoxes(body, voxel[p], boxes);
 }
 
 void Lattice::classifyUnitBonds(const Material& material)
@@ -229,7 +231,9 @@ void Lattice::condenseVolumetricModulus()
     for (size_t p = 0; p < particleCount(); ++p) {
         double missingCompliance = 0.0;
         for (int axis = 0; axis < 3; ++axis) {
-            const int count = int(mBondAcross[p][2 * axis] >= 0) + int(mBondAcross[p][2 * axis + 1] >= 0);
+            // A pin carries nothing along its axis, so it is no bond there.
+            int count = 0;
+            for (const int face : {2 * axis, 2 * axis + 1}) count += int(mBondAcross[p][face] >= 0 && !bonds[size_t(mBondAcross[p][face])].pinned);
             mInverseBondCount[p][axis] = count > 0 ? 1.0 / count : 0.0;
             if (count == 0) missingCompliance += 1.0 / stiffness.normalModulusPa[axis];
         }

@@ -30,7 +30,7 @@ void Lattice::releaseSnapEnergies()
     // particle's volumetric energy with them counted (tr ε now plus their shares) less without.
     std::unordered_map<uint32_t, double> removedTrace;
     const auto traceShare = [&](uint32_t b, uint32_t p) {
-        const double stretchM = mBondTerms[b].armM.norm() - voxelSizeM;
+        const double stretchM = bonds[b].pinned ? 0.0 : mBondTerms[b].armM.norm() - voxelSizeM;
         return stretchM > 0.0 ? stretchM / voxelSizeM * mInverseBondCount[p][bonds[b].axis] : 0.0;
     };
     for (const uint32_t b : snapped)
@@ -89,7 +89,7 @@ double Lattice::kineticEnergyJ() const
 double Lattice::bondStrainEnergyJ(size_t b) const
 {
     const double intact = 1.0 - bondDamage(b);
-    const double overlapM = std::max(0.0, voxelSizeM - (positionM[bonds[b].high] - positionM[bonds[b].low]).norm());
+    const double overlapM = bonds[b].pinned ? 0.0 : std::max(0.0, voxelSizeM - (positionM[bonds[b].high] - positionM[bonds[b].low]).norm());
     return elasticEnergyJ(b, strainOf(bonds[b]), intact) + 0.5 * (1.0 - intact) * stiffness.normalNPerM[size_t(bonds[b].axis)] * overlapM * overlapM;
 }
 

@@ -44,9 +44,9 @@ FaceInBox freeFaceDeepestInBoxes(const Body& body, const openvdb::Coord& ijk, co
     for (int face = 0; face < 6; ++face) {
         if (body.grid->tree().isValueOn(ijk + faceOffset(face))) continue;
         const Eigen::Vector3d beyondM = body.voxelWorldM(ijk + faceOffset(face));
-        for (const ObstacleBox& box : boxes) {
-            const double depthM = depthInsideM(box, beyondM);
-            if (depthM > deepest.depthM) deepest = {face, depthM};
+        for (size_t box = 0; box < boxes.size(); ++box) {
+            const double depthM = depthInsideM(boxes[box], beyondM);
+            if (depthM > deepest.depthM) deepest = {face, depthM, int(box)};
         }
     }
     return deepest.depthM >= 0.0 ? deepest : FaceInBox();

@@ -184,8 +184,11 @@ Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene
 LatticeSupports Simulation::latticeSupports() const
 {
     const GroundPlane& g = mScene.world.ground;
-    LatticeSupports supports{{g.enabled, g.normal.normalized(), g.offsetM}, {}};
-    for (const StaticBox& box : mScene.world.colliders) supports.boxes.push_back(obstacleOf(box));
+    LatticeSupports supports{{g.enabled, g.normal.normalized(), g.offsetM}, {}, {}};
+    for (const StaticBox& box : mScene.world.colliders) {
+        supports.boxes.push_back(obstacleOf(box));
+        supports.pinned.push_back(box.holds == SupportHold::Pinned ? 1 : 0);
+    }
     return supports;
 }
 

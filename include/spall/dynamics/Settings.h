@@ -26,6 +26,15 @@ struct EnumNames<AirDrag> {
     static constexpr std::pair<AirDrag, const char*> kNames[] = {{AirDrag::None, "none"}, {AirDrag::HaiderLevenspiel, "haider-levenspiel"}};
 };
 
+/// How a collider holds the voxels of an object anchored to it (`"anchor": "supports"`):
+/// clamped, by a bond of the material's own (a wall under a floor), or pinned, by one that
+/// carries force but no moment (a pane in glazing beads: simply supported).
+enum class SupportHold { Clamped, Pinned };
+template <>
+struct EnumNames<SupportHold> {
+    static constexpr std::pair<SupportHold, const char*> kNames[] = {{SupportHold::Clamped, "clamped"}, {SupportHold::Pinned, "pinned"}};
+};
+
 struct GroundPlane {
     bool enabled = true;
     Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< pointing out of the ground (unit: 1, normalised)
@@ -42,6 +51,7 @@ struct StaticBox {
     Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();   ///< from rotationDeg
     double restitution = 0.2;  ///< (unit: fraction)
     double friction = 0.6;     ///< Coulomb coefficient (unit: 1)
+    SupportHold holds = SupportHold::Clamped;
 };
 
 struct WorldSettings {

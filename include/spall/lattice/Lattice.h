@@ -14,6 +14,7 @@
 #include <spall/fracture/Material.h>
 #include <spall/lattice/ParticleBlocks.h>
 #include <spall/lattice/Settings.h>
+#include <spall/loads/Exposure.h>
 #include <spall/loads/LoadGeometry.h>
 #include <spall/voxel/Body.h>
 
@@ -98,6 +99,11 @@ struct LatticeBond {
     /// Which of LatticeStiffness::strength it fails at: 1 inside a masonry unit or along wood's
     /// grain, else 0.
     uint8_t strengthClass = 0;
+    /// A support bond of a box that holds by a pin (LatticeSupports::pinned): only its shear
+    /// spring, at its voxel's centre, so the voxel turns freely on it and slides along its axis
+    /// (a pane's edge in its glazing's clearance); it fails in shear. However many voxels thick
+    /// the body, its edge is then a hinge.
+    uint8_t pinned = 0;
 };
 
 /// A bond's deformation, in its frame (half-way between its particles' orientations).
@@ -121,6 +127,9 @@ struct LatticeGround {
 struct LatticeSupports {
     LatticeGround ground;
     std::vector<ObstacleBox> boxes;
+    /// Per box, 1 when it holds by a pin (a pane in glazing beads, simply supported), else 0
+    /// (clamped, as if the box were more of the material); empty: every box clamps.
+    std::vector<uint8_t> pinned;
 };
 
 /// Particles (one per voxel, in the grid's leaf order) and bonds (one per intact link) as flat
@@ -346,10 +355,11 @@ private:
     void addLinkBonds(const Body& body);
     /// Bonds each anchored voxel to a held point beyond it (fromBody).
     void addSupportBonds(const Body& body, const LatticeSupports& supports);
-    /// The face of an anchored voxel that a support holds, or -1: the ground's face when the
-    /// voxel lies within half a voxel of it, else the free face whose neighbouring cell's centre
-    /// lies deepest inside a box (freeFaceDeepestInBoxes).
-    int supportedFace(const Body& body, uint32_t p, int groundFace, const std::vector<ObstacleBox>& boxes) const;
+    /// The face of an anchored voxel that a support holds (face -1: none) and the box holding it
+    /// (-1: the ground): the ground's face when the voxel lies within half a voxel of it, else
+    /// the free face whose neighbouring cell's centre lies deepest inside a box
+    /// (freeFaceDeepestInBoxes).
+    FaceInBox supportedFace(const Body& body, uint32_t p, int groundFace, const std::vector<ObstacleBox>& boxes) const;
     /// Bonds between two voxels of the same masonry unit take the unit's strength (Material),
     /// when a voxel is no taller than a course.
     void classifyUnitBonds(const Material& material);

@@ -25,6 +25,7 @@ ObstacleBox worldBounds(const Body& body);
 struct FaceInBox {
     int face = -1;
     double depthM = 0.0;
+    int box = -1;  ///< which of the boxes
 };
 FaceInBox freeFaceDeepestInBoxes(const Body& body, const openvdb::Coord& ijk, const std::vector<ObstacleBox>& boxes);
 
