@@ -8,7 +8,9 @@
 #include <spall/core/Parallel.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 
 namespace spall {
 
@@ -20,16 +22,37 @@ DisjointSets Lattice::intactPieces() const
     return sets;
 }
 
-double Lattice::fundamentalFrequencyRadS(const openvdb::Coord& boxLow, const openvdb::Coord& boxHigh, bool isHeld) const
+double Lattice::fundamentalFrequencyRadS(double thicknessM, double lengthM, bool isHeld) const
 {
-    std::array<double, 3> sides{};
-    for (int axis = 0; axis < 3; ++axis) sides[size_t(axis)] = double(boxHigh[axis] - boxLow[axis] + 1) * voxelSizeM;
-    std::sort(sides.begin(), sides.end());
     const double barSpeedMS = std::sqrt(stiffness.strength[0].youngsModulusPa * voxelSizeM * voxelSizeM * voxelSizeM / particleMassKg);
     // (β L)² / √12 for a rectangular section's radius of gyration t / √12: β L = 4.730 free-free,
     // 1.875 clamped-free (Clough & Penzien §18-3).
     const double shapeFactor = isHeld ? 1.875 * 1.875 / std::sqrt(12.0) : 4.730 * 4.730 / std::sqrt(12.0);
-    return shapeFactor * barSpeedMS * sides[0] / (sides[2] * sides[2]);
+    return shapeFactor * barSpeedMS * thicknessM / (lengthM * lengthM);
+}
+
+std::vector<uint32_t> Lattice::bondsFromHeld() const
+{
+    // Breadth first from every held particle at once, through intact bonds, in particle order.
+    constexpr uint32_t kUnreached = std::numeric_limits<uint32_t>::max();
+    std::vector<uint32_t> hops(particleCount(), kUnreached), front;
+    for (uint32_t p = 0; p < particleCount(); ++p)
+        if (held[p]) {
+            hops[p] = 0;
+            front.push_back(p);
+        }
+    for (size_t next = 0; next < front.size(); ++next) {
+        const uint32_t p = front[next];
+        for (int face = 0; face < 6; ++face) {
+            const int32_t b = mBondAcross[p][face];
+            if (b < 0 || bondDamage(size_t(b)) >= 1.0) continue;
+            const uint32_t q = bonds[size_t(b)].low == p ? bonds[size_t(b)].high : bonds[size_t(b)].low;
+            if (hops[q] != kUnreached) continue;
+            hops[q] = hops[p] + 1;
+            front.push_back(q);
+        }
+    }
+    return hops;
 }
 
 void Lattice::findDampedPieces()
@@ -39,17 +62,21 @@ void Lattice::findDampedPieces()
     std::vector<openvdb::Coord> low, high;
     std::vector<std::vector<uint32_t>> members;
     std::vector<char> pieceHeld;
+    std::vector<uint32_t> pieceReach;  // the most bonds between a held piece's particle and a held one
+    const std::vector<uint32_t> hops = bondsFromHeld();
     for (uint32_t p = 0; p < particleCount(); ++p) {
         int32_t& piece = pieceOfRoot[sets.root(p)];
         if (piece < 0) {
             piece = int32_t(members.size());
             members.emplace_back();
             pieceHeld.push_back(0);
+            pieceReach.push_back(0);
             low.push_back(voxel[p]);
             high.push_back(voxel[p]);
         }
         members[size_t(piece)].push_back(p);
         pieceHeld[size_t(piece)] |= held[p];
+        if (hops[p] != std::numeric_limits<uint32_t>::max()) pieceReach[size_t(piece)] = std::max(pieceReach[size_t(piece)], hops[p]);
         low[size_t(piece)].minComponent(voxel[p]);
         high[size_t(piece)].maxComponent(voxel[p]);
     }
@@ -61,7 +88,11 @@ void Lattice::findDampedPieces()
     for (size_t k = 0; k < members.size(); ++k) {
         DampedPiece& piece = mDampedPieces[k];
         piece.held = pieceHeld[k] != 0;
-        piece.decayPerS = 2.0 * dampingRatio * fundamentalFrequencyRadS(low[k], high[k], piece.held);
+        std::array<double, 3> sides{};
+        for (int axis = 0; axis < 3; ++axis) sides[size_t(axis)] = double(high[k][axis] - low[k][axis] + 1) * voxelSizeM;
+        std::sort(sides.begin(), sides.end());
+        const double lengthM = piece.held ? (pieceReach[k] + 0.5) * voxelSizeM : sides[2];
+        piece.decayPerS = 2.0 * dampingRatio * fundamentalFrequencyRadS(sides[0], lengthM, piece.held);
         piece.firstParticle = members[k].front();
         for (size_t begin = 0; begin < members[k].size(); begin += kDampingChunk) {
             const uint32_t start = uint32_t(mPieceParticles.size() + begin);

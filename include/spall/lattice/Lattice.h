@@ -201,11 +201,12 @@ public:
     double bondDamage(size_t b) const;
     /// The particles grouped by the bonds that have not broken.
     DisjointSets intactPieces() const;
-    /// A piece's fundamental angular frequency, estimated as an Euler–Bernoulli beam's with
-    /// the piece's box in the lattice's index space: bending about its thinnest side t over its
-    /// longest L, free at both ends, ω = 22.37 √(EI / ρAL⁴) = 6.458 c t / L², or clamped at one
-    /// when a support holds it, 3.516 √(EI / ρAL⁴) = 1.015 c t / L² (c = √(E / ρ)) (unit: rad/s).
-    double fundamentalFrequencyRadS(const openvdb::Coord& boxLow, const openvdb::Coord& boxHigh, bool held) const;
+    /// A piece's fundamental angular frequency, estimated as an Euler–Bernoulli beam's of
+    /// thickness t and length L: free at both ends, ω = 22.37 √(EI / ρAL⁴) = 6.458 c t / L², or
+    /// clamped at one, 3.516 √(EI / ρAL⁴) = 1.015 c t / L² (c = √(E / ρ)) (unit: rad/s). A free
+    /// piece's t and L are the thinnest and longest sides of its box in the lattice's index
+    /// space; a held piece's L is its farthest reach from what holds it (findDampedPieces).
+    double fundamentalFrequencyRadS(double thicknessM, double lengthM, bool held) const;
 
     /// Linear bulk viscosity: a dashpot along each bond of ζ ρ c h² (c the P-wave speed), as
     /// explicit codes damp the ringing of a discretised shock front (von Neumann & Richtmyer 1950;
@@ -281,6 +282,10 @@ private:
     std::vector<uint32_t> mPieceParticles;  ///< the particles piece by piece, each in particle order
     std::vector<DampingChunk> mDampingChunks;
     void findDampedPieces();
+    /// Per particle, the fewest intact bonds between it and a held particle (UINT32_MAX: none):
+    /// a held piece is a cantilever as long as its farthest particle's path, plus half a voxel
+    /// to its free face (a wall held along its base, its height, not its length).
+    std::vector<uint32_t> bondsFromHeld() const;
     /// Each free piece's particles' velocities and spins about the piece's rigid motion (the
     /// motion with their linear and angular momentum, about their centre, with their present
     /// inertia) decay by exp(−2 ζ ω dt); so do a held piece's velocities. Momenta are unchanged.
