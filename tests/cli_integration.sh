@@ -330,9 +330,15 @@ if "$spall" run "$dir/long.json" --resume "$dir/whole" 2> /dev/null; then fail "
 [[ -s "$dir/out/preview.png" ]] || fail "spall run wrote no preview.png"
 "$spall" render "$dir/out" --frame 2 -o "$dir/pics" --size 320x180 > /dev/null
 "$spall" render "$dir/out" --sheet -o "$dir/pics" --size 320x180 > /dev/null
-for png in "$dir/pics/frame.0002.png" "$dir/pics/sheet.png"; do
+$py "$(dirname "$0")/../tools/fragments_front_view.py" "$dir/out/fragments.0002.vdb" "$dir/pics/front.png" \
+  || fail "tools/fragments_front_view.py could not draw a frame"
+for png in "$dir/pics/frame.0002.png" "$dir/pics/sheet.png" "$dir/pics/front.png"; do
   head -c 8 "$png" | od -c | grep -q "P   N   G" || fail "$png is not a PNG"
 done
+if $py "$(dirname "$0")/../tools/fragments_front_view.py" "$dir/nowhere.vdb" "$dir/pics/x.png" 2> "$dir/err.txt"; then
+  fail "fragments_front_view.py drew a missing frame"
+fi
+grep -q "nowhere.vdb" "$dir/err.txt" || fail "fragments_front_view.py did not name the missing frame: $(cat "$dir/err.txt")"
 $py - "$dir/pics/frame.0002.png" <<'PY' || fail "the rendered frame shows no fragment colours"
 import sys, zlib, struct
 data = open(sys.argv[1], "rb").read()
