@@ -62,7 +62,7 @@ void Lattice::findDampedPieces()
     std::vector<openvdb::Coord> low, high;
     std::vector<std::vector<uint32_t>> members;
     std::vector<char> pieceHeld;
-    std::vector<uint32_t> pieceReach;  // the most bonds between a held piece's particle and a held one
+    std::vector<uint32_t> pieceReach;  // a held piece's most bonds between a particle and a held one (a free piece's: unreached)
     const std::vector<uint32_t> hops = bondsFromHeld();
     for (uint32_t p = 0; p < particleCount(); ++p) {
         int32_t& piece = pieceOfRoot[sets.root(p)];
@@ -76,7 +76,7 @@ void Lattice::findDampedPieces()
         }
         members[size_t(piece)].push_back(p);
         pieceHeld[size_t(piece)] |= held[p];
-        if (hops[p] != std::numeric_limits<uint32_t>::max()) pieceReach[size_t(piece)] = std::max(pieceReach[size_t(piece)], hops[p]);
+        pieceReach[size_t(piece)] = std::max(pieceReach[size_t(piece)], hops[p]);
         low[size_t(piece)].minComponent(voxel[p]);
         high[size_t(piece)].maxComponent(voxel[p]);
     }

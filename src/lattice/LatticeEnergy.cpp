@@ -30,7 +30,7 @@ void Lattice::releaseSnapEnergies()
     // particle's volumetric energy with them counted (tr ε now plus their shares) less without.
     std::unordered_map<uint32_t, double> removedTrace;
     const auto traceShare = [&](uint32_t b, uint32_t p) {
-        const double stretchM = bonds[b].pinned ? 0.0 : mBondTerms[b].armM.norm() - voxelSizeM;
+        const double stretchM = mBondTerms[b].armM.norm() - voxelSizeM;
         return stretchM > 0.0 ? stretchM / voxelSizeM * mInverseBondCount[p][bonds[b].axis] : 0.0;
     };
     for (const uint32_t b : snapped)
