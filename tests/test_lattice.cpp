@@ -428,6 +428,43 @@ TEST(Lattice, APanePinnedAtItsEdgesVibratesAsASimplySupportedPlate)
     }
 }
 
+TEST(Lattice, APinnedEdgePushedAlongItsPinStopsAtTheFrame)
+{
+    // A pin carries nothing along its axis (glazing's clearance), so only the frame itself can
+    // stop a pane's edge driven into it. A row of four glass voxels along x, its first pinned to
+    // a box beyond its -x face, pushed toward the box by a hundred times its weight per voxel:
+    // it slides until its first cube sinks a quarter voxel into the box (Lattice::colliders),
+    // then stops there. Without the box's contact it slid in without limit (a shard of the glass
+    // pane scene came out through its frame at 157 m/s).
+    const Material glass = findMaterialPreset("glass");
+    const double h = 0.005;
+    Body body = test::boxBody(4, 1, 1, h, glass.densityKgM3);
+    for (auto it = body.grid->beginValueOn(); it; ++it)
+        if (it.getCoord().x() == 0) it.setValue(*it | kAnchorBit);
+    const double boxFaceM = -2.0 * h;  // the row spans x from -2h to 2h
+    LatticeSupports supports;
+    supports.boxes.push_back({Eigen::Vector3d(boxFaceM - 0.05, 0, 0), Eigen::Vector3d(0.05, 0.05, 0.05), Eigen::Quaterniond::Identity()});
+    supports.pinned = {1};
+    Lattice lattice = Lattice::fromBody(body, glass, supports);
+    ASSERT_EQ(lattice.particleCount(), size_t(5)) << "one pin";
+    const size_t first = size_t(lattice.particleAt(openvdb::Coord(0, 0, 0)));
+    const Eigen::Vector3d push(-100.0 * lattice.particleMassKg * 9.81, 0, 0);
+    const double dt = lattice.stableTimeStepS();
+    double deepestM = -1.0;
+    for (int step = 0; step < 20000; ++step) {
+        for (size_t p = 0; p < lattice.voxelParticleCount; ++p) lattice.externalForceN[p] = push;
+        lattice.step(dt);
+        // How far the first voxel's cube reaches into the box.
+        deepestM = std::max(deepestM, boxFaceM - (lattice.positionM[first].x() - 0.5 * h));
+    }
+    std::printf("pinned edge pushed into its frame: deepest %.3f voxel into the box, at the end moving %.2e m/s\n", deepestM / h,
+                lattice.velocityMS[first].x());
+    EXPECT_GT(deepestM, 0.2 * h) << "the pin does not stop it";
+    EXPECT_LE(deepestM, 0.25 * h + 1e-12);
+    // Stopped, but for one step's push of the whole row on it.
+    EXPECT_LE(std::abs(lattice.velocityMS[first].x()), dt * 4.0 * push.norm() / lattice.particleMassKg);
+}
+
 TEST(Lattice, LongitudinalPulseTravelsAtTheBarSpeed)
 {
     // A half-sine force pulse on one end of a 160 × 4 × 4 bar, 30 voxels long (far above the

@@ -366,7 +366,9 @@ void Lattice::step(double dtS)
         kick(p);
         positionM[p] += dtS * velocityMS[p];
         orientation[p] = (rotationOf(dtS * angularVelocityRadS[p]) * orientation[p]).normalized();
-        if (ground.enabled && !held[p] && !bondedToGround(p)) keepAboveGround(p);
+        if (held[p]) return;
+        if (ground.enabled && !bondedToGround(p)) keepAboveGround(p);
+        if (!colliders.empty()) keepOutOfColliders(p);
     });
     // Damage first, from the new positions (and the velocities half-way through the step, for
     // the strain rate), then the forces from the state.
@@ -389,6 +391,25 @@ void Lattice::step(double dtS)
 bool Lattice::bondedToGround(size_t p) const
 {
     return p < mGroundBond.size() && mGroundBond[p] >= 0 && bondDamage(size_t(mGroundBond[p])) < 1.0;
+}
+
+void Lattice::keepOutOfColliders(size_t p)
+{
+    // The particle's centre may come within a quarter edge of a box's faces (its cube sinking in
+    // by up to a quarter edge); deeper, it goes back out across the nearest face.
+    const double allowedM = 0.25 * voxelSizeM;
+    for (const ObstacleBox& box : colliders) {
+        const Eigen::Matrix3d rot = box.orientation.toRotationMatrix();
+        const Eigen::Vector3d local = rot.transpose() * (positionM[p] - box.centreM);
+        const Eigen::Vector3d depth = (box.halfExtentM.array() + allowedM - local.cwiseAbs().array()).matrix();
+        if ((depth.array() <= 0.0).any()) continue;
+        int axis = 0;
+        depth.minCoeff(&axis);
+        const Eigen::Vector3d outward = rot.col(axis) * (local[axis] >= 0.0 ? 1.0 : -1.0);
+        positionM[p] += depth[axis] * outward;
+        const double into = outward.dot(velocityMS[p]);
+        if (into < 0.0) velocityMS[p] -= into * outward;
+    }
 }
 
 void Lattice::keepAboveGround(size_t p)

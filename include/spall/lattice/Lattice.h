@@ -221,6 +221,12 @@ public:
     double dampingRatio = 0.0;
     LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;
     LatticeGround ground;
+    /// Static boxes the particles may not pass through (the scene's colliders: a window's frame).
+    /// A particle whose cube sinks into one by more than a quarter of its edge is put back at that
+    /// depth and loses its velocity into the box, as on the ground. The quarter leaves a support
+    /// bond's elastic give alone and matches the rigid phase's tolerance
+    /// (collisions.penetration_tolerance_voxels' default).
+    std::vector<ObstacleBox> colliders;
 
     /// The particles' edge (unit: m): the body's voxel's, or its blocks' (`blocks`).
     double voxelSizeM = 0.0;
@@ -379,6 +385,8 @@ private:
     /// f(i) for i < count: in parallel for large lattices, in order for small ones.
     template <typename F>
     void forEach(size_t count, const F& f) const;
+    /// Puts a particle that sank into a collider back to the allowed depth (colliders).
+    void keepOutOfColliders(size_t p);
     /// Puts a particle that sank into the ground back on it (LatticeGround).
     void keepAboveGround(size_t p);
     /// Whether a particle is still bonded to its ground point: it then bears on the ground
