@@ -403,6 +403,42 @@ TEST(Loads, GroundReflectsAFreeAirCharge)
     EXPECT_NEAR(imaged, surface, 0.15 * surface);
 }
 
+TEST(Loads, AWindowInAWallOfCollidersIsLoadedAsThatPartOfASolidWall)
+{
+    // The air cannot tell a wall made of static colliders from one made of a body: a 0.6 m
+    // pane held in the opening of a 4 m x 3 m wall of four colliders must take, on its front
+    // and on its rear, the impulse the same 0.6 m patch of a solid wall of the same outline
+    // takes (UFC 3-340-02 §2-15.3: clearing and the rear's rise follow the whole wall). Loaded
+    // as a 0.6 m plate standing free, it cleared round its own edges and filled behind at once.
+    const double h = 0.1, tnt = 1.0, distance = 6.0;
+    const BlastField field({Charge{Eigen::Vector3d::Zero(), tnt, 0.0, BurstType::Surface}}, BlastSettings());
+    const LoadGeometry open{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
+    const Body solid = test::boxBody(1, 40, 30, h, 2500.0, Eigen::Vector3d(distance + 0.5 * h, 0, 1.5));
+    Body pane = test::boxBody(1, 6, 6, h, 2500.0, Eigen::Vector3d(distance + 0.5 * h, 0, 1.5));
+    pane.anchored = true;
+    LoadGeometry walled = open;
+    const double cx = distance + 0.5 * h, hx = 0.5 * h;
+    walled.obstacles = {{Eigen::Vector3d(cx, -1.15, 1.5), Eigen::Vector3d(hx, 0.85, 1.5), Eigen::Quaterniond::Identity()},
+                        {Eigen::Vector3d(cx, 1.15, 1.5), Eigen::Vector3d(hx, 0.85, 1.5), Eigen::Quaterniond::Identity()},
+                        {Eigen::Vector3d(cx, 0, 0.6), Eigen::Vector3d(hx, 0.3, 0.6), Eigen::Quaterniond::Identity()},
+                        {Eigen::Vector3d(cx, 0, 2.4), Eigen::Vector3d(hx, 0.3, 0.6), Eigen::Quaterniond::Identity()}};
+    const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::Surface, tnt, distance);
+    const double dt = p.positiveDurationS / 200, until = p.arrivalTimeS + p.positiveDurationS + p.negativeDurationS;
+    // The solid wall's patch: voxels 17..22 across and 12..17 up, its pane's place.
+    auto patch = [](int face) {
+        return [face](const ExposedFace& f) { return f.face == face && f.voxel.y() >= 17 && f.voxel.y() <= 22 && f.voxel.z() >= 12 && f.voxel.z() <= 17; };
+    };
+    auto all = [](int face) { return [face](const ExposedFace& f) { return f.face == face; }; };
+    const double solidFront = faceImpulseOn(solid, field, open, dt, until, patch(kNegX)), solidRear = faceImpulseOn(solid, field, open, dt, until, patch(kPosX));
+    const double paneFront = faceImpulseOn(pane, field, walled, dt, until, all(kNegX)), paneRear = faceImpulseOn(pane, field, walled, dt, until, all(kPosX));
+    const double freeFront = faceImpulseOn(pane, field, open, dt, until, all(kNegX)), freeRear = faceImpulseOn(pane, field, open, dt, until, all(kPosX));
+    std::printf("0.6 m patch of a 4 m x 3 m wall: front %.3f, rear %.3f N s; a pane in a wall of colliders %.3f, %.3f; standing free %.3f, %.3f\n",
+                solidFront, solidRear, paneFront, paneRear, freeFront, freeRear);
+    EXPECT_NEAR(paneFront, solidFront, 0.01 * solidFront);
+    EXPECT_NEAR(paneRear, solidRear, 0.01 * std::abs(solidFront));
+    EXPECT_GT(std::abs(freeFront - solidFront) + std::abs(freeRear - solidRear), 0.05 * solidFront) << "the outline matters here";
+}
+
 TEST(Loads, ABlockOnTheGroundIsPressedIntoItNotLifted)
 {
     // No air under a face resting on the ground, and the ground's reflection does not wrap round

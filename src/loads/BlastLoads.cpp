@@ -66,11 +66,33 @@ double Silhouette::clearingTimeS() const
 
 double Silhouette::rearRiseTimeS() const { return 4.0 * std::min(clearingHeightM(), halfWidthM) / shockSpeedMS; }
 
-Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vector3d& chargeM, double shockSpeedMS,
-                        const LoadGround& ground)
+std::vector<const ObstacleBox*> heldBy(const std::vector<const Body*>& group, const std::vector<ObstacleBox>& obstacles)
 {
-    // The corners of every member's oriented index box, in the world.
+    std::vector<const ObstacleBox*> holders;
+    const auto anchored = [](const Body* body) { return body->anchored; };
+    if (obstacles.empty() || std::none_of(group.begin(), group.end(), anchored)) return holders;
+    std::vector<char> taken(obstacles.size(), 0);
+    for (const Body* body : group) {
+        if (!body->anchored) continue;
+        const ObstacleBox bounds = worldBounds(*body);
+        for (size_t i = 0; i < obstacles.size(); ++i)
+            if (!taken[i] && boxesMeet(bounds, obstacles[i], 0.5 * body->voxelSizeM)) taken[i] = 1, holders.push_back(&obstacles[i]);
+    }
+    // Breadth first through obstacles that meet, within half the group's voxel.
+    const double gapM = 0.5 * group.front()->voxelSizeM;
+    for (size_t next = 0; next < holders.size(); ++next)
+        for (size_t i = 0; i < obstacles.size(); ++i)
+            if (!taken[i] && boxesMeet(*holders[next], obstacles[i], gapM)) taken[i] = 1, holders.push_back(&obstacles[i]);
+    return holders;
+}
+
+Silhouette silhouetteOf(const std::vector<const Body*>& group, const std::vector<const ObstacleBox*>& holders, const Eigen::Vector3d& chargeM,
+                        double shockSpeedMS, const LoadGround& ground)
+{
+    // The corners of every member's oriented index box, and of the boxes that hold them, in the world.
     std::vector<Eigen::Vector3d> corners;
+    for (const ObstacleBox* box : holders)
+        for (const Eigen::Vector3d& corner : cornersOf(*box)) corners.push_back(corner);
     for (const Body* body : group) {
         const Eigen::Matrix3d rot = body->motion.orientation.toRotationMatrix();
         const openvdb::CoordBBox& box = body->indexBounds;
@@ -151,10 +173,11 @@ std::vector<Silhouette> BlastLoads::silhouettes(const std::vector<const Body*>& 
 {
     std::vector<Silhouette> outlines(mWindows.size());
     if (mSettings.model != LoadModel::BlastEngineering) return outlines;
+    const std::vector<const ObstacleBox*> holders = heldBy(group, mGeometry.obstacles);
     for (size_t w = 0; w < mWindows.size(); ++w) {
         const Eigen::Vector3d& charge = mField.charges()[mWindows[w].charge].positionM;
         const double speed = mField.pulseAt(mWindows[w].charge, (group.front()->motion.positionM - charge).squaredNorm()).shockSpeedMS;
-        outlines[w] = silhouetteOf(group, charge, speed, mGeometry.ground);
+        outlines[w] = silhouetteOf(group, holders, charge, speed, mGeometry.ground);
     }
     return outlines;
 }

@@ -43,4 +43,25 @@ bool segmentMeetsBox(const Eigen::Vector3d& aM, const Eigen::Vector3d& bM, const
     return true;
 }
 
+bool boxesMeet(const ObstacleBox& a, const ObstacleBox& b, double gapM)
+{
+    const Eigen::Matrix3d ra = a.orientation.toRotationMatrix(), rb = b.orientation.toRotationMatrix();
+    const Eigen::Vector3d between = b.centreM - a.centreM;
+    // Each box's extent along a unit axis is the sum of its half extents times |cos| to it.
+    const auto separates = [&](const Eigen::Vector3d& axis) {
+        const double length = axis.norm();
+        if (length < 1e-12) return false;  // parallel edges: covered by the face normals
+        const Eigen::Vector3d unit = axis / length;
+        const double reachA = (ra.transpose() * unit).cwiseAbs().dot(a.halfExtentM);
+        const double reachB = (rb.transpose() * unit).cwiseAbs().dot(b.halfExtentM);
+        return std::abs(between.dot(unit)) > reachA + reachB + gapM;
+    };
+    for (int i = 0; i < 3; ++i)
+        if (separates(ra.col(i)) || separates(rb.col(i))) return false;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (separates(ra.col(i).cross(rb.col(j)))) return false;
+    return true;
+}
+
 }  // namespace spall

@@ -45,9 +45,17 @@ struct Silhouette {
     /// half-width (unit: s).
     double rearRiseTimeS() const;
 };
-/// The outline of a group of bodies (one body, or bodies pressed together) seen from a charge.
-Silhouette silhouetteOf(const std::vector<const Body*>& group, const Eigen::Vector3d& chargeM, double shockSpeedMS,
-                        const LoadGround& ground);
+/// The outline of a group of bodies (one body, or bodies pressed together) seen from a charge,
+/// with the static boxes that hold it (heldBy).
+Silhouette silhouetteOf(const std::vector<const Body*>& group, const std::vector<const ObstacleBox*>& holders, const Eigen::Vector3d& chargeM,
+                        double shockSpeedMS, const LoadGround& ground);
+
+/// The obstacles that hold a group: those within half a voxel of an anchored member's bounds,
+/// and every obstacle joined to them through others that meet (a frame, the wall round it).
+/// A window set in a wall of colliders is then loaded as part of the wall: its front does not
+/// clear round the pane's own edges, and its rear fills as the wall's rear does (UFC 3-340-02
+/// §2-15.3, front and rear walls: both follow the whole face's outline).
+std::vector<const ObstacleBox*> heldBy(const std::vector<const Body*>& group, const std::vector<ObstacleBox>& obstacles);
 
 /// Face by face loads, for bodies that are not rigid (the deformable phase): per body, the mean
 /// force over the step on each exposed face (body.exposedFaces order, world frame, unit: N),

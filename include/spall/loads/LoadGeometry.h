@@ -26,6 +26,11 @@ double depthInsideM(const ObstacleBox& box, const Eigen::Vector3d& pointM);
 /// True when the segment from a to b meets the box (slab test in the box's frame).
 bool segmentMeetsBox(const Eigen::Vector3d& aM, const Eigen::Vector3d& bM, const ObstacleBox& box);
 
+/// True when the two boxes overlap or lie within `gapM` of each other along every separating
+/// axis (the separating axis test for oriented boxes: their 3 + 3 face normals and 9 edge
+/// cross products; Gottschalk, Lin and Manocha 1996, "OBBTree").
+bool boxesMeet(const ObstacleBox& a, const ObstacleBox& b, double gapM);
+
 /// The ground plane: a face region resting on it clears only over its other edges (UFC
 /// 3-340-02: S is the smaller of a wall's height and half-width), and no wave goes under it.
 struct LoadGround {
