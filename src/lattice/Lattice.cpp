@@ -368,7 +368,7 @@ void Lattice::step(double dtS)
         orientation[p] = (rotationOf(dtS * angularVelocityRadS[p]) * orientation[p]).normalized();
         if (held[p]) return;
         if (ground.enabled && !bondedToGround(p)) keepAboveGround(p);
-        if (!colliders.empty()) keepOutOfColliders(p);
+        if (!mKeptOut.empty()) keepOutOfColliders(p);
     });
     // Damage first, from the new positions (and the velocities half-way through the step, for
     // the strain rate), then the forces from the state.
@@ -393,19 +393,30 @@ bool Lattice::bondedToGround(size_t p) const
     return p < mGroundBond.size() && mGroundBond[p] >= 0 && bondDamage(size_t(mGroundBond[p])) < 1.0;
 }
 
-void Lattice::keepOutOfColliders(size_t p)
+void Lattice::keepOutOf(const std::vector<ObstacleBox>& boxes)
 {
     // The particle's centre may come within a quarter edge of a box's faces (its cube sinking in
     // by up to a quarter edge); deeper, it goes back out across the nearest face.
     const double allowedM = 0.25 * voxelSizeM;
-    for (const ObstacleBox& box : colliders) {
-        const Eigen::Matrix3d rot = box.orientation.toRotationMatrix();
-        const Eigen::Vector3d local = rot.transpose() * (positionM[p] - box.centreM);
-        const Eigen::Vector3d depth = (box.halfExtentM.array() + allowedM - local.cwiseAbs().array()).matrix();
+    mKeptOut.clear();
+    for (const ObstacleBox& box : boxes) {
+        KeptOut kept{box.orientation.toRotationMatrix().transpose(), box.centreM, box.halfExtentM + Eigen::Vector3d::Constant(allowedM), {}};
+        const ObstacleBox grown{box.centreM, kept.reachM, box.orientation};
+        for (const Eigen::Vector3d& corner : cornersOf(grown)) kept.boundsM.extend(corner);
+        mKeptOut.push_back(kept);
+    }
+}
+
+void Lattice::keepOutOfColliders(size_t p)
+{
+    for (const KeptOut& box : mKeptOut) {
+        if (!box.boundsM.contains(positionM[p])) continue;
+        const Eigen::Vector3d local = box.toBox * (positionM[p] - box.centreM);
+        const Eigen::Vector3d depth = box.reachM - local.cwiseAbs();
         if ((depth.array() <= 0.0).any()) continue;
         int axis = 0;
         depth.minCoeff(&axis);
-        const Eigen::Vector3d outward = rot.col(axis) * (local[axis] >= 0.0 ? 1.0 : -1.0);
+        const Eigen::Vector3d outward = box.toBox.row(axis).transpose() * (local[axis] >= 0.0 ? 1.0 : -1.0);
         positionM[p] += depth[axis] * outward;
         const double into = outward.dot(velocityMS[p]);
         if (into < 0.0) velocityMS[p] -= into * outward;

@@ -97,7 +97,7 @@ Lattice Lattice::fromBody(const Body& body, const Material& material, const Latt
     lattice.particleInertiaKgM2 = lattice.particleMassKg * h * h / 6.0;
     lattice.stiffness = calibrateLattice(material, h);
     lattice.ground = supports.ground;
-    lattice.colliders = supports.boxes;
+    lattice.keepOutOf(supports.boxes);
     lattice.addVoxelParticles(body);
     // A body may rest a little below the plane (anchored within a quarter voxel of it; blocks of
     // voxels reach lower than their voxels): the contact plane is then where its cubes rest, so

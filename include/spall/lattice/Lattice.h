@@ -161,6 +161,12 @@ public:
     /// stiffest normal bonds; (8μ + 12λ) h / m isotropic) added.
     double stableTimeStepS() const;
     void step(double dtS);
+    /// Static boxes the particles may not pass through (the scene's colliders: a window's frame).
+    /// A particle whose cube sinks into one by more than a quarter of its edge is put back at that
+    /// depth and loses its velocity into the box, as on the ground. The quarter leaves a support
+    /// bond's elastic give alone and matches the rigid phase's tolerance
+    /// (collisions.penetration_tolerance_voxels' default). Set by fromBody from its supports.
+    void keepOutOf(const std::vector<ObstacleBox>& boxes);
     /// The bonds' forces from the state, leaving their damage as it is (after the state arrays
     /// were written from outside, as a checkpoint does).
     void refreshForces();
@@ -221,12 +227,6 @@ public:
     double dampingRatio = 0.0;
     LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;
     LatticeGround ground;
-    /// Static boxes the particles may not pass through (the scene's colliders: a window's frame).
-    /// A particle whose cube sinks into one by more than a quarter of its edge is put back at that
-    /// depth and loses its velocity into the box, as on the ground. The quarter leaves a support
-    /// bond's elastic give alone and matches the rigid phase's tolerance
-    /// (collisions.penetration_tolerance_voxels' default).
-    std::vector<ObstacleBox> colliders;
 
     /// The particles' edge (unit: m): the body's voxel's, or its blocks' (`blocks`).
     double voxelSizeM = 0.0;
@@ -245,6 +245,14 @@ private:
     std::vector<std::array<int32_t, 6>> mBondAcross;
     /// Per voxel particle, its bond to a ground point, or -1.
     std::vector<int32_t> mGroundBond;
+    /// The boxes of keepOutOf, each in its own frame grown by the allowed depth, with the
+    /// world-axis bounds of that grown box: a particle outside them costs six comparisons.
+    struct KeptOut {
+        Eigen::Matrix3d toBox;
+        Eigen::Vector3d centreM, reachM;
+        Eigen::AlignedBox3d boundsM;
+    };
+    std::vector<KeptOut> mKeptOut;
     /// Per particle, λ for the axes it has bonds along (stress-free missing axes condensed out).
     std::vector<double> mLambdaPa;
     /// Per particle and axis, 1 / (its bonds along the axis), or 0 without any.
@@ -385,7 +393,7 @@ private:
     /// f(i) for i < count: in parallel for large lattices, in order for small ones.
     template <typename F>
     void forEach(size_t count, const F& f) const;
-    /// Puts a particle that sank into a collider back to the allowed depth (colliders).
+    /// Puts a particle that sank into a collider back to the allowed depth (keepOutOf).
     void keepOutOfColliders(size_t p);
     /// Puts a particle that sank into the ground back on it (LatticeGround).
     void keepAboveGround(size_t p);
