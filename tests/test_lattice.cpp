@@ -433,7 +433,7 @@ TEST(Lattice, APinnedEdgePushedAlongItsPinStopsAtTheFrame)
     // A pin carries nothing along its axis (glazing's clearance), so only the frame itself can
     // stop a pane's edge driven into it. A row of four glass voxels along x, its first pinned to
     // a box beyond its -x face, pushed toward the box by a hundred times its weight per voxel:
-    // it slides until its first cube sinks a quarter voxel into the box (Lattice::colliders),
+    // it slides until its first cube sinks a quarter voxel into the box (Lattice::keepOutOf),
     // then stops there. Without the box's contact it slid in without limit (a shard of the glass
     // pane scene came out through its frame at 157 m/s).
     const Material glass = findMaterialPreset("glass");
