@@ -304,20 +304,19 @@ TEST(Loads, BoxBehindABlastWallTakesTheDiffractedLoad)
     // T1 0.3 m behind it at mid-height, T2 1.4 m behind it on the ground. With / without the
     // barrier the CFD gives, for the block's front face and for its net push:
     // T1 0.17-0.24 and 0.09, T2 0.476 and 0.376. spall loads the shadowed faces with the wave
-    // diffracted over the barrier's top (loads/Diffraction.h): T1 0.26 and 0.18, T2 0.52 and
-    // 0.48. T1's net push is twice the CFD's: its front faces the barrier 0.3 m away, in the
-    // gap the wave fills from above, and meets the diffracted wave near the angle where its
-    // reflection peaks; a ray model has neither the gap nor the eddy (docs/accuracy.md). T1's
-    // net is bounded at 2.2 times the CFD's, so that it still shows the shielding.
+    // diffracted over the barrier's top (loads/Diffraction.h), and as UFC 3-340-02 loads a
+    // building's roof and rear, with its side-on pressure and drag and no reflection: T1 0.205
+    // and 0.105, T2 0.39 and 0.30. Reflecting the diffracted wave as a shock gave T1's net push
+    // twice the CFD's (0.18).
     const BlastField field({Charge{Eigen::Vector3d::Zero(), 0.365, 0.0, BurstType::Surface}}, BlastSettings());
     const LoadGeometry open{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
     LoadGeometry walled = open;
     walled.obstacles.push_back({Eigen::Vector3d(2.05, 0, 0.5), Eigen::Vector3d(0.05, 10, 0.5), Eigen::Quaterniond::Identity()});
     struct Target {
         Eigen::Vector3d centreM;
-        double frontRatio, netRatio, netTolerance;
+        double frontRatio, netRatio;
     };
-    for (const Target& target : {Target{{2.5, 0, 0.5}, 0.205, 0.09, 1.2}, Target{{3.6, 0, 0.1}, 0.476, 0.376, 0.3}}) {
+    for (const Target& target : {Target{{2.5, 0, 0.5}, 0.205, 0.09}, Target{{3.6, 0, 0.1}, 0.476, 0.376}}) {
         const std::vector<Body> block{test::boxBody(2, 2, 2, 0.1, 2000.0, target.centreM)};
         const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::Surface, 0.365, target.centreM.norm());
         const double dt = p.positiveDurationS / 200, until = p.arrivalTimeS + p.positiveDurationS + p.negativeDurationS;
@@ -338,7 +337,7 @@ TEST(Loads, BoxBehindABlastWallTakesTheDiffractedLoad)
         std::printf("target at x %.1f: front %.3f (CFD %.3f), net %.3f (CFD %.3f)\n", target.centreM.x(), frontRatio, target.frontRatio,
                     netRatio, target.netRatio);
         EXPECT_NEAR(frontRatio, target.frontRatio, 0.3 * target.frontRatio);
-        EXPECT_NEAR(netRatio, target.netRatio, target.netTolerance * target.netRatio);
+        EXPECT_NEAR(netRatio, target.netRatio, 0.3 * target.netRatio);
     }
 }
 

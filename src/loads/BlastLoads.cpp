@@ -148,17 +148,17 @@ const ObstacleBox* BlastLoads::shadowCaster(const Eigen::Vector3d& xM, const Eig
     return body >= 0 ? &exposure->groupBoundsOf(size_t(body)) : nullptr;
 }
 
-PointPulse BlastLoads::pulseOnFace(const OpenWindow& window, const PointPulse& direct, const Eigen::Vector3d& probeM,
-                                   const Exposure* exposure, size_t excludeGroup, double groundToleranceM, Eigen::Vector3d& travelM) const
+FaceWave BlastLoads::waveOnFace(const OpenWindow& window, const PointPulse& direct, const Eigen::Vector3d& probeM,
+                                const Eigen::Vector3d& directTravel, const Exposure* exposure, size_t excludeGroup, double groundToleranceM) const
 {
     const Eigen::Vector3d& charge = mField.charges()[window.charge].positionM;
     const ObstacleBox* caster = shadowCaster(probeM, charge, exposure, excludeGroup);
-    if (!caster) return direct;
+    if (!caster) return {direct, directTravel, false};
     const EdgePath path = shortestPathAround(*caster, charge, probeM, mGeometry, groundToleranceM);
     const DiffractedWave wave = diffractedWave(path, charge, probeM);
-    travelM = wave.directionM;
     const double equivalent = wave.equivalentDistanceM;
-    return diffractedPulse(direct, mField.pulseAt(window.charge, equivalent * equivalent), path.lengthM - (probeM - charge).norm());
+    return {diffractedPulse(direct, mField.pulseAt(window.charge, equivalent * equivalent), path.lengthM - (probeM - charge).norm()),
+            wave.directionM, true};
 }
 
 std::vector<char> BlastLoads::loadedBodies(const std::vector<Body>& bodies) const
@@ -229,11 +229,14 @@ void BlastLoads::forEachFaceImpulse(const Body& body, const std::vector<Silhouet
                 const bool ownBodyCannotShadow = exposure && exposure->alone(bodyIndex) && onIndexBounds(body, face);
                 const size_t excludeGroup =
                     (cosine > 0.0 && !ownBodyCannotShadow) || !exposure ? Exposure::kNoBody : exposure->groupOf()[bodyIndex];
-                Eigen::Vector3d travel = rHat;
-                const PointPulse pulse = pulseOnFace(window, direct, x + 0.5 * h * normal, exposure, excludeGroup, 0.5 * h, travel);
-                const double from = timeS - pulse.arrivalTimeS;
-                const FaceExposure face = faceExposure(pulse, -normal.dot(travel), outlines[w].clearingTimeS(), outlines[w].rearRiseTimeS(), p0);
-                const double impulse = faceImpulsePaS(pulse, face, from, from + dtS, p0);
+                const FaceWave wave = waveOnFace(window, direct, x + 0.5 * h * normal, rHat, exposure, excludeGroup, 0.5 * h);
+                const double from = timeS - wave.pulse.arrivalTimeS;
+                FaceExposure face =
+                    faceExposure(wave.pulse, -normal.dot(wave.travel), outlines[w].clearingTimeS(), outlines[w].rearRiseTimeS(), p0);
+                // UFC 3-340-02 §2-15.3: the wave that spills round an edge loads the roof, side
+                // and rear walls with its side-on pressure and drag; none of them reflects it.
+                if (wave.diffracted) face.reflectedFraction = 0.0;
+                const double impulse = faceImpulsePaS(wave.pulse, face, from, from + dtS, p0);
                 if (impulse != 0.0) f(i, Eigen::Vector3d(-impulse * area * normal), arm, normal);
                 continue;
             }

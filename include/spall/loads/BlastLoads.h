@@ -66,6 +66,15 @@ struct FaceForces {
 };
 
 /// The blast's loads during one step: the field and the windows open at the step's start.
+/// The wave that reaches one face from one charge.
+struct FaceWave {
+    PointPulse pulse;
+    /// Unit direction the wave travels in at the face.
+    Eigen::Vector3d travel = Eigen::Vector3d::UnitX();
+    /// True when it reaches the face only round an obstacle (loads/Diffraction.h).
+    bool diffracted = false;
+};
+
 class BlastLoads {
 public:
     BlastLoads(const BlastField& field, const std::vector<OpenWindow>& windows, const LoadSettings& settings, const LoadGeometry& geometry);
@@ -108,11 +117,11 @@ private:
     /// that the straight path from x to the charge crosses, or null.
     const ObstacleBox* shadowCaster(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure,
                                     size_t excludeGroup) const;
-    /// The pulse at a face whose outward point is `probeM`: the direct one, or when something
-    /// stands between the face and the charge, the wave diffracted around it, with the
-    /// direction it travels in `travelM` (left as is for the direct wave).
-    PointPulse pulseOnFace(const OpenWindow& window, const PointPulse& direct, const Eigen::Vector3d& probeM, const Exposure* exposure,
-                           size_t excludeGroup, double groundToleranceM, Eigen::Vector3d& travelM) const;
+    /// The wave at a face whose outward point is `probeM`: the direct one (travelling along
+    /// `directTravel`), or when something stands between the face and the charge, the wave
+    /// diffracted around it.
+    FaceWave waveOnFace(const OpenWindow& window, const PointPulse& direct, const Eigen::Vector3d& probeM, const Eigen::Vector3d& directTravel,
+                        const Exposure* exposure, size_t excludeGroup, double groundToleranceM) const;
     /// The group's silhouette from each open window's charge (blast engineering only).
     std::vector<Silhouette> silhouettes(const std::vector<const Body*>& group) const;
     /// stepWrench with the outlines and the faces to skip given; each face's mean force into
