@@ -245,24 +245,53 @@ TEST(Loads, SmallCubeMatchesTheUfcFrontMinusRearProcedure)
 
 TEST(Loads, FiniteWallClearsAsTheCfdReferenceSays)
 {
-    // shared/reference/blast-loads-cfd.md: a 0.5 m high wall 2 m from a 0.36 kg surface burst
-    // takes 0.875 of the front impulse a very tall wall takes over the same face (positive
-    // phase). Long walls (20 m), so only the top edge clears, as in the axisymmetric reference.
-    // UFC's linear relief over tc = 4S/U (3.7 ms here, against T+ = 1.4 ms) clears less than
-    // the CFD: spall gives 0.966, 10.4 % high. Issue 16 asks for 10 %; the bound below is
-    // today's, and tightens when the relief model does.
-    const BlastField field({Charge{Eigen::Vector3d::Zero(), 0.365, 0.0, BurstType::Surface}}, BlastSettings());
+    // shared/reference/blast-loads-cfd.md: walls of height H 2 m from a 0.36 kg surface burst
+    // take, over their face, this part of the front impulse a very tall wall takes over the
+    // same face (positive phase): 0.875 for H = 0.5 m, 0.994 for H = 2 m. Long walls (20 m),
+    // so only the top edge clears, as in the axisymmetric reference.
     const LoadGeometry ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
-    const double h = 0.1;
-    const Body low = test::boxBody(1, 200, 5, h, 2000.0, Eigen::Vector3d(2.0 + 0.5 * h, 0, 0.25));
-    const Body tall = test::boxBody(1, 200, 35, h, 2000.0, Eigen::Vector3d(2.0 + 0.5 * h, 0, 1.75));
+    const double h = 0.1, p0 = 101325.0;
+    auto wallOfHeight = [&](int voxels) { return test::boxBody(1, 200, voxels, h, 2000.0, Eigen::Vector3d(2.0 + 0.5 * h, 0, 0.5 * h * voxels)); };
+    const Body tall = wallOfHeight(35);
+    // The central strip of the lowest `voxels` voxels, front faces: voxels 98..101 across the middle.
+    auto strip = [](const ExposedFace& f, int voxels) { return f.face == kNegX && f.voxel.y() >= 98 && f.voxel.y() <= 101 && f.voxel.z() < voxels; };
+
+    // End to end, on Kingery-Bulmash's wave from the charge: 0.966 for the 0.5 m wall, 10.4 %
+    // high. A quarter of that is the source's, not the clearing's: the reference's is not TNT,
+    // and its reflected impulse is 3.52 times its side-on impulse at 2 m where Kingery-Bulmash's
+    // is 2.66, so more of its reflected impulse is the excess that clearing takes.
+    const BlastField field({Charge{Eigen::Vector3d::Zero(), 0.365, 0.0, BurstType::Surface}}, BlastSettings());
     const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::Surface, 0.365, 2.0);
-    // The central strip of the lowest 0.5 m, front faces: the voxels 98..101 across the middle.
-    auto strip = [](const ExposedFace& f) { return f.face == kNegX && f.voxel.y() >= 98 && f.voxel.y() <= 101 && f.voxel.z() < 5; };
     const double dt = p.positiveDurationS / 200, until = p.arrivalTimeS + p.positiveDurationS;
-    const double ratio = faceImpulseOn(low, field, ground, dt, until, strip) / faceImpulseOn(tall, field, ground, dt, until, strip);
-    EXPECT_NEAR(ratio, 0.875, 0.12 * 0.875) << ratio;
-    EXPECT_LT(ratio, 1.0);
+    auto lowest = [&](const ExposedFace& f) { return strip(f, 5); };
+    const double endToEnd = faceImpulseOn(wallOfHeight(5), field, ground, dt, until, lowest) / faceImpulseOn(tall, field, ground, dt, until, lowest);
+    EXPECT_NEAR(endToEnd, 0.875, 0.12 * 0.875) << endToEnd;
+
+    // The clearing itself: the same faces, outlines and face model on the reference's own wave
+    // at 2 m (its table: Ps 151 kPa, is 72.8 Pa s, T+ 1.44 ms; the large wall's Pr 486 kPa, ir
+    // 256 Pa s; the shock speed from Ps by Rankine-Hugoniot in its air, gamma 1.4 at 288 K).
+    PointPulse wave;
+    wave.peakOverpressurePa = 151e3, wave.positiveDurationS = 1.44e-3, wave.reflectedPeakPa = 486e3;
+    wave.decayCoefficient = solveDecayCoefficient(72.8 / (wave.peakOverpressurePa * wave.positiveDurationS));
+    wave.reflectedDecayCoefficient = solveDecayCoefficient(256.0 / (wave.reflectedPeakPa * wave.positiveDurationS));
+    wave.shockSpeedMS = std::sqrt(1.4 * 287.05 * 288.0) * std::sqrt(1.0 + 6.0 * wave.peakOverpressurePa / (7.0 * p0));
+    auto frontImpulse = [&](const Body& wall, int voxels) {
+        const Silhouette outline = silhouetteOf({&wall}, {}, Eigen::Vector3d::Zero(), wave.shockSpeedMS, ground.ground);
+        double total = 0;
+        for (const ExposedFace& f : wall.exposedFaces) {
+            if (!strip(f, voxels)) continue;
+            const Eigen::Vector3d centre = wall.motion.positionM + wall.voxelOffsetM(f.voxel) - Eigen::Vector3d(0.5 * h, 0, 0);
+            const FaceExposure face = faceExposure(wave, centre.normalized().x(), outline.clearingTimeS(), outline.rearRiseTimeS(), p0);
+            total += faceImpulsePaS(wave, face, 0.0, wave.positiveDurationS, p0);
+        }
+        return total;
+    };
+    const double half = frontImpulse(wallOfHeight(5), 5) / frontImpulse(tall, 5), two = frontImpulse(wallOfHeight(20), 20) / frontImpulse(tall, 20);
+    std::printf("front impulse against a tall wall's: 0.5 m wall %.3f end to end (CFD 0.875); on the CFD's wave 0.5 m %.3f, 2 m %.3f (0.994)\n",
+                endToEnd, half, two);
+    EXPECT_NEAR(half, 0.875, 0.1 * 0.875);
+    EXPECT_NEAR(two, 0.994, 0.1 * 0.994);
+    EXPECT_LT(half, two);
 }
 
 TEST(Loads, SlabTakesTheSameImpulseIntactOrInTouchingLayers)
