@@ -4,6 +4,7 @@
 #include "TestUtil.h"
 
 #include <spall/loads/BlastLoads.h>
+#include <spall/loads/Exposure.h>
 #include <spall/loads/FacePulse.h>
 #include <spall/loads/ObliqueReflection.h>
 
@@ -292,6 +293,24 @@ TEST(Loads, FiniteWallClearsAsTheCfdReferenceSays)
     EXPECT_NEAR(half, 0.875, 0.1 * 0.875);
     EXPECT_NEAR(two, 0.994, 0.1 * 0.994);
     EXPECT_LT(half, two);
+}
+
+TEST(Exposure, FacesBetweenTouchingLayersTouchNoAirAndTheLayersAreOneGroup)
+{
+    // Three 2 m x 0.1 m x 2 m layers pressed together: each of the 400 voxel faces between two
+    // layers is covered on both sides, and the three clear as one group. The third layer sits
+    // 0.3 voxel off the first two's lattice sideways, as pieces of another object may.
+    const double h = 0.1;
+    std::vector<Body> layers;
+    for (int k = 0; k < 3; ++k) layers.push_back(test::boxBody(20, 1, 20, h, 1800.0, Eigen::Vector3d(k == 2 ? 0.03 : 0.0, 4.05 + h * k, 0)));
+    const Exposure exposure(layers, std::vector<char>(layers.size(), 1));
+    for (size_t b = 0; b < layers.size(); ++b) {
+        int covered = 0;
+        for (size_t f = 0; f < layers[b].exposedFaces.size(); ++f) covered += exposure.covered(b, f);
+        EXPECT_EQ(covered, b == 1 ? 800 : 400) << "layer " << b;
+        EXPECT_EQ(exposure.groupOf()[b], 0u) << "layer " << b;
+    }
+    EXPECT_FALSE(exposure.alone(0));
 }
 
 TEST(Loads, SlabTakesTheSameImpulseIntactOrInTouchingLayers)

@@ -57,8 +57,9 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
 {
     if (bodies.empty()) return;
     collectCells(bodies, considered);
+    markCells();  // before grouping: bodyAt reads the blocks' bits
     groupTouchingBodies(bodies, considered);
-    fillBlocks();
+    ownBlocks();
     boundGroups(bodies, considered);
     boundCells();
 }
@@ -111,19 +112,30 @@ void Exposure::groupTouchingBodies(const std::vector<Body>& bodies, const std::v
     for (size_t b = 0; b < bodies.size(); ++b) mGroup[b] = groups.root(uint32_t(b));
 }
 
-void Exposure::fillBlocks()
+void Exposure::markCells()
 {
-    // Blocks hold their cells and those next to them: a voxel can contain points of the
-    // neighbouring cells (bodies need not share the world's lattice).
     for (const Cell& c : mCells) {
         const int64_t i = std::llround(c.centre[0]), j = std::llround(c.centre[1]), k = std::llround(c.centre[2]);
-        for (int corner = 0; corner < 8; ++corner) {
-            const auto [block, added] =
-                mBlocks.try_emplace(blockKey(i + (corner & 1 ? 1 : -1), j + (corner & 2 ? 1 : -1), k + (corner & 4 ? 1 : -1)), Block{mGroup[c.body], {}});
-            if (!added && block->second.owner != mGroup[c.body]) block->second.owner = kManyGroups;
-        }
         const int bit = int(i & 7) + 8 * int(j & 7) + 64 * int(k & 7);
         mBlocks[blockKey(i, j, k)].occupied[size_t(bit >> 6)] |= uint64_t(1) << (bit & 63);
+    }
+}
+
+void Exposure::ownBlocks()
+{
+    // Blocks hold their cells and those next to them: a voxel can contain points of the
+    // neighbouring cells (bodies need not share the world's lattice). One of the eight
+    // corners is the cell's own block, so every marked block gets an owner.
+    for (const Cell& c : mCells) {
+        const int64_t i = std::llround(c.centre[0]), j = std::llround(c.centre[1]), k = std::llround(c.centre[2]);
+        const size_t group = mGroup[c.body];
+        for (int corner = 0; corner < 8; ++corner) {
+            Block& block = mBlocks[blockKey(i + (corner & 1 ? 1 : -1), j + (corner & 2 ? 1 : -1), k + (corner & 4 ? 1 : -1))];
+            if (block.owner == kUnowned)
+                block.owner = group;
+            else if (block.owner != group)
+                block.owner = kManyGroups;
+        }
     }
 }
 

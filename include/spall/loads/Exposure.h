@@ -72,8 +72,10 @@ private:
     /// mCovered (faces whose neighbouring cell is another body's) and mGroup (bodies pressed
     /// together).
     void groupTouchingBodies(const std::vector<Body>& bodies, const std::vector<char>& considered);
-    /// mBlocks: each cell's occupancy bit, and which group owns each block and its neighbours.
-    void fillBlocks();
+    /// mBlocks' occupancy: each cell's bit.
+    void markCells();
+    /// mBlocks' owners: the group of the cells in or next to each block, or kManyGroups.
+    void ownBlocks();
     /// mGroupBounds from the groups and the members' oriented boxes.
     void boundGroups(const std::vector<Body>& bodies, const std::vector<char>& considered);
     /// mCellsLo, mCellsHi and mOnlyGroup: the cells' bounds and their one group, if one.
@@ -90,8 +92,9 @@ private:
     std::vector<Cell> mCells;  ///< sorted by key, then body
     /// A block of 8^3 cells: the one group with cells in or next to it, or kManyGroups; and
     /// which of its cells hold a voxel centre (bit i + 8 j + 64 k of its cell (i, j, k)).
+    static constexpr size_t kManyGroups = kNoBody - 1, kUnowned = kNoBody - 2;
     struct Block {
-        size_t owner = 0;
+        size_t owner = kUnowned;
         std::array<uint64_t, 8> occupied{};
     };
     /// Every block holding a cell or next to one.
@@ -99,7 +102,6 @@ private:
     /// Whether any cell from lattice point lo to hi (inclusive, at most one block apart) holds a
     /// voxel centre: a test of bits before bodyAt's search of the sorted cells.
     bool anyOccupied(const int64_t lo[3], const int64_t hi[3]) const;
-    static constexpr size_t kManyGroups = kNoBody - 1;
     /// Bounds of every cell's centre (cell units), and the group all cells belong to when they
     /// belong to one (kManyGroups otherwise): a segment that misses the bounds, or a query that
     /// excludes the only group, meets nothing.
