@@ -65,7 +65,6 @@ struct FaceForces {
     std::vector<std::vector<Eigen::Vector3d>> forceN;
 };
 
-/// The blast's loads during one step: the field and the windows open at the step's start.
 /// The wave that reaches one face from one charge.
 struct FaceWave {
     PointPulse pulse;
@@ -75,6 +74,7 @@ struct FaceWave {
     bool diffracted = false;
 };
 
+/// The blast's loads during one step: the field and the windows open at the step's start.
 class BlastLoads {
 public:
     BlastLoads(const BlastField& field, const std::vector<OpenWindow>& windows, const LoadSettings& settings, const LoadGeometry& geometry);

@@ -90,9 +90,11 @@ private:
     double mVoxelSizeM = 1.0;
     Eigen::Vector3d mOriginM = Eigen::Vector3d::Zero();  ///< a lattice point (unit: m)
     std::vector<Cell> mCells;  ///< sorted by key, then body
+    /// Block owners that are no one group: cells of several groups, and (while the blocks are
+    /// built) none yet.
+    static constexpr size_t kManyGroups = kNoBody - 1, kUnowned = kNoBody - 2;
     /// A block of 8^3 cells: the one group with cells in or next to it, or kManyGroups; and
     /// which of its cells hold a voxel centre (bit i + 8 j + 64 k of its cell (i, j, k)).
-    static constexpr size_t kManyGroups = kNoBody - 1, kUnowned = kNoBody - 2;
     struct Block {
         size_t owner = kUnowned;
         std::array<uint64_t, 8> occupied{};
