@@ -97,11 +97,9 @@ def wall_ratio(wave, height_m):
     rows = [0.05 + 0.1 * k for k in range(int(round(height_m / 0.1)))]
     low = [[height_m - z, height_m + z] for z in rows]
     tall = [[3.5 - z, 3.5 + z] for z in rows]
-    out = {}
-    for name, relief in reliefs(wave, height_m, 10.0).items():
-        tall_relief = reliefs(wave, 3.5, 10.0)[name]
-        out[name] = front_impulse_pa_s(wave, low, relief) / front_impulse_pa_s(wave, tall, tall_relief)
-    return out
+    tall_reliefs = reliefs(wave, 3.5, 10.0)
+    return {name: front_impulse_pa_s(wave, low, relief) / front_impulse_pa_s(wave, tall, tall_reliefs[name])
+            for name, relief in reliefs(wave, height_m, 10.0).items()}
 
 
 def main():
