@@ -164,6 +164,10 @@ private:
     std::vector<std::string> mNotes;
 };
 
+/// A hash of every number in the state, by its bits (bodies with their voxels and links, events,
+/// dust, hand-offs, the time): equal hashes mean a bit-identical state, for the golden tests.
+uint64_t stateHash(const SimulationState& state);
+
 /// Bodies alone in a world (no charges, no fracture), for the collision benchmark and tests.
 /// Steps are at most `maxStepS` and adapt as in a run (no voxel moves more than half a voxel,
 /// shorter while contacts are deep), or are exactly `maxStepS` when `fixedStep`.
