@@ -76,8 +76,8 @@ inline ClosestToFailing closestToFailing(const Lattice& lattice)
     ClosestToFailing c;
     for (size_t b = 0; b < lattice.bondCount(); ++b) {
         const LatticeBond& bond = lattice.bonds[b];
-        const double u0 = lattice.bondHistory[b].strengthScale * lattice.stiffness.strength[bond.strengthClass].peakStretchM;
-        const double index = lattice.bondHistory[b].maxEquivalentStretchM / u0;
+        const double u0 = lattice.state.bondHistory[b].strengthScale * lattice.stiffness.strength[bond.strengthClass].peakStretchM;
+        const double index = lattice.state.bondHistory[b].maxEquivalentStretchM / u0;
         c.damaged = c.damaged || lattice.bondDamage(b) > 0.0;
         if (index > c.peakFailureIndex) c = {b, index, c.damaged};
     }

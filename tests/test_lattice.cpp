@@ -33,10 +33,26 @@ Material latticeConcrete()
 const Material kConcrete = latticeConcrete();
 constexpr double kH = 0.01;
 
-Lattice latticeOfBox(int nx, int ny, int nz, const Material& material = kConcrete)
+Lattice latticeOfBox(int nx, int ny, int nz, const Material& material = kConcrete, const LatticeSettings& settings = LatticeSettings())
 {
     Body body = test::boxBody(nx, ny, nz, kH, material.densityKgM3);
-    return Lattice::fromBody(body, material);
+    return Lattice::fromBody(body, material, LatticeSupports(), settings);
+}
+
+/// `material` with the damping ratio `zeta`.
+Material damped(Material material, double zeta)
+{
+    material.dampingRatio = zeta;
+    return material;
+}
+
+/// The deformable phase's settings with its bulk viscosity off (its dashpots would take energy,
+/// or count as strength).
+LatticeSettings withoutBulkViscosity()
+{
+    LatticeSettings settings;
+    settings.bulkViscosity = 0.0;
+    return settings;
 }
 
 double barWaveSpeed(const Material& m) { return std::sqrt(m.youngsModulusPa / m.densityKgM3); }
@@ -46,12 +62,12 @@ double barWaveSpeed(const Material& m) { return std::sqrt(m.youngsModulusPa / m.
 /// positive (interpolated within the step).
 std::vector<double> upCrossingTimesS(Lattice& lattice, size_t p, double dt, int steps, const std::function<void(int)>& afterStep = {})
 {
-    const double restY = lattice.positionM[p].y();
+    const double restY = lattice.state.positionM[p].y();
     std::vector<double> upCrossings;
     double previous = 0.0;
     for (int i = 0; i < steps; ++i) {
         lattice.step(dt);
-        const double y = lattice.positionM[p].y() - restY;
+        const double y = lattice.state.positionM[p].y() - restY;
         if (previous < 0.0 && y >= 0.0) upCrossings.push_back((i + previous / (previous - y)) * dt);
         previous = y;
         if (afterStep) afterStep(i);
@@ -115,8 +131,8 @@ TEST(Lattice, MomentumIsConservedExactly)
     std::mt19937 random(7);
     std::normal_distribution<double> normal(0.0, 1.0);
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
-        lattice.velocityMS[p] = Eigen::Vector3d(normal(random), normal(random), normal(random));
-        lattice.angularVelocityRadS[p] = 100.0 * Eigen::Vector3d(normal(random), normal(random), normal(random));
+        lattice.state.velocityMS[p] = Eigen::Vector3d(normal(random), normal(random), normal(random));
+        lattice.state.angularVelocityRadS[p] = 100.0 * Eigen::Vector3d(normal(random), normal(random), normal(random));
     }
     const Eigen::Vector3d p0 = lattice.linearMomentum(), l0 = lattice.angularMomentumAboutOrigin();
     const double dt = lattice.stableTimeStepS();
@@ -131,15 +147,14 @@ TEST(Lattice, DampingKeepsMomentaAndRigidMotionAndTakesOnlyVibration)
     // Mass-proportional damping about each piece's rigid motion: in a free block broken in two
     // and shaken at random, each piece keeps its linear and angular momentum while its
     // vibration dies; a block spinning rigidly keeps its kinetic energy.
-    Lattice lattice = latticeOfBox(8, 4, 3);
-    lattice.dampingRatio = 0.05;
+    Lattice lattice = latticeOfBox(8, 4, 3, damped(kConcrete, 0.05));
     for (size_t b = 0; b < lattice.bondCount(); ++b)
-        if (lattice.bonds[b].axis == 0 && lattice.voxel[lattice.bonds[b].low].x() == 3) lattice.bondHistory[b].damageDriverM = 1.0;
+        if (lattice.bonds[b].axis == 0 && lattice.voxel[lattice.bonds[b].low].x() == 3) lattice.state.bondHistory[b].damageDriverM = 1.0;
     std::mt19937 random(11);
     std::normal_distribution<double> normal(0.0, 1.0);
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
-        lattice.velocityMS[p] = Eigen::Vector3d(normal(random), normal(random), normal(random));
-        lattice.angularVelocityRadS[p] = 100.0 * Eigen::Vector3d(normal(random), normal(random), normal(random));
+        lattice.state.velocityMS[p] = Eigen::Vector3d(normal(random), normal(random), normal(random));
+        lattice.state.angularVelocityRadS[p] = 100.0 * Eigen::Vector3d(normal(random), normal(random), normal(random));
     }
     lattice.refreshForces();
     const Eigen::Vector3d p0 = lattice.linearMomentum(), l0 = lattice.angularMomentumAboutOrigin();
@@ -153,15 +168,13 @@ TEST(Lattice, DampingKeepsMomentaAndRigidMotionAndTakesOnlyVibration)
     std::printf("damped block: energy %.3e J -> %.3e J over %.2f ms\n", energyStart, energyEnd, 2000 * dt * 1e3);
     EXPECT_LT(energyEnd, 0.5 * energyStart);
 
-    Lattice spinning = latticeOfBox(8, 4, 3);
-    spinning.dampingRatio = 0.05;
-    spinning.bulkViscosity = 0.0;
+    Lattice spinning = latticeOfBox(8, 4, 3, damped(kConcrete, 0.05), withoutBulkViscosity());
     const Eigen::Vector3d spin(0.0, 0.0, 20.0);
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-    for (const Eigen::Vector3d& x : spinning.positionM) centre += x / double(spinning.particleCount());
+    for (const Eigen::Vector3d& x : spinning.state.positionM) centre += x / double(spinning.particleCount());
     for (size_t p = 0; p < spinning.particleCount(); ++p) {
-        spinning.velocityMS[p] = spin.cross(spinning.positionM[p] - centre);
-        spinning.angularVelocityRadS[p] = spin;
+        spinning.state.velocityMS[p] = spin.cross(spinning.state.positionM[p] - centre);
+        spinning.state.angularVelocityRadS[p] = spin;
     }
     const double rigidEnergy = spinning.kineticEnergyJ();
     for (int i = 0; i < 2000; ++i) spinning.step(dt);
@@ -182,28 +195,26 @@ TEST(Lattice, DampedCantileverDecaysAtTheMaterialsDampingRatio)
     auto acc = body.grid->getAccessor();
     for (int y = 0; y < thick; ++y)
         for (int z = 0; z < thick; ++z) acc.setValue(openvdb::Coord(0, y, z), acc.getValue(openvdb::Coord(0, y, z)) | kAnchorBit);
-    Lattice lattice = Lattice::fromBody(body, kConcrete);
-    lattice.bulkViscosity = 0.0;
-    lattice.dampingRatio = zeta;
+    Lattice lattice = Lattice::fromBody(body, damped(kConcrete, zeta), LatticeSupports(), withoutBulkViscosity());
     const double lengthM = (free + 0.5) * kH;
     const double beta = 1.8751 / lengthM, sigma = 0.7341;
-    const double x0 = lattice.positionM[0].x();
+    const double x0 = lattice.state.positionM[0].x();
     size_t tip = 0;
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
         if (lattice.voxel[p] == openvdb::Coord(free, thick / 2, thick / 2)) tip = p;
         if (lattice.held[p]) continue;
-        const double x = beta * (lattice.positionM[p].x() - x0);
-        lattice.velocityMS[p] = Eigen::Vector3d(0, 0.005 * (std::cosh(x) - std::cos(x) - sigma * (std::sinh(x) - std::sin(x))), 0);
+        const double x = beta * (lattice.state.positionM[p].x() - x0);
+        lattice.state.velocityMS[p] = Eigen::Vector3d(0, 0.005 * (std::cosh(x) - std::cos(x) - sigma * (std::sinh(x) - std::sin(x))), 0);
     }
     const double dt = lattice.stableTimeStepS();
-    const double restY = lattice.positionM[tip].y();
+    const double restY = lattice.state.positionM[tip].y();
     // The largest displacement in each cycle, a cycle ending at an up-crossing.
     std::vector<double> peaks{0.0};
     // A held piece's length is its farthest reach from the held layer, plus half a voxel.
     const double estimatedRadS = lattice.fundamentalFrequencyRadS(thick * kH, lengthM, true);
     const int steps = int(5.2 * 2 * M_PI / estimatedRadS / dt);
     std::vector<double> upCrossings = upCrossingTimesS(lattice, tip, dt, steps, [&](int) {
-        const double y = lattice.positionM[tip].y() - restY;
+        const double y = lattice.state.positionM[tip].y() - restY;
         if (y < 0.0 && peaks.back() > 0.0) peaks.push_back(0.0);
         peaks.back() = std::max(peaks.back(), y);
     });
@@ -232,23 +243,21 @@ TEST(Lattice, AWallHeldAlongItsBaseIsDampedAtItsHeightsCantileverMode)
     Body body = test::boxBody(length, thick, high + 1, kH, kConcrete.densityKgM3);
     for (auto it = body.grid->beginValueOn(); it; ++it)
         if (it.getCoord().z() == 0) it.setValue(*it | kAnchorBit);
-    Lattice lattice = Lattice::fromBody(body, kConcrete);
-    lattice.bulkViscosity = 0.0;
-    lattice.dampingRatio = zeta;
+    Lattice lattice = Lattice::fromBody(body, damped(kConcrete, zeta), LatticeSupports(), withoutBulkViscosity());
     const double heightM = (high + 0.5) * kH, beta = 1.8751 / heightM, sigma = 0.7341;
-    const double z0 = lattice.positionM[0].z();
+    const double z0 = lattice.state.positionM[0].z();
     size_t tip = 0;
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
         if (lattice.voxel[p] == openvdb::Coord(length / 2, thick / 2, high)) tip = p;
         if (lattice.held[p]) continue;
-        const double x = beta * (lattice.positionM[p].z() - z0);
-        lattice.velocityMS[p] = Eigen::Vector3d(0, 0.005 * (std::cosh(x) - std::cos(x) - sigma * (std::sinh(x) - std::sin(x))), 0);
+        const double x = beta * (lattice.state.positionM[p].z() - z0);
+        lattice.state.velocityMS[p] = Eigen::Vector3d(0, 0.005 * (std::cosh(x) - std::cos(x) - sigma * (std::sinh(x) - std::sin(x))), 0);
     }
-    const double dt = lattice.stableTimeStepS(), restY = lattice.positionM[tip].y();
+    const double dt = lattice.stableTimeStepS(), restY = lattice.state.positionM[tip].y();
     std::vector<double> peaks{0.0};
     const int steps = int(3.2 * 2 * M_PI / lattice.fundamentalFrequencyRadS(thick * kH, heightM, true) / dt);
     upCrossingTimesS(lattice, tip, dt, steps, [&](int) {
-        const double y = lattice.positionM[tip].y() - restY;
+        const double y = lattice.state.positionM[tip].y() - restY;
         if (y < 0.0 && peaks.back() > 0.0) peaks.push_back(0.0);
         peaks.back() = std::max(peaks.back(), y);
     });
@@ -270,9 +279,9 @@ TEST(Lattice, ParticlesThatShareNoBondCollideAsSmoothSpheres)
     Lattice lattice = Lattice::fromBody(body, kConcrete);
     ASSERT_EQ(lattice.bondCount(), 0u);
     const double offset = 0.3;
-    lattice.positionM[1].y() += offset * kH;
-    lattice.velocityMS[0] = Eigen::Vector3d(5, 0, 0);
-    lattice.velocityMS[1] = Eigen::Vector3d(-5, 0, 0);
+    lattice.state.positionM[1].y() += offset * kH;
+    lattice.state.velocityMS[0] = Eigen::Vector3d(5, 0, 0);
+    lattice.state.velocityMS[1] = Eigen::Vector3d(-5, 0, 0);
     lattice.refreshForces();
     const Eigen::Vector3d p0 = lattice.linearMomentum();
     const double e0 = lattice.kineticEnergyJ();
@@ -280,14 +289,14 @@ TEST(Lattice, ParticlesThatShareNoBondCollideAsSmoothSpheres)
     const double dt = lattice.stableTimeStepS();
     for (double t = 0; t < 8 * kH / 10.0; t += dt) {
         lattice.step(dt);
-        closest = std::min(closest, (lattice.positionM[1] - lattice.positionM[0]).norm());
+        closest = std::min(closest, (lattice.state.positionM[1] - lattice.state.positionM[0]).norm());
     }
     const Eigen::Vector3d n(std::sqrt(1 - offset * offset), offset, 0);  // from 0 to 1 at contact
     const Eigen::Vector3d relative(10, 0, 0), exchange = relative.dot(n) * n;
     // Within 0.5 % of the relative speed (measured 0.22 %): the spring is soft enough that the
     // spheres slide 27 µm past each other while they touch, turning the line of centres.
-    EXPECT_LT((lattice.velocityMS[0] - (Eigen::Vector3d(5, 0, 0) - exchange)).norm(), 5e-3 * 10);
-    EXPECT_LT((lattice.velocityMS[1] - (Eigen::Vector3d(-5, 0, 0) + exchange)).norm(), 5e-3 * 10);
+    EXPECT_LT((lattice.state.velocityMS[0] - (Eigen::Vector3d(5, 0, 0) - exchange)).norm(), 5e-3 * 10);
+    EXPECT_LT((lattice.state.velocityMS[1] - (Eigen::Vector3d(-5, 0, 0) + exchange)).norm(), 5e-3 * 10);
     EXPECT_LT((lattice.linearMomentum() - p0).norm(), 1e-12 * lattice.particleMassKg * 5);
     // The contact lasts about four steps: velocity Verlet with a force that starts within a step
     // loses a little (0.47 %), and must not gain.
@@ -302,13 +311,12 @@ TEST(Lattice, OneAndTwoThreadsGiveTheSameBits)
     // sum has one order whatever the thread count (and damping sums its pieces in fixed chunks).
     auto run = [](int threads) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-        Lattice lattice = latticeOfBox(24, 24, 16);
-        lattice.dampingRatio = 0.05;
+        Lattice lattice = latticeOfBox(24, 24, 16, damped(kConcrete, 0.05));
         std::mt19937 random(11);
         std::normal_distribution<double> normal(0.0, 0.05);
-        for (Eigen::Vector3d& v : lattice.velocityMS) v = Eigen::Vector3d(normal(random), normal(random), normal(random));
+        for (Eigen::Vector3d& v : lattice.state.velocityMS) v = Eigen::Vector3d(normal(random), normal(random), normal(random));
         for (int i = 0; i < 20; ++i) lattice.step(lattice.stableTimeStepS());
-        return lattice.positionM;
+        return lattice.state.positionM;
     };
     const std::vector<Eigen::Vector3d> one = run(1), two = run(2);
     ASSERT_EQ(one.size(), two.size());
@@ -330,13 +338,12 @@ TEST(Lattice, ABeamHeldByTwoBoxesBendsAtTheClampedClampedFrequency)
     LatticeSupports supports;
     for (const double side : {-1.0, 1.0})
         supports.boxes.push_back({Eigen::Vector3d(side * (halfLengthM + 0.5), 0, 0), Eigen::Vector3d(0.5, 1, 1), Eigen::Quaterniond::Identity()});
-    Lattice lattice = Lattice::fromBody(body, kConcrete, supports);
+    Lattice lattice = Lattice::fromBody(body, kConcrete, supports, withoutBulkViscosity());
     ASSERT_EQ(lattice.particleCount() - lattice.voxelParticleCount, size_t(2 * thick * 2)) << "one held point per anchored voxel";
     for (size_t p = lattice.voxelParticleCount; p < lattice.particleCount(); ++p) {
         const int x = lattice.voxel[p].x();
         ASSERT_TRUE(x == -1 || x == length) << "a held point beyond an end face, not a side";
     }
-    lattice.bulkViscosity = 0.0;
     const double spanM = (length + 1) * kH, t = thick * kH;
     const double expected = 4.7300 * 4.7300 / (2 * M_PI * spanM * spanM) * std::sqrt(kConcrete.youngsModulusPa * t * t / 12 / kConcrete.densityKgM3);
     // The first mode's shape as velocities in y, x from the left held point.
@@ -344,9 +351,9 @@ TEST(Lattice, ABeamHeldByTwoBoxesBendsAtTheClampedClampedFrequency)
     const double x0 = -halfLengthM - 0.5 * kH;
     size_t middle = 0;
     for (size_t p = 0; p < lattice.voxelParticleCount; ++p) {
-        const double x = beta * (lattice.positionM[p].x() - x0);
+        const double x = beta * (lattice.state.positionM[p].x() - x0);
         const double shape = std::cosh(x) - std::cos(x) - sigma * (std::sinh(x) - std::sin(x));
-        lattice.velocityMS[p] = Eigen::Vector3d(0, 0.01 * shape / 1.6, 0);
+        lattice.state.velocityMS[p] = Eigen::Vector3d(0, 0.01 * shape / 1.6, 0);
         if (lattice.voxel[p] == openvdb::Coord(length / 2, thick / 2, 0)) middle = p;
     }
     const double dt = lattice.stableTimeStepS();
@@ -380,13 +387,12 @@ std::pair<double, double> paneFrequencyHz(int side, int layers, bool pinned)
         supports.boxes.push_back({Eigen::Vector3d(0, 0, sign * (halfM + 0.5)), Eigen::Vector3d(1, 1, 0.5), Eigen::Quaterniond::Identity()});
     }
     supports.pinned.assign(supports.boxes.size(), pinned ? 1 : 0);
-    Lattice lattice = Lattice::fromBody(body, glass, supports);
-    lattice.bulkViscosity = 0.0;
+    Lattice lattice = Lattice::fromBody(body, glass, supports, withoutBulkViscosity());
     const double spanM = (side - 1) * h;
     size_t centre = 0;
     for (size_t p = 0; p < lattice.voxelParticleCount; ++p) {
-        const Eigen::Vector3d fromEdgeM = lattice.positionM[p] + Eigen::Vector3d::Constant(halfM - 0.5 * h);
-        lattice.velocityMS[p] = Eigen::Vector3d(0, 0.01 * std::sin(M_PI * fromEdgeM.x() / spanM) * std::sin(M_PI * fromEdgeM.z() / spanM), 0);
+        const Eigen::Vector3d fromEdgeM = lattice.state.positionM[p] + Eigen::Vector3d::Constant(halfM - 0.5 * h);
+        lattice.state.velocityMS[p] = Eigen::Vector3d(0, 0.01 * std::sin(M_PI * fromEdgeM.x() / spanM) * std::sin(M_PI * fromEdgeM.z() / spanM), 0);
         if (lattice.voxel[p] == openvdb::Coord(side / 2, 0, side / 2)) centre = p;
     }
     const double dt = lattice.stableTimeStepS();
@@ -455,14 +461,14 @@ TEST(Lattice, APinnedEdgePushedAlongItsPinStopsAtTheFrame)
         for (size_t p = 0; p < lattice.voxelParticleCount; ++p) lattice.externalForceN[p] = push;
         lattice.step(dt);
         // How far the first voxel's cube reaches into the box.
-        deepestM = std::max(deepestM, boxFaceM - (lattice.positionM[first].x() - 0.5 * h));
+        deepestM = std::max(deepestM, boxFaceM - (lattice.state.positionM[first].x() - 0.5 * h));
     }
     std::printf("pinned edge pushed into its frame: deepest %.3f voxel into the box, at the end moving %.2e m/s\n", deepestM / h,
-                lattice.velocityMS[first].x());
+                lattice.state.velocityMS[first].x());
     EXPECT_GT(deepestM, 0.2 * h) << "the pin does not stop it";
     EXPECT_LE(deepestM, 0.25 * h + 1e-12);
     // Stopped, but for one step's push of the whole row on it.
-    EXPECT_LE(std::abs(lattice.velocityMS[first].x()), dt * 4.0 * push.norm() / lattice.particleMassKg);
+    EXPECT_LE(std::abs(lattice.state.velocityMS[first].x()), dt * 4.0 * push.norm() / lattice.particleMassKg);
 }
 
 TEST(Lattice, LongitudinalPulseTravelsAtTheBarSpeed)
@@ -480,7 +486,7 @@ TEST(Lattice, LongitudinalPulseTravelsAtTheBarSpeed)
         double sum = 0.0;
         int count = 0;
         for (size_t p = 0; p < lattice.particleCount(); ++p)
-            if (lattice.voxel[p].x() == x) sum += lattice.velocityMS[p].x(), ++count;
+            if (lattice.voxel[p].x() == x) sum += lattice.state.velocityMS[p].x(), ++count;
         return sum / count;
     };
     const int steps = int((stationB + 40) * kH / c / dt);
@@ -508,18 +514,17 @@ TEST(Lattice, CantileverBendsAtTheEulerBernoulliFrequency)
     auto acc = body.grid->getAccessor();
     for (int y = 0; y < thick; ++y)
         for (int z = 0; z < 2; ++z) acc.setValue(openvdb::Coord(0, y, z), acc.getValue(openvdb::Coord(0, y, z)) | kAnchorBit);
-    Lattice lattice = Lattice::fromBody(body, kConcrete);
-    lattice.bulkViscosity = 0.0;  // energy must be conserved
+    Lattice lattice = Lattice::fromBody(body, kConcrete, LatticeSupports(), withoutBulkViscosity());  // energy must be conserved
     const double lengthM = (free + 0.5) * kH, t = thick * kH;
     const double expected = 1.8751 * 1.8751 / (2 * M_PI * lengthM * lengthM) * std::sqrt(kConcrete.youngsModulusPa * t * t / 12 / kConcrete.densityKgM3);
     // The first mode's shape (Euler–Bernoulli, clamped–free), as velocities in y.
     const double beta = 1.8751 / lengthM, sigma = 0.7341;
-    const double x0 = lattice.positionM[0].x();
+    const double x0 = lattice.state.positionM[0].x();
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
         if (lattice.held[p]) continue;
-        const double x = beta * (lattice.positionM[p].x() - x0);
+        const double x = beta * (lattice.state.positionM[p].x() - x0);
         const double shape = std::cosh(x) - std::cos(x) - sigma * (std::sinh(x) - std::sin(x));
-        lattice.velocityMS[p] = Eigen::Vector3d(0, 0.01 * shape / 2.0, 0);
+        lattice.state.velocityMS[p] = Eigen::Vector3d(0, 0.01 * shape / 2.0, 0);
     }
     const double dt = lattice.stableTimeStepS();
     const int steps = int(2.2 / expected / dt);
@@ -554,7 +559,7 @@ struct BarSpec {
     Material material = kConcrete;
     double lengthM = 0.04, sideM = 0.02, h = 0.01, pullMS = 0.05, notch = 0.8;
     LatticeDamageLaw law = LatticeDamageLaw::Softening;
-    double bulkViscosity = Lattice().bulkViscosity;
+    double bulkViscosity = LatticeSettings().bulkViscosity;
 };
 
 /// The bar's end layers held (the grips), one end pulled (the whole bar starting on the matching
@@ -583,21 +588,22 @@ BarPull pullBarApart(const BarSpec& spec)
     Body body = test::boxBody(nx, ny, ny, h, material.densityKgM3);
     for (auto it = body.grid->tree().beginValueOn(); it; ++it)
         if (it.getCoord().x() == 0 || it.getCoord().x() == nx - 1) it.setValue(*it | kAnchorBit);
-    Lattice lattice = Lattice::fromBody(body, material);
-    lattice.damageLaw = spec.law;
-    lattice.bulkViscosity = spec.bulkViscosity;
-    const double x0 = lattice.positionM[0].x(), gaugeM = (nx - 1) * h;
+    LatticeSettings settings;
+    settings.damageLaw = spec.law;
+    settings.bulkViscosity = spec.bulkViscosity;
+    Lattice lattice = Lattice::fromBody(body, material, LatticeSupports(), settings);
+    const double x0 = lattice.state.positionM[0].x(), gaugeM = (nx - 1) * h;
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
-        lattice.velocityMS[p] = Eigen::Vector3d(pullMS * (lattice.positionM[p].x() - x0) / gaugeM, 0, 0);
-        if (lattice.held[p] && lattice.voxel[p].x() == 0) lattice.velocityMS[p].setZero();
+        lattice.state.velocityMS[p] = Eigen::Vector3d(pullMS * (lattice.state.positionM[p].x() - x0) / gaugeM, 0, 0);
+        if (lattice.held[p] && lattice.voxel[p].x() == 0) lattice.state.velocityMS[p].setZero();
     }
     // Held layers cannot contract sideways, which concentrates stress at the grips' corners (more
     // sharply the finer h): the quarters next to the grips are 50 % stronger, as a dog-bone
     // specimen's are thicker.
     for (size_t b = 0; b < lattice.bondCount(); ++b) {
         const int x = lattice.voxel[lattice.bonds[b].low].x();
-        if (x < nx / 4 || x >= nx - nx / 4) lattice.bondHistory[b].strengthScale = 1.5;
-        if (lattice.bonds[b].axis == 0 && x == nx / 2 - 1) lattice.bondHistory[b].strengthScale = spec.notch;
+        if (x < nx / 4 || x >= nx - nx / 4) lattice.state.bondHistory[b].strengthScale = 1.5;
+        if (lattice.bonds[b].axis == 0 && x == nx / 2 - 1) lattice.state.bondHistory[b].strengthScale = spec.notch;
     }
     const double energy0 = lattice.kineticEnergyJ() + lattice.strainEnergyJ();
     const double dt = lattice.stableTimeStepS();
@@ -610,7 +616,7 @@ BarPull result;
     auto heldPower = [&] {  // the agent holding the ends balances the bonds' force on them
         double power = 0.0;
         for (size_t p = 0; p < lattice.particleCount(); ++p)
-            if (lattice.held[p]) power -= lattice.bondForceN[p].dot(lattice.velocityMS[p]);
+            if (lattice.held[p]) power -= lattice.state.bondForceN[p].dot(lattice.state.velocityMS[p]);
         return power;
     };
     for (double t = 0.0; t < pullTimeS; t += dt) {
@@ -850,18 +856,18 @@ TEST(Lattice, DirectShearFollowsTheMohrCoulombEnvelope)
                                   (lattice.stiffness.normalNPerM[2] / kH + 2.0 * lattice.stiffness.lameLambdaPa);
         const double liftM = compressionOverCohesion < 0.0 ? 0.6 * lattice.stiffness.strength[0].peakStretchM : 0.0;
         for (size_t p = 0; p < lattice.particleCount(); ++p)
-            if (lattice.voxel[p].z() == 1) lattice.positionM[p].z() += compressionOverCohesion < 0.0 ? liftM : -pressDownM;
+            if (lattice.voxel[p].z() == 1) lattice.state.positionM[p].z() += compressionOverCohesion < 0.0 ? liftM : -pressDownM;
         lattice.refreshForces();
         auto upperLayerStressPa = [&]() -> Eigen::Vector3d {
             Eigen::Vector3d force = Eigen::Vector3d::Zero();
             for (size_t p = 0; p < lattice.particleCount(); ++p)
-                if (lattice.voxel[p].z() == 1) force += lattice.bondForceN[p];
+                if (lattice.voxel[p].z() == 1) force += lattice.state.bondForceN[p];
             return force / areaM2;
         };
         const double compressionPa = upperLayerStressPa().z();
         const double shearMS = 1e-3, dt = lattice.stableTimeStepS();
         for (size_t p = 0; p < lattice.particleCount(); ++p)
-            if (lattice.voxel[p].z() == 1) lattice.velocityMS[p] = Eigen::Vector3d(shearMS, 0, 0);
+            if (lattice.voxel[p].z() == 1) lattice.state.velocityMS[p] = Eigen::Vector3d(shearMS, 0, 0);
         // The failure surface is where damage starts: the shear stress of the last step before.
         double onsetShearPa = 0.0;
         auto damaged = [&] {
@@ -902,12 +908,11 @@ TEST(Lattice, ConcreteIsStrongerWhenPulledFaster)
         Body body = test::boxBody(nx, 2, 2, kH, material.densityKgM3);
         for (auto it = body.grid->tree().beginValueOn(); it; ++it)
             if (it.getCoord().x() == 0 || it.getCoord().x() == nx - 1) it.setValue(*it | kAnchorBit);
-        Lattice lattice = Lattice::fromBody(body, material);
-        lattice.bulkViscosity = 0.0;  // its dashpots' force would count as strength
-        double x0 = lattice.positionM[0].x();
-        for (const Eigen::Vector3d& x : lattice.positionM) x0 = std::min(x0, x.x());
+        Lattice lattice = Lattice::fromBody(body, material, LatticeSupports(), withoutBulkViscosity());
+        double x0 = lattice.state.positionM[0].x();
+        for (const Eigen::Vector3d& x : lattice.state.positionM) x0 = std::min(x0, x.x());
         // From rest length on the velocity field of a uniform strain rate, so no wave runs ahead.
-        for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.velocityMS[p] = Eigen::Vector3d(ratePerS * (lattice.positionM[p].x() - x0), 0, 0);
+        for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.state.velocityMS[p] = Eigen::Vector3d(ratePerS * (lattice.state.positionM[p].x() - x0), 0, 0);
         const double dt = lattice.stableTimeStepS();
         const double areaM2 = 4 * kH * kH;
         double peakPa = 0.0;
@@ -915,7 +920,7 @@ TEST(Lattice, ConcreteIsStrongerWhenPulledFaster)
             lattice.step(dt);
             double forceN = 0.0;
             for (size_t p = 0; p < lattice.particleCount(); ++p)
-                if (lattice.voxel[p].x() == nx - 1) forceN -= lattice.bondForceN[p].x();
+                if (lattice.voxel[p].x() == nx - 1) forceN -= lattice.state.bondForceN[p].x();
             peakPa = std::max(peakPa, forceN / areaM2);
             if (forceN / areaM2 < 0.5 * peakPa) break;
         }
@@ -986,17 +991,17 @@ TEST(Lattice, MasonryPulledAcrossItsBedJointsBreaksInAJointAtTheJointsStrength)
         EXPECT_EQ(bond.strengthClass == 0, acrossBedJoint) << "bond " << b << ": a bed joint lies between every third layer";
         unitBonds += bond.strengthClass;
     }
-    const double z0 = lattice.positionM[0].z();
+    const double z0 = lattice.state.positionM[0].z();
     for (size_t p = 0; p < lattice.particleCount(); ++p)
-        lattice.velocityMS[p] = lattice.voxel[p].z() == 0 ? Eigen::Vector3d::Zero()
-                                                          : Eigen::Vector3d(0, 0, pullMS * (lattice.positionM[p].z() - z0) / ((nz - 1) * h));
+        lattice.state.velocityMS[p] = lattice.voxel[p].z() == 0 ? Eigen::Vector3d::Zero()
+                                                          : Eigen::Vector3d(0, 0, pullMS * (lattice.state.positionM[p].z() - z0) / ((nz - 1) * h));
     const double dt = lattice.stableTimeStepS();
     double peakStressPa = 0.0;
     for (double t = 0.0; t < 1.5 * lattice.stiffness.strength[0].zeroTractionStretchM / pullMS; t += dt) {
         lattice.step(dt);
         double pullN = 0.0;
         for (size_t p = 0; p < lattice.particleCount(); ++p)
-            if (lattice.voxel[p].z() == nz - 1) pullN -= lattice.bondForceN[p].z();
+            if (lattice.voxel[p].z() == nz - 1) pullN -= lattice.state.bondForceN[p].z();
         peakStressPa = std::max(peakStressPa, pullN / (sideM * sideM));
     }
     int brokenInJoints = 0, brokenInUnits = 0;
@@ -1056,16 +1061,19 @@ TEST(Lattice, StrengthScatterHasTheMaterialsMeanCovAndCorrelation)
     const Material concrete = findMaterialPreset("concrete");
     const double h = 0.005;
     const Body body = test::boxBody(20, 20, 20, h, concrete.densityKgM3);
-    const Lattice a = Lattice::fromBody(body, concrete, LatticeSupports(), 3), again = Lattice::fromBody(body, concrete, LatticeSupports(), 3),
-                  other = Lattice::fromBody(body, concrete, LatticeSupports(), 4);
+    LatticeSettings seed3, seed4;
+    seed3.seed = 3;
+    seed4.seed = 4;
+    const Lattice a = Lattice::fromBody(body, concrete, LatticeSupports(), seed3), again = Lattice::fromBody(body, concrete, LatticeSupports(), seed3),
+                  other = Lattice::fromBody(body, concrete, LatticeSupports(), seed4);
     double mean = 0, meanSquare = 0;
     size_t same = 0, differ = 0;
     for (size_t b = 0; b < a.bondCount(); ++b) {
-        const double s = a.bondHistory[b].strengthScale;
+        const double s = a.state.bondHistory[b].strengthScale;
         mean += s / a.bondCount();
         meanSquare += s * s / a.bondCount();
-        same += s == again.bondHistory[b].strengthScale;
-        differ += s != other.bondHistory[b].strengthScale;
+        same += s == again.state.bondHistory[b].strengthScale;
+        differ += s != other.state.bondHistory[b].strengthScale;
     }
     const double cov = std::sqrt(meanSquare - mean * mean) / mean, expected = concrete.strengthCoefficientOfVariation * varianceFunction(h, 0.016);
     std::printf("concrete bonds at h = %.3f m: mean strength scale %.3f, CoV %.3f (expected %.3f)\n", h, mean, cov, expected);

@@ -145,6 +145,14 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("grain_axis": "z"}}})").find("materials.stone.grain_axis: must be none for a material built of units"),
               std::string::npos);
+    // ... and values along it that a lattice can be calibrated to, against those across it
+    // (refused where the scene is read, not when a body enters the deformable phase).
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + pine + R"("along_grain_shear_modulus_Pa": 1e6}}})")
+                  .find("materials.pine.along_grain_shear_modulus_Pa: must be above half the shear modulus across the grain"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + pine + R"("along_grain_youngs_modulus_Pa": 1e6}}})")
+                  .find("materials.pine.along_grain_youngs_modulus_Pa: must be at least 4 nu E"),
+              std::string::npos);
     EXPECT_EQ(errorOf(defaultSceneJson()), "");
 }
 

@@ -24,10 +24,12 @@ namespace {
 struct WallStrip {
     double heightM = 1.0, thicknessM = 0.2, widthM = 0.1, voxelM = 0.025;
     /// Brick masonry as one material with its bed joints' strength (units off): a cantilever
-    /// wall cracks in its base bed joint, and the units' stronger inside plays no part.
+    /// wall cracks in its base bed joint, and the units' stronger inside plays no part. Undamped,
+    /// as the single degree of freedom it is checked against.
     Material material = [] {
         Material m = findMaterialPreset("brick-masonry");
         m.unitLengthM = 0.0;
+        m.dampingRatio = 0.0;
         return m;
     }();
     double areaM2() const { return widthM * heightM; }
@@ -146,7 +148,7 @@ LatticeResponse loadWall(const WallStrip& wall, double peakPa, double durationS,
     LatticeResponse r;
     r.peakFailureIndex = worst.peakFailureIndex;
     r.damaged = worst.damaged;
-    r.worstBondHeightM = bond.axis == 2 ? 0.5 * (lattice.positionM[bond.low].z() + lattice.positionM[bond.high].z()) : lattice.positionM[bond.low].z();
+    r.worstBondHeightM = bond.axis == 2 ? 0.5 * (lattice.state.positionM[bond.low].z() + lattice.state.positionM[bond.high].z()) : lattice.state.positionM[bond.low].z();
     return r;
 }
 

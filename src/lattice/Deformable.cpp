@@ -57,7 +57,7 @@ void setMotionsFromFit(const std::vector<Body*>& bodies, const RigidFit& fit, co
 uint32_t particleOfVoxel(const Lattice& lattice, const openvdb::Coord& voxel)
 {
     const int32_t p = lattice.particleAt(particleCell(voxel, lattice.blocks));
-    if (p < 0) throw std::logic_error("a voxel outside its body's lattice");
+    SPALL_CHECK(p >= 0);  // every voxel of the body has a particle
     return uint32_t(p);
 }
 
@@ -105,14 +105,7 @@ double rigidKineticEnergyJ(const Lattice& lattice, const std::vector<uint32_t>& 
 DeformableBody latticeInBlocks(const Body& body, const VoxelBlocks& blocks, const Material& material, const LatticeSettings& settings,
                                const LatticeSupports& supports, double timeS)
 {
-    DeformableBody d{body.id,
-                     blocks.voxels > 1 ? Lattice::fromBody(coarsenedBody(body, blocks), material, supports, settings.seed)
-                                       : Lattice::fromBody(body, material, supports, settings.seed),
-                     timeS, timeS, {}, 0.0, {}};
-    d.lattice.blocks = blocks;
-    d.lattice.bulkViscosity = settings.bulkViscosity;
-    d.lattice.damageLaw = settings.damageLaw;
-    d.lattice.dampingRatio = material.dampingRatio;
+    DeformableBody d{body.id, Lattice::fromBody(body, material, supports, settings, blocks), timeS, timeS, {}, 0.0, {}};
     // Faces come in leaf order, a voxel's together: a particle is looked up once per voxel.
     d.particleOfFace.reserve(body.exposedFaces.size());
     for (size_t f = 0; f < body.exposedFaces.size(); ++f)
@@ -148,8 +141,8 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
     Lattice& to = fresh.lattice;
     Lattice& from = saved.lattice;
     const size_t n = to.particleCount(), bonds = to.bondCount();
-    if (from.positionM.size() != n || from.velocityMS.size() != n || from.angularVelocityRadS.size() != n || from.orientation.size() != n ||
-        from.bondHistory.size() != bonds || from.bondForceN.size() != n || from.bondMomentNm.size() != n ||
+    if (from.state.positionM.size() != n || from.state.velocityMS.size() != n || from.state.angularVelocityRadS.size() != n || from.state.orientation.size() != n ||
+        from.state.bondHistory.size() != bonds || from.state.bondForceN.size() != n || from.state.bondMomentNm.size() != n ||
         (!saved.pendingImpulseNs.empty() && saved.pendingImpulseNs.size() != n))
         throw InputError("saved state: the lattice of body " + std::to_string(body.id) + " does not fit its voxels and links");
     if (!(saved.pendingS >= 0.0 && saved.pendingS < to.stableTimeStepS()) || (saved.pendingS > 0.0) != !saved.pendingImpulseNs.empty())
@@ -157,14 +150,14 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
                          std::to_string(saved.pendingS) + " s that does not fit its gathered impulses");
     fresh.pendingS = saved.pendingS;
     fresh.pendingImpulseNs = std::move(saved.pendingImpulseNs);
-    to.positionM = std::move(from.positionM);
-    to.velocityMS = std::move(from.velocityMS);
-    to.angularVelocityRadS = std::move(from.angularVelocityRadS);
-    to.orientation = std::move(from.orientation);
-    to.bondHistory = std::move(from.bondHistory);
+    to.state.positionM = std::move(from.state.positionM);
+    to.state.velocityMS = std::move(from.state.velocityMS);
+    to.state.angularVelocityRadS = std::move(from.state.angularVelocityRadS);
+    to.state.orientation = std::move(from.state.orientation);
+    to.state.bondHistory = std::move(from.state.bondHistory);
     to.refreshForces();  // the volumetric strain; the forces as the step left them come next
-    to.bondForceN = std::move(from.bondForceN);
-    to.bondMomentNm = std::move(from.bondMomentNm);
+    to.state.bondForceN = std::move(from.state.bondForceN);
+    to.state.bondMomentNm = std::move(from.state.bondMomentNm);
     saved = std::move(fresh);
 }
 
@@ -176,7 +169,7 @@ void setExternalForces(DeformableBody& deformable, const Body& body, const std::
     const Eigen::Vector3d weight = body.mass.massKg / double(lattice.voxelParticleCount) * gravityMS2;
     for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = lattice.held[p] ? Eigen::Vector3d::Zero() : weight;
     if (faceForcesN.empty()) return;
-    if (deformable.particleOfFace.size() != faceForcesN.size()) throw std::logic_error("setExternalForces: not the lattice's body's faces");
+    SPALL_CHECK(deformable.particleOfFace.size() == faceForcesN.size());  // the lattice's own body's faces
     for (size_t f = 0; f < faceForcesN.size(); ++f) {
         const uint32_t p = deformable.particleOfFace[f];
         if (!lattice.held[p]) lattice.externalForceN[p] += faceForcesN[f];
@@ -227,8 +220,8 @@ RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& par
     const double cubeMoment = lattice.voxelSizeM * lattice.voxelSizeM / 12.0;
     Eigen::Vector3d restCentre = Eigen::Vector3d::Zero();
     for (const uint32_t p : particles) {
-        fit.centreM += lattice.positionM[p];
-        fit.velocityMS += lattice.velocityMS[p];
+        fit.centreM += lattice.state.positionM[p];
+        fit.velocityMS += lattice.state.velocityMS[p];
         restCentre += restPlaceM(lattice, p);
     }
     fit.centreM /= n;
@@ -241,10 +234,10 @@ RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& par
     // per axis, times its orientation), so one particle or a row of them has a rotation as well.
     Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
     for (const uint32_t p : particles) {
-        const Eigen::Vector3d d = lattice.positionM[p] - fit.centreM;
-        covariance += d * (restPlaceM(lattice, p) - restCentre).transpose() + cubeMoment * lattice.orientation[p].toRotationMatrix();
-        fit.angularMomentumKgM2S += d.cross(m * (lattice.velocityMS[p] - fit.velocityMS)) + lattice.particleInertiaKgM2 * lattice.angularVelocityRadS[p];
-        fit.kineticEnergyJ += 0.5 * m * lattice.velocityMS[p].squaredNorm() + 0.5 * lattice.particleInertiaKgM2 * lattice.angularVelocityRadS[p].squaredNorm();
+        const Eigen::Vector3d d = lattice.state.positionM[p] - fit.centreM;
+        covariance += d * (restPlaceM(lattice, p) - restCentre).transpose() + cubeMoment * lattice.state.orientation[p].toRotationMatrix();
+        fit.angularMomentumKgM2S += d.cross(m * (lattice.state.velocityMS[p] - fit.velocityMS)) + lattice.particleInertiaKgM2 * lattice.state.angularVelocityRadS[p];
+        fit.kineticEnergyJ += 0.5 * m * lattice.state.velocityMS[p].squaredNorm() + 0.5 * lattice.particleInertiaKgM2 * lattice.state.angularVelocityRadS[p].squaredNorm();
     }
     const Eigen::JacobiSVD<Eigen::Matrix3d> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
     Eigen::Matrix3d flip = Eigen::Matrix3d::Identity();
@@ -269,7 +262,7 @@ void addRigidMomentum(Lattice& lattice, const Eigen::Vector3d& linearKgMS, const
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
         if (lattice.held[p]) continue;
         massKg += m;
-        centre += m * lattice.positionM[p];
+        centre += m * lattice.state.positionM[p];
     }
     if (massKg == 0.0) return;
     centre /= massKg;
@@ -277,7 +270,7 @@ void addRigidMomentum(Lattice& lattice, const Eigen::Vector3d& linearKgMS, const
     Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
         if (lattice.held[p]) continue;
-        const Eigen::Vector3d r = lattice.positionM[p] - centre;
+        const Eigen::Vector3d r = lattice.state.positionM[p] - centre;
         inertia += m * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose()) + lattice.particleInertiaKgM2 * Eigen::Matrix3d::Identity();
     }
     // L about the origin = c × P + I ω about the centre, for the rigid field's increment.
@@ -285,8 +278,8 @@ void addRigidMomentum(Lattice& lattice, const Eigen::Vector3d& linearKgMS, const
     const Eigen::Vector3d dw = inertia.ldlt().solve(angularAboutOriginKgM2S - centre.cross(linearKgMS));
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
         if (lattice.held[p]) continue;
-        lattice.velocityMS[p] += dv + dw.cross(lattice.positionM[p] - centre);
-        lattice.angularVelocityRadS[p] += dw;
+        lattice.state.velocityMS[p] += dv + dw.cross(lattice.state.positionM[p] - centre);
+        lattice.state.angularVelocityRadS[p] += dw;
     }
 }
 
@@ -351,16 +344,16 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
     for (size_t p = 0; p < to.particleCount(); ++p) {
         const int32_t q = counterpart(p);
         if (q < 0) continue;
-        to.positionM[p] = from.positionM[size_t(q)];
-        to.velocityMS[p] = from.velocityMS[size_t(q)];
-        to.angularVelocityRadS[p] = from.angularVelocityRadS[size_t(q)];
-        to.orientation[p] = from.orientation[size_t(q)];
+        to.state.positionM[p] = from.state.positionM[size_t(q)];
+        to.state.velocityMS[p] = from.state.velocityMS[size_t(q)];
+        to.state.angularVelocityRadS[p] = from.state.angularVelocityRadS[size_t(q)];
+        to.state.orientation[p] = from.state.orientation[size_t(q)];
     }
     for (size_t b = 0; b < to.bondCount(); ++b) {
         const int32_t low = counterpart(to.bonds[b].low), high = counterpart(to.bonds[b].high);
         if (low < 0 || high < 0) continue;
         const int32_t c = from.bondAcross(size_t(low), 2 * to.bonds[b].axis + 1);
-        if (c >= 0) to.bondHistory[b] = from.bondHistory[size_t(c)];
+        if (c >= 0) to.state.bondHistory[b] = from.state.bondHistory[size_t(c)];
     }
     // The forces of the part's own bonds; those of bonds to the pieces that left (broken, in
     // contact at most) are gone with them.

@@ -70,7 +70,7 @@ void Lattice::scatterStrengths(const Material& material, uint64_t seed)
         const openvdb::Coord lo = voxel[bonds[b].low];
         Eigen::Vector3d mid = Eigen::Vector3d(lo.x(), lo.y(), lo.z()) * h;
         mid[bonds[b].axis] += 0.5 * h;
-        bondHistory[b].strengthScale = std::exp(sigma * field.at(mid) - 0.5 * sigma * sigma);
+        state.bondHistory[b].strengthScale = std::exp(sigma * field.at(mid) - 0.5 * sigma * sigma);
     });
 }
 
@@ -85,14 +85,14 @@ double Lattice::stableTimeStepS() const
 
 BondStrain Lattice::strainOf(const LatticeBond& bond) const
 {
-    const Eigen::Quaterniond& qa = orientation[bond.low];
-    const Eigen::Quaterniond& qb = orientation[bond.high];
+    const Eigen::Quaterniond& qa = state.orientation[bond.low];
+    const Eigen::Quaterniond& qb = state.orientation[bond.high];
     BondStrain s;
     if (bond.pinned) {
         // A pin measures its voxel's centre in the held point's frame, across its axis only: the
         // voxel may turn on it and slide toward or away from the support (glazing's clearance).
         s.frame = rotationMatrixOf(held[bond.low] ? qa : qb);
-        s.displacementM = s.frame.transpose() * (positionM[bond.high] - positionM[bond.low]);
+        s.displacementM = s.frame.transpose() * (state.positionM[bond.high] - state.positionM[bond.low]);
         s.displacementM[bond.axis] = 0.0;
         return s;
     }
@@ -101,7 +101,7 @@ BondStrain Lattice::strainOf(const LatticeBond& bond) const
     Eigen::Quaterniond half;
     half.coeffs() = qa.coeffs() + sameHemisphere * qb.coeffs();
     s.frame = rotationMatrixOf(half);
-    s.displacementM = s.frame.transpose() * (positionM[bond.high] - positionM[bond.low]);
+    s.displacementM = s.frame.transpose() * (state.positionM[bond.high] - state.positionM[bond.low]);
     s.displacementM[bond.axis] -= voxelSizeM;
     s.rotationRad = s.frame.transpose() * rotationVector(qb * qa.conjugate());
     return s;
@@ -142,15 +142,15 @@ void Lattice::computeVolumetricStrain()
 
 double Lattice::bondDamage(size_t b) const
 {
-    return damageLaw == LatticeDamageLaw::DavisonStevens ? bondHistory[b].rateDamage : softeningDamage(b);
+    return damageLaw == LatticeDamageLaw::DavisonStevens ? state.bondHistory[b].rateDamage : softeningDamage(b);
 }
 
 double Lattice::softeningDamage(size_t b) const
 {
-    const double scale = bondHistory[b].strengthScale;
+    const double scale = state.bondHistory[b].strengthScale;
     const LatticeStiffness::Strength& strength = stiffness.strength[bonds[b].strengthClass];
     const double u0 = scale * strength.peakStretchM, uf = strength.zeroTractionStretchM / scale;
-    const double kappa = bondHistory[b].damageDriverM;
+    const double kappa = state.bondHistory[b].damageDriverM;
     if (kappa <= u0) return 0.0;
     // A bond too large to soften breaks at its peak, whatever its strength scale.
     if (kappa >= uf || snapsAtPeak(b)) return 1.0;
@@ -171,10 +171,10 @@ uint8_t Lattice::measureBond(size_t b, double dtS, bool growDamage)
     const BondStrain s = strainOf(bond);
     const int a = bond.axis;
     BondForceTerms& terms = mBondTerms[b];
-    terms.armM = positionM[bond.high] - positionM[bond.low];
+    terms.armM = state.positionM[bond.high] - state.positionM[bond.low];
     const double lengthM = terms.armM.norm();
     const Eigen::Vector3d along = terms.armM * (1.0 / lengthM);
-    const double openingRateMS = (velocityMS[bond.high] - velocityMS[bond.low]).dot(along);
+    const double openingRateMS = (state.velocityMS[bond.high] - state.velocityMS[bond.low]).dot(along);
     const double damageBefore = bondDamage(b);
     double damage = damageBefore;
     if (growDamage && growBondDamage(b, equivalentStretchM(b, s, lengthM, damage), std::abs(openingRateMS) / voxelSizeM, dtS))
@@ -236,14 +236,14 @@ void Lattice::gatherBondForces(size_t p)
             moment += terms.pairMomentNm + terms.bendingMomentNm;
         }
     }
-    bondForceN[p] = force;
-    bondMomentNm[p] = moment;
+    state.bondForceN[p] = force;
+    state.bondMomentNm[p] = moment;
 }
 
 double Lattice::equivalentStretchM(size_t b) const
 {
     const LatticeBond& bond = bonds[b];
-    return equivalentStretchM(b, strainOf(bond), (positionM[bond.high] - positionM[bond.low]).norm(), bondDamage(b));
+    return equivalentStretchM(b, strainOf(bond), (state.positionM[bond.high] - state.positionM[bond.low]).norm(), bondDamage(b));
 }
 
 Lattice::FailureTerms Lattice::failureTerms(int strengthClass, int axis) const
@@ -301,7 +301,7 @@ double Lattice::equivalentStretchM(size_t b, const BondStrain& strain, double le
 
 bool Lattice::growBondDamage(size_t b, double equivalentStretchNowM, double strainRatePerS, double dtS)
 {
-    BondHistory& history = bondHistory[b];
+    BondHistory& history = state.bondHistory[b];
     const double increaseM = equivalentStretchNowM - history.maxEquivalentStretchM;
     if (increaseM > 0.0) {
         history.maxEquivalentStretchM += increaseM;
@@ -317,7 +317,7 @@ bool Lattice::growBondDamage(size_t b, double equivalentStretchNowM, double stra
 
 double Lattice::rateDamageAfter(size_t b, double equivalentStretchNowM, double dtS) const
 {
-    const BondHistory& history = bondHistory[b];
+    const BondHistory& history = state.bondHistory[b];
     const double onLine = softeningDamage(b);
     // Past the softening line's end the crack is open: broken, as in the crack band.
     if (onLine >= 1.0) return 1.0;
@@ -340,8 +340,8 @@ void Lattice::refreshForces()
     updateFailureTerms();
     mBondTerms.resize(bondCount());
     mSnapped.assign(bondCount(), 0);
-    bondForceN.resize(particleCount());
-    bondMomentNm.resize(particleCount());
+    state.bondForceN.resize(particleCount());
+    state.bondMomentNm.resize(particleCount());
     forEach(bondCount(), [&](size_t b) { measureBond(b, 0.0, false); });
     computeVolumetricStrain();
     forEach(bondCount(), [&](size_t b) { completeBondForce(b); });
@@ -358,14 +358,14 @@ void Lattice::step(double dtS)
     // the same about every axis, so ω changes by the moment alone (no gyroscopic term).
     auto kick = [&](size_t p) {
         if (held[p]) return;
-        velocityMS[p] += halfDt * invMass * (bondForceN[p] + externalForceN[p]);
-        angularVelocityRadS[p] += halfDt * invInertia * bondMomentNm[p];
+        state.velocityMS[p] += halfDt * invMass * (state.bondForceN[p] + externalForceN[p]);
+        state.angularVelocityRadS[p] += halfDt * invInertia * state.bondMomentNm[p];
     };
     updateFailureTerms();
     forEach(particleCount(), [&](size_t p) {
         kick(p);
-        positionM[p] += dtS * velocityMS[p];
-        orientation[p] = (rotationOf(dtS * angularVelocityRadS[p]) * orientation[p]).normalized();
+        state.positionM[p] += dtS * state.velocityMS[p];
+        state.orientation[p] = (rotationOf(dtS * state.angularVelocityRadS[p]) * state.orientation[p]).normalized();
         if (held[p]) return;
         if (ground.enabled && !bondedToGround(p)) keepAboveGround(p);
         if (!mKeptOut.empty()) keepOutOfColliders(p);
@@ -410,26 +410,26 @@ void Lattice::keepOutOf(const std::vector<ObstacleBox>& boxes)
 void Lattice::keepOutOfColliders(size_t p)
 {
     for (const KeptOut& box : mKeptOut) {
-        if (!box.boundsM.contains(positionM[p])) continue;
-        const Eigen::Vector3d local = box.toBox * (positionM[p] - box.centreM);
+        if (!box.boundsM.contains(state.positionM[p])) continue;
+        const Eigen::Vector3d local = box.toBox * (state.positionM[p] - box.centreM);
         const Eigen::Vector3d depth = box.reachM - local.cwiseAbs();
         if ((depth.array() <= 0.0).any()) continue;
         int axis = 0;
         depth.minCoeff(&axis);
         const Eigen::Vector3d outward = box.toBox.row(axis).transpose() * (local[axis] >= 0.0 ? 1.0 : -1.0);
-        positionM[p] += depth[axis] * outward;
-        const double into = outward.dot(velocityMS[p]);
-        if (into < 0.0) velocityMS[p] -= into * outward;
+        state.positionM[p] += depth[axis] * outward;
+        const double into = outward.dot(state.velocityMS[p]);
+        if (into < 0.0) state.velocityMS[p] -= into * outward;
     }
 }
 
 void Lattice::keepAboveGround(size_t p)
 {
-    const double depth = ground.offsetM + 0.5 * voxelSizeM - ground.normal.dot(positionM[p]);
+    const double depth = ground.offsetM + 0.5 * voxelSizeM - ground.normal.dot(state.positionM[p]);
     if (depth <= 0.0) return;
-    positionM[p] += depth * ground.normal;
-    const double into = ground.normal.dot(velocityMS[p]);
-    if (into < 0.0) velocityMS[p] -= into * ground.normal;
+    state.positionM[p] += depth * ground.normal;
+    const double into = ground.normal.dot(state.velocityMS[p]);
+    if (into < 0.0) state.velocityMS[p] -= into * ground.normal;
 }
 
 }  // namespace spall

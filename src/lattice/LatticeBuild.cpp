@@ -1,11 +1,12 @@
 // Building a lattice from a body: the bonds' calibration against the material's elasticity,
 // particles and bonds from the body's voxels and links, and its anchors' support points.
 #include <spall/lattice/Lattice.h>
+
+#include <spall/core/Error.h>
 #include <spall/loads/Exposure.h>
 
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 
 namespace spall {
 
@@ -26,10 +27,10 @@ std::array<double, 3> normalModuli(double acrossPa, double poissonRatio, double 
     const double across = acrossPa / (1.0 + poissonRatio);
     const double kappa = poissonRatio * across / (1.0 + poissonRatio);
     const double discriminant = alongPa * alongPa - 4.0 * alongPa * kappa;
-    if (discriminant < 0.0) throw std::invalid_argument("calibrateLattice: E along the grain is too small against E and nu across it");
+    SPALL_CHECK(discriminant >= 0.0);  // validateMaterial: E along the grain large enough
     const double along = 0.5 * (alongPa + std::sqrt(discriminant));
     const double denominator = 1.0 - kappa * (1.0 / along + 2.0 / across);
-    if (!(denominator > 0.0)) throw std::invalid_argument("calibrateLattice: no lattice has these E and nu");
+    SPALL_CHECK(denominator > 0.0);  // validateMaterial: a lattice has these E and nu
     return {across, along, kappa / denominator};
 }
 
@@ -37,18 +38,17 @@ std::array<double, 3> normalModuli(double acrossPa, double poissonRatio, double 
 
 LatticeStiffness calibrateLattice(const Material& m, double h)
 {
-    if (!(m.youngsModulusPa > 0.0) || !(m.poissonRatio > -1.0 && m.poissonRatio < 0.5) || !(m.densityKgM3 > 0.0) || !(h > 0.0))
-        throw std::invalid_argument("calibrateLattice: E, density and h must be positive and -1 < nu < 0.5");
+    // The material's fields were checked where the scene was read (validateMaterial).
+    SPALL_CHECK(m.youngsModulusPa > 0.0 && m.poissonRatio > -1.0 && m.poissonRatio < 0.5 && m.densityKgM3 > 0.0 && h > 0.0);
     const bool grained = hasGrain(m);
-    if (grained && (!(m.alongGrainYoungsModulusPa > 0.0) || !(m.alongGrainShearModulusPa > 0.0)))
-        throw std::invalid_argument("calibrateLattice: a grain needs E and G along it");
+    SPALL_CHECK(!grained || (m.alongGrainYoungsModulusPa > 0.0 && m.alongGrainShearModulusPa > 0.0));
     const double eAcross = m.youngsModulusPa, eAlong = grained ? m.alongGrainYoungsModulusPa : eAcross;
     const double gAcross = eAcross / (2.0 * (1.0 + m.poissonRatio)), gAlong = grained ? m.alongGrainShearModulusPa : gAcross;
     const int grainAxis = grainAxisIndex(m);
     const auto [dAcross, dAlong, lambda] = normalModuli(eAcross, m.poissonRatio, eAlong);
     // Shear: C44 across the grain is (2 s_T) / 4h = G_T, along it (s_L + s_T) / 4h = G_L.
     const double sAcross = 2.0 * gAcross * h, sAlong = (4.0 * gAlong - 2.0 * gAcross) * h;
-    if (!(sAlong > 0.0)) throw std::invalid_argument("calibrateLattice: G along the grain must exceed half of G across it");
+    SPALL_CHECK(sAlong > 0.0);  // validateMaterial: G along the grain above half of G across it
     LatticeStiffness k;
     k.lameLambdaPa = lambda;
     for (int axis = 0; axis < 3; ++axis) {
@@ -60,8 +60,7 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
         // Twisting about the axis shears the two planes that hold it.
         k.twistingNmPerRad[axis] = kSquareTorsionConstant * (along ? gAlong : 0.5 * (gAlong + gAcross)) * h * h * h;
     }
-    if (!(m.tensileStrengthPa > 0.0) || !(m.fractureEnergyJPerM2 > 0.0) || !(m.shearStrengthPa > 0.0) || !(m.frictionCoefficient >= 0.0))
-        throw std::invalid_argument("calibrateLattice: strengths and fracture energy must be positive and the friction coefficient not negative");
+    SPALL_CHECK(m.tensileStrengthPa > 0.0 && m.fractureEnergyJPerM2 > 0.0 && m.shearStrengthPa > 0.0 && m.frictionCoefficient >= 0.0);
     const auto strengthOf = [&](double youngsPa, double tensilePa, double fractureEnergyJPerM2, double shearPa, double friction) {
         LatticeStiffness::Strength s;
         s.youngsModulusPa = youngsPa;
@@ -88,9 +87,16 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
     return k;
 }
 
-Lattice Lattice::fromBody(const Body& body, const Material& material, const LatticeSupports& supports, uint64_t strengthSeed)
+Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const LatticeSupports& supports, const LatticeSettings& settings,
+                          const VoxelBlocks& blocks)
 {
+    const Body coarse = blocks.voxels > 1 ? coarsenedBody(wholeBody, blocks) : Body();
+    const Body& body = blocks.voxels > 1 ? coarse : wholeBody;
     Lattice lattice;
+    lattice.blocks = blocks;
+    lattice.bulkViscosity = settings.bulkViscosity;
+    lattice.damageLaw = settings.damageLaw;
+    lattice.dampingRatio = material.dampingRatio;
     const double h = body.voxelSizeM;
     lattice.voxelSizeM = h;
     lattice.particleMassKg = material.densityKgM3 * h * h * h;
@@ -103,14 +109,14 @@ Lattice Lattice::fromBody(const Body& body, const Material& material, const Latt
     // voxels reach lower than their voxels): the contact plane is then where its cubes rest, so
     // a particle whose ground bond breaks is not thrown up onto the plane.
     if (lattice.ground.enabled)
-        for (const Eigen::Vector3d& x : lattice.positionM)
+        for (const Eigen::Vector3d& x : lattice.state.positionM)
             lattice.ground.offsetM = std::min(lattice.ground.offsetM, lattice.ground.normal.dot(x) - 0.5 * h);
     lattice.addLinkBonds(body);
     lattice.addSupportBonds(body, supports);
     if (hasUnits(material)) lattice.classifyUnitBonds(material);
     if (hasGrain(material)) lattice.classifyGrainBonds(material);
-    lattice.bondHistory.assign(lattice.bonds.size(), BondHistory());
-    if (material.strengthCoefficientOfVariation > 0.0) lattice.scatterStrengths(material, strengthSeed);
+    lattice.state.bondHistory.assign(lattice.bonds.size(), BondHistory());
+    if (material.strengthCoefficientOfVariation > 0.0) lattice.scatterStrengths(material, settings.seed);
     const LatticeStiffness& k = lattice.stiffness;
     const double stiffestPa = *std::max_element(k.normalModulusPa.begin(), k.normalModulusPa.end());
     const double pWaveSpeed = std::sqrt((k.lameLambdaPa + stiffestPa) / material.densityKgM3);
@@ -125,10 +131,10 @@ void Lattice::addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& plac
 {
     mParticleIndex->setValueOn(ijk, int32_t(voxel.size()));
     voxel.push_back(ijk);
-    positionM.push_back(placeM);
-    velocityMS.push_back(isHeld ? Eigen::Vector3d::Zero() : velocity);
-    angularVelocityRadS.push_back(isHeld ? Eigen::Vector3d::Zero() : spin);
-    orientation.push_back(q);
+    state.positionM.push_back(placeM);
+    state.velocityMS.push_back(isHeld ? Eigen::Vector3d::Zero() : velocity);
+    state.angularVelocityRadS.push_back(isHeld ? Eigen::Vector3d::Zero() : spin);
+    state.orientation.push_back(q);
     held.push_back(isHeld ? 1 : 0);
     externalForceN.push_back(Eigen::Vector3d::Zero());
     mBondAcross.push_back({-1, -1, -1, -1, -1, -1});
@@ -181,7 +187,7 @@ void Lattice::addSupportBonds(const Body& body, const LatticeSupports& supports)
         // material, joined by a bond of the material's own stiffness and strength.
         const int axis = faceAxis(face);
         const uint32_t supportPoint = uint32_t(particleCount());
-        addParticle(voxel[p] + faceOffset(face), positionM[p] + body.motion.orientation * (voxelSizeM * faceNormal(face)),
+        addParticle(voxel[p] + faceOffset(face), state.positionM[p] + body.motion.orientation * (voxelSizeM * faceNormal(face)),
                     Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), body.motion.orientation, true);
         held[p] = 0;
         if (face & 1) addBond(p, supportPoint, axis);

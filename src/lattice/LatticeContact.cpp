@@ -49,7 +49,7 @@ void Lattice::listContactCandidates()
     std::vector<std::array<int64_t, 3>> cell(n);
     std::vector<std::pair<uint64_t, uint32_t>> byCell(n);
     for (size_t p = 0; p < n; ++p) {
-        for (int axis = 0; axis < 3; ++axis) cell[p][size_t(axis)] = static_cast<int64_t>(std::floor(positionM[p][axis] / cellM));
+        for (int axis = 0; axis < 3; ++axis) cell[p][size_t(axis)] = static_cast<int64_t>(std::floor(state.positionM[p][axis] / cellM));
         byCell[p] = {cellKey(cell[p][0], cell[p][1], cell[p][2]), uint32_t(p)};
     }
     std::sort(byCell.begin(), byCell.end());
@@ -66,7 +66,7 @@ void Lattice::listContactCandidates()
                         auto it = std::lower_bound(byCell.begin(), byCell.end(), std::make_pair(key, p + 1));
                         for (; it != byCell.end() && it->first == key; ++it) {
                             const uint32_t q = it->second;
-                            if ((held[p] && held[q]) || (positionM[q] - positionM[p]).squaredNorm() >= reach2 || shareABond(p, q)) continue;
+                            if ((held[p] && held[q]) || (state.positionM[q] - state.positionM[p]).squaredNorm() >= reach2 || shareABond(p, q)) continue;
                             found.emplace_back(p, q);
                         }
                     }
@@ -74,14 +74,14 @@ void Lattice::listContactCandidates()
     });
     mContactCandidates.clear();
     for (const auto& found : perBlock) mContactCandidates.insert(mContactCandidates.end(), found.begin(), found.end());
-    mListedAtM = positionM;
+    mListedAtM = state.positionM;
 }
 
 void Lattice::updateContactCandidates()
 {
     const double limit = 0.5 * kContactSkin * voxelSizeM, limit2 = limit * limit;
     bool moved = mListedAtM.size() != particleCount();
-    for (size_t p = 0; p < particleCount() && !moved; ++p) moved = (positionM[p] - mListedAtM[p]).squaredNorm() > limit2;
+    for (size_t p = 0; p < particleCount() && !moved; ++p) moved = (state.positionM[p] - mListedAtM[p]).squaredNorm() > limit2;
     if (moved) listContactCandidates();
 }
 
@@ -91,12 +91,12 @@ void Lattice::addContactForces()
         kContactStiffnessFraction * *std::min_element(stiffness.normalNPerM.begin(), stiffness.normalNPerM.end());
     // In the sorted list's order, so the sums do not depend on when it was last made.
     for (const auto& [p, q] : mContactCandidates) {
-        const Eigen::Vector3d apartM = positionM[q] - positionM[p];
+        const Eigen::Vector3d apartM = state.positionM[q] - state.positionM[p];
         const double distanceM = apartM.norm();
         if (distanceM >= voxelSizeM || distanceM <= 0.0) continue;
         const Eigen::Vector3d onQ = (stiffnessNPerM * (voxelSizeM - distanceM) / distanceM) * apartM;
-        bondForceN[q] += onQ;
-        bondForceN[p] -= onQ;
+        state.bondForceN[q] += onQ;
+        state.bondForceN[p] -= onQ;
     }
 }
 

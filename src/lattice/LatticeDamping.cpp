@@ -166,13 +166,13 @@ void Lattice::dampVibration(double dtS)
             PieceSums& s = chunkSums[c];
             for (uint32_t i = chunk.begin; i < chunk.end; ++i) {
                 const uint32_t p = mPieceParticles[i];
-                const Eigen::Vector3d r = positionM[p] - positionM[piece.firstParticle];
+                const Eigen::Vector3d r = state.positionM[p] - state.positionM[piece.firstParticle];
                 s.massKg += particleMassKg;
                 s.particles += 1.0;
-                s.momentumKgMS += particleMassKg * velocityMS[p];
+                s.momentumKgMS += particleMassKg * state.velocityMS[p];
                 s.firstMomentKgM += particleMassKg * r;
                 s.secondMomentKgM2 += particleMassKg * r * r.transpose();
-                s.angularMomentumKgM2S += r.cross(particleMassKg * velocityMS[p]) + particleInertiaKgM2 * angularVelocityRadS[p];
+                s.angularMomentumKgM2S += r.cross(particleMassKg * state.velocityMS[p]) + particleInertiaKgM2 * state.angularVelocityRadS[p];
             }
         },
         kChunksPerTask);
@@ -189,13 +189,13 @@ void Lattice::dampVibration(double dtS)
             const DampedPiece& piece = mDampedPieces[chunk.piece];
             const PieceMotion& m = motion[chunk.piece];
             const double keep = std::exp(-piece.decayPerS * dtS);
-            const Eigen::Vector3d originM = positionM[piece.firstParticle];
+            const Eigen::Vector3d originM = state.positionM[piece.firstParticle];
             for (uint32_t i = chunk.begin; i < chunk.end; ++i) {
                 const uint32_t p = mPieceParticles[i];
                 if (held[p]) continue;
-                const Eigen::Vector3d rigidVelocity = m.velocityMS + m.spinRadS.cross(positionM[p] - originM - m.centreM);
-                velocityMS[p] = rigidVelocity + keep * (velocityMS[p] - rigidVelocity);
-                angularVelocityRadS[p] = m.spinRadS + keep * (angularVelocityRadS[p] - m.spinRadS);
+                const Eigen::Vector3d rigidVelocity = m.velocityMS + m.spinRadS.cross(state.positionM[p] - originM - m.centreM);
+                state.velocityMS[p] = rigidVelocity + keep * (state.velocityMS[p] - rigidVelocity);
+                state.angularVelocityRadS[p] = m.spinRadS + keep * (state.angularVelocityRadS[p] - m.spinRadS);
             }
         },
         kChunksPerTask);

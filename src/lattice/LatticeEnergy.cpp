@@ -64,32 +64,32 @@ void Lattice::releaseSnapEnergy(size_t b, double volumetricJ)
     // paid it): what it held on its failure surface is the energy, quadratic in a strain the
     // failure index is linear in, over the index squared (rate-free strength).
     const LatticeStiffness::Strength& strength = stiffness.strength[bond.strengthClass];
-    const double index = equivalentStretchM(b, strain, lengthM, 0.0) / (bondHistory[b].strengthScale * strength.peakStretchM);
+    const double index = equivalentStretchM(b, strain, lengthM, 0.0) / (state.bondHistory[b].strengthScale * strength.peakStretchM);
     const double releasedJ = lostJ / std::max(1.0, index * index) - strength.fractureEnergyJPerM2 * voxelSizeM * voxelSizeM;
     if (!(releasedJ > 0.0)) return;
     // Kinetic energy added by dv apart, shared between the free ends (a held end takes none):
     // E = m (dv w + dv² / 2) for one free end and m (dv w / 2 + dv² / 4) for two (each moving
     // dv / 2), w the free ends' opening rate: dv = -w + sqrt(w² + 2 n E / m), n free ends.
     const Eigen::Vector3d along = mBondTerms[b].armM / lengthM;
-    const auto freeVelocity = [&](uint32_t p) { return held[p] ? Eigen::Vector3d::Zero() : velocityMS[p]; };
+    const auto freeVelocity = [&](uint32_t p) { return held[p] ? Eigen::Vector3d::Zero() : state.velocityMS[p]; };
     const double w = (freeVelocity(bond.high) - freeVelocity(bond.low)).dot(along);
     const double dv = -w + std::sqrt(w * w + 2.0 * freeEnds * releasedJ / particleMassKg);
-    if (!held[bond.high]) velocityMS[bond.high] += (dv / freeEnds) * along;
-    if (!held[bond.low]) velocityMS[bond.low] -= (dv / freeEnds) * along;
+    if (!held[bond.high]) state.velocityMS[bond.high] += (dv / freeEnds) * along;
+    if (!held[bond.low]) state.velocityMS[bond.low] -= (dv / freeEnds) * along;
 }
 
 double Lattice::kineticEnergyJ() const
 {
     double sum = 0.0;
     for (size_t p = 0; p < particleCount(); ++p)
-        sum += 0.5 * particleMassKg * velocityMS[p].squaredNorm() + 0.5 * particleInertiaKgM2 * angularVelocityRadS[p].squaredNorm();
+        sum += 0.5 * particleMassKg * state.velocityMS[p].squaredNorm() + 0.5 * particleInertiaKgM2 * state.angularVelocityRadS[p].squaredNorm();
     return sum;
 }
 
 double Lattice::bondStrainEnergyJ(size_t b) const
 {
     const double intact = 1.0 - bondDamage(b);
-    const double overlapM = bonds[b].pinned ? 0.0 : std::max(0.0, voxelSizeM - (positionM[bonds[b].high] - positionM[bonds[b].low]).norm());
+    const double overlapM = bonds[b].pinned ? 0.0 : std::max(0.0, voxelSizeM - (state.positionM[bonds[b].high] - state.positionM[bonds[b].low]).norm());
     return elasticEnergyJ(b, strainOf(bonds[b]), intact) + 0.5 * (1.0 - intact) * stiffness.normalNPerM[size_t(bonds[b].axis)] * overlapM * overlapM;
 }
 
@@ -109,7 +109,7 @@ double Lattice::strainEnergyJ() const
 Eigen::Vector3d Lattice::linearMomentum() const
 {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (const Eigen::Vector3d& v : velocityMS) sum += particleMassKg * v;
+    for (const Eigen::Vector3d& v : state.velocityMS) sum += particleMassKg * v;
     return sum;
 }
 
@@ -117,7 +117,7 @@ Eigen::Vector3d Lattice::angularMomentumAboutOrigin() const
 {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (size_t p = 0; p < particleCount(); ++p)
-        sum += positionM[p].cross(particleMassKg * velocityMS[p]) + particleInertiaKgM2 * angularVelocityRadS[p];
+        sum += state.positionM[p].cross(particleMassKg * state.velocityMS[p]) + particleInertiaKgM2 * state.angularVelocityRadS[p];
     return sum;
 }
 

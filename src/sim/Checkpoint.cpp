@@ -123,15 +123,15 @@ void transferDeformable(Archive& a, D& d)
     auto& lattice = d.lattice;
     a.pod(lattice.blocks.voxels, "particle voxels");
     for (int axis = 0; axis < 3; ++axis) a.pod(lattice.blocks.origin[axis], "particle blocks' origin");
-    a.sequence(lattice.positionM, "particle positions", [&](auto& v) { a.vec(v, "particle position"); });
-    a.sequence(lattice.velocityMS, "particle velocities", [&](auto& v) { a.vec(v, "particle velocity"); });
-    a.sequence(lattice.angularVelocityRadS, "particle spins", [&](auto& v) { a.vec(v, "particle spin"); });
-    a.sequence(lattice.orientation, "particle orientations", [&](auto& q) { a.doubles(q.coeffs().data(), 4, "particle orientation"); });
-    a.sequence(lattice.bondForceN, "particle bond forces", [&](auto& v) { a.vec(v, "particle bond force"); });
-    a.sequence(lattice.bondMomentNm, "particle bond moments", [&](auto& v) { a.vec(v, "particle bond moment"); });
+    a.sequence(lattice.state.positionM, "particle positions", [&](auto& v) { a.vec(v, "particle position"); });
+    a.sequence(lattice.state.velocityMS, "particle velocities", [&](auto& v) { a.vec(v, "particle velocity"); });
+    a.sequence(lattice.state.angularVelocityRadS, "particle spins", [&](auto& v) { a.vec(v, "particle spin"); });
+    a.sequence(lattice.state.orientation, "particle orientations", [&](auto& q) { a.doubles(q.coeffs().data(), 4, "particle orientation"); });
+    a.sequence(lattice.state.bondForceN, "particle bond forces", [&](auto& v) { a.vec(v, "particle bond force"); });
+    a.sequence(lattice.state.bondMomentNm, "particle bond moments", [&](auto& v) { a.vec(v, "particle bond moment"); });
     a.pod(d.pendingS, "deformable gathered time");
     a.sequence(d.pendingImpulseNs, "particle gathered impulses", [&](auto& v) { a.vec(v, "particle gathered impulse"); });
-    a.sequence(lattice.bondHistory, "bond histories", [&](auto& h) {
+    a.sequence(lattice.state.bondHistory, "bond histories", [&](auto& h) {
         a.pod(h.strengthScale, "bond strength");
         a.pod(h.maxEquivalentStretchM, "bond stretch");
         a.pod(h.damageDriverM, "bond damage driver");

@@ -6,24 +6,44 @@
 
 namespace spall {
 
-/// Bad user input (file, field or value); the message names the file, the field and the reason.
-class InputError : public std::runtime_error {
+/// What every error spall throws derives from: catch this to catch them all.
+class Error : public std::runtime_error {
 public:
     using std::runtime_error::runtime_error;
 };
 
-/// Reading or writing files failed.
-class IoError : public std::runtime_error {
+/// Bad user input (file, field or value); the message names the file, the field and the reason.
+class InputError : public Error {
 public:
-    using std::runtime_error::runtime_error;
+    using Error::Error;
+};
+
+/// Reading or writing files failed.
+class IoError : public Error {
+public:
+    using Error::Error;
 };
 
 /// The simulation reached a state no physics allows (a non-finite motion); the message names
 /// the body and the time.
-class SimulationError : public std::runtime_error {
+class SimulationError : public Error {
 public:
-    using std::runtime_error::runtime_error;
+    using Error::Error;
 };
+
+/// A broken invariant (SPALL_CHECK): a bug in spall, not in what it was given; the message names
+/// the condition and where it was checked.
+class InternalError : public Error {
+public:
+    using Error::Error;
+};
+
+/// Throws the InternalError of a failed SPALL_CHECK.
+[[noreturn]] inline void failCheck(const char* condition, const char* file, int line)
+{
+    throw InternalError(std::string(file) + ":" + std::to_string(line) + ": internal check failed: " + condition +
+                        " (a bug in spall; please report it with the scene)");
+}
 
 /// Cooperative cancellation and progress, shaped like OpenVDB's interrupter.
 struct Interrupter {
@@ -33,3 +53,15 @@ struct Interrupter {
 };
 
 }  // namespace spall
+
+/// An invariant the code relies on, checked in every build (pbrt-v4's CHECK): throws
+/// InternalError naming the condition when it does not hold. Input is checked where it is read,
+/// with InputError; this is for what no input can break.
+#define SPALL_CHECK(condition) ((condition) ? static_cast<void>(0) : ::spall::failCheck(#condition, __FILE__, __LINE__))
+/// The same, checked only in builds without NDEBUG (pbrt-v4's DCHECK): for checks too costly for
+/// a release build's inner loops.
+#ifdef NDEBUG
+#define SPALL_DCHECK(condition) static_cast<void>(0)
+#else
+#define SPALL_DCHECK(condition) SPALL_CHECK(condition)
+#endif

@@ -132,6 +132,20 @@ struct LatticeSupports {
     std::vector<uint8_t> pinned;
 };
 
+/// What a lattice carries from one step to the next, and all that a checkpoint saves of it:
+/// per particle (world frame) its motion and the forces velocity Verlet carries, per bond its
+/// history. The rest follows from its body (Lattice::fromBody) or is a step's scratch.
+struct LatticeState {
+    std::vector<Eigen::Vector3d> positionM, velocityMS, angularVelocityRadS;
+    std::vector<Eigen::Quaterniond> orientation;
+    /// The bonds' force and moment on each particle, with the contacts' between particles that
+    /// share no bond, as the last step left them (unit: N, N m): velocity Verlet's first half
+    /// kick of the next step uses them. They depend on the velocities half-way through that step
+    /// (the dashpots), so a checkpoint saves them.
+    std::vector<Eigen::Vector3d> bondForceN, bondMomentNm;
+    std::vector<BondHistory> bondHistory;
+};
+
 /// Particles (one per voxel, in the grid's leaf order) and bonds (one per intact link) as flat
 /// arrays. The caller sets externalForceN before a step (it acts through the step); step()
 /// integrates by velocity Verlet, symplectic, so with no damping the energy oscillates but does
@@ -144,11 +158,14 @@ public:
     /// it), across the face that looks most directly into the ground; else across its free face
     /// whose neighbouring cell lies deepest inside a support box. An anchored voxel next to
     /// neither is held.
-    /// `strengthSeed` draws the material's strength scatter (Material::strengthCoefficientOfVariation).
+    /// Its settings are taken here, once: the bulk viscosity, the damage law and the seed that
+    /// draws the strength scatter (Material::strengthCoefficientOfVariation) from `settings`, the
+    /// damping ratio from the material; with `blocks` of more than one voxel, a particle per block
+    /// (ParticleBlocks.h).
     static Lattice fromBody(const Body& body, const Material& material, const LatticeSupports& supports = LatticeSupports(),
-                            uint64_t strengthSeed = 1);
+                            const LatticeSettings& settings = LatticeSettings(), const VoxelBlocks& blocks = VoxelBlocks());
 
-    size_t particleCount() const { return positionM.size(); }
+    size_t particleCount() const { return state.positionM.size(); }
     /// The particle at a voxel (a support point at the cell beyond its voxel), or -1.
     int32_t particleAt(const openvdb::Coord& ijk) const { return mParticleIndex->getValue(ijk); }
     /// The bond across a face of particle p (LinkBits.h's Face order), or -1.
@@ -180,21 +197,15 @@ public:
     Eigen::Vector3d linearMomentum() const;
     Eigen::Vector3d angularMomentumAboutOrigin() const;
 
-    // State, world frame, one entry per particle.
     /// Particles [0, voxelParticleCount) are the body's voxels, in its leaf order; those after
     /// them are its anchors' support points (held).
     size_t voxelParticleCount = 0;
     std::vector<openvdb::Coord> voxel;  ///< the body's index of each particle (a support point: the cell beyond its voxel)
-    std::vector<Eigen::Vector3d> positionM, velocityMS, angularVelocityRadS, externalForceN;
-    std::vector<Eigen::Quaterniond> orientation;
-    /// The bonds' force and moment on each particle, with the contacts' between particles that
-    /// share no bond, as the last step left them (unit: N, N m):
-    /// velocity Verlet's first half kick of the next step uses them. They depend on the
-    /// velocities half-way through that step (the dashpots), so a checkpoint saves them.
-    std::vector<Eigen::Vector3d> bondForceN, bondMomentNm;
+    /// What acts on each particle through the next step besides its bonds (the caller's; unit: N).
+    std::vector<Eigen::Vector3d> externalForceN;
+    LatticeState state;
     std::vector<uint8_t> held;  ///< 1: fixed to the world (an anchored voxel)
     std::vector<LatticeBond> bonds;
-    std::vector<BondHistory> bondHistory;
     /// How close a bond is to failing, as a stretch: the normal stretch that would load it as
     /// much in pure tension, u0 × f with f its failure index (1 on the failure surface).
     /// Tension: f² = (stretch/u0)² + (τ/c)² (the tension cut-off joined to pure shear by an
@@ -219,13 +230,13 @@ public:
     /// LS-DYNA's linear term Q2, 0.06 by default there), softening with the bond as it opens (a
     /// crack carries no viscous stress). Without it a sharp front rings and a
     /// free face's reflection puts spurious tension a few voxels deep (docs/accuracy.md). 0 turns
-    /// it off.
-    double bulkViscosity = 0.1;
+    /// it off. Set by fromBody (LatticeSettings::bulkViscosity).
+    double bulkViscosity = 0.0;
     /// The material's damping ratio (Material::dampingRatio): after each step every piece's
     /// velocities about its rigid motion decay as mass-proportional damping of that ratio at the
-    /// piece's fundamental frequency would make them (dampVibration). 0 turns it off.
+    /// piece's fundamental frequency would make them (dampVibration). 0 turns it off. Set by fromBody.
     double dampingRatio = 0.0;
-    LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;
+    LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;  ///< set by fromBody (LatticeSettings::damageLaw)
     LatticeGround ground;
 
     /// The particles' edge (unit: m): the body's voxel's, or its blocks' (`blocks`).

@@ -140,8 +140,9 @@ private:
     void solveContactsWithLattices(const ContactSet& contacts, double dtS);
     /// Each body's index in mState.bodies, by id.
     std::unordered_map<int64_t, size_t> bodyIndexById() const;
-    /// The ground and the colliders, as the lattices' anchors are bonded to them.
-    LatticeSupports latticeSupports() const;
+    /// The static world (the ground and the colliders) as the loads stage casts shadows with it
+    /// and as the lattices' anchors are bonded to it, built once from the scene (SceneSetup.cpp).
+    void buildStaticWorldViews();
     /// Throws SimulationError naming the first body whose pose or velocity is not finite: an
     /// unstable integration must stop the run, not reach the output as a broken transform.
     void refuseNonFiniteMotion() const;
@@ -158,6 +159,8 @@ private:
 
     Scene mScene;
     std::unique_ptr<BlastField> mField;
+    LoadGeometry mLoadGeometry;
+    LatticeSupports mLatticeSupports;
     SimulationState mState;  ///< everything carried from step to step (what a checkpoint saves)
     std::function<void(const Simulation&, const StepRecord&)> mObserver;
     StepRecord mRecord;  ///< filled while a step runs, for the observer

@@ -1,0 +1,211 @@
+// Setting a simulation up: each object's mesh voxelised and placed, anchored to the ground or the
+// colliders, and checked (its size against the memory, no charge inside it); the blast field, and
+// the static world as the loads and the lattices read it, built once.
+#include <spall/sim/Simulation.h>
+
+#include <spall/core/Error.h>
+#include <spall/io/VdbIo.h>
+#include <spall/sim/MemoryBudget.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace spall {
+namespace {
+
+ObstacleBox obstacleOf(const StaticBox& box) { return {box.centreM, box.halfExtentM, box.orientation}; }
+
+/// Sets the anchor bit of voxels whose lowest point lies within a quarter voxel of the ground.
+void anchorToGround(Body& body, const GroundPlane& ground)
+{
+    for (auto it = body.grid->beginValueOn(); it; ++it)
+        if (body.voxelHeightAbovePlaneM(it.getCoord(), ground.normal, ground.offsetM) <= 0.25 * body.voxelSizeM) it.setValue(*it | kAnchorBit);
+}
+
+/// Sets the anchor bit of voxels with a free face within a quarter voxel of a collider: the
+/// centre of the cell beyond the face lies at least a quarter voxel inside the box.
+void anchorToColliders(Body& body, const std::vector<StaticBox>& colliders)
+{
+    std::vector<ObstacleBox> boxes;
+    for (const StaticBox& box : colliders) boxes.push_back(obstacleOf(box));
+    for (auto it = body.grid->beginValueOn(); it; ++it)
+        if (freeFaceDeepestInBoxes(body, it.getCoord(), boxes).depthM >= 0.25 * body.voxelSizeM) it.setValue(*it | kAnchorBit);
+}
+
+/// Refuses, before anything is allocated, a scene whose objects' bounding boxes hold more voxels
+/// than max_voxels, or whose whole objects would not fit in the memory available.
+void checkSceneFits(const Scene& scene, const std::vector<TriangleMesh>& meshes)
+{
+    const double h = scene.voxelSizeM;
+    double upperBound = 0.0;
+    for (size_t i = 0; i < scene.objects.size(); ++i)
+        upperBound += scene.objects[i].primitive ? boundingBoxVoxels(*scene.objects[i].primitive, h) : boundingBoxVoxels(meshes[i], h);
+    std::ostringstream problem;
+    problem.precision(3);
+    if (upperBound > static_cast<double>(scene.maxVoxels)) {
+        problem << scene.sourceName << ": max_voxels: the objects' bounding boxes hold up to " << upperBound << " voxels at voxel_size_m "
+                << h << ", above max_voxels " << scene.maxVoxels << " (use a larger voxel_size_m: the count falls with its cube)";
+        throw InputError(problem.str());
+    }
+    const double needed = estimateMemory(upperBound).intactBytes, available = availableMemoryBytes();
+    if (available >= 0 && needed > available) {
+        problem << scene.sourceName << ": voxel_size_m: up to " << upperBound << " voxels need about " << needed / 1e9 << " GB, and "
+                << available / 1e9 << " GB of memory is available (use a larger voxel_size_m: memory falls with its cube)";
+        throw InputError(problem.str());
+    }
+}
+
+/// A charge inside an object would need contact detonation physics the model does not have.
+void refuseChargesInside(const Body& body, const std::string& objectName, const Scene& scene)
+{
+    for (size_t c = 0; c < scene.charges.size(); ++c) {
+        const Eigen::Vector3d local = (body.motion.orientation.inverse() * (scene.charges[c].positionM - body.motion.positionM) +
+                                       body.mass.centreOfMassLocalM) / body.voxelSizeM;
+        const openvdb::Coord ijk(static_cast<int>(std::lround(local.x())), static_cast<int>(std::lround(local.y())),
+                                 static_cast<int>(std::lround(local.z())));
+        if (body.grid->tree().isValueOn(ijk))
+            throw InputError(scene.sourceName + ": charges[" + std::to_string(c) + "].position_m: the charge is inside object '" + objectName + "'");
+    }
+}
+
+/// The free field: the scene's charges, with the ground's reflection of those in free air.
+std::unique_ptr<BlastField> makeField(const Scene& scene)
+{
+    const GroundPlane& ground = scene.world.ground;
+    std::vector<Charge> charges = ground.enabled ? withGroundImages(scene.charges, ground.normal, ground.offsetM) : scene.charges;
+    // Weakening remembers which charge loaded a link in a few bits of the link's value.
+    const bool weakening = scene.fracture.algorithm == FractureAlgorithm::YieldLimit && scene.fracture.weakening;
+    if (weakening && charges.size() > static_cast<size_t>(kMaxWeakeningCharges))
+        throw InputError(scene.sourceName + ": charges: " + std::to_string(charges.size()) + " charges (ground images included) with "
+                         "fracture.weakening on; it tells at most " + std::to_string(kMaxWeakeningCharges) +
+                         " apart (set fracture.weakening to false, or merge charges)");
+    return std::make_unique<BlastField>(std::move(charges), scene.blast);
+}
+
+}  // namespace
+
+Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(scene)
+{
+    initialiseOpenVdb();
+    mField = makeField(scene);
+    buildStaticWorldViews();
+    const std::vector<TriangleMesh> meshes = loadMeshes();
+    checkSceneFits(scene, meshes);
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+        Body body = placeObject(i, voxeliseObject(scene.objects[i], meshes[i], interrupter));
+        mState.initialVoxels += body.mass.voxelCount;
+        if (scene.fracture.algorithm == FractureAlgorithm::DavisonStevens) body.damage = zeroDamageLike(*body.grid);
+        mState.bodies.push_back(std::move(body));
+    }
+    noteFragmentMemory();
+    mState.stepStats.minDtS = scene.timeStep.maxTimeStepS;
+}
+
+std::vector<TriangleMesh> Simulation::loadMeshes()
+{
+    std::vector<TriangleMesh> meshes(mScene.objects.size());
+    for (size_t i = 0; i < mScene.objects.size(); ++i) {
+        if (mScene.objects[i].primitive) continue;
+        std::vector<std::string> notes;
+        meshes[i] = loadMesh(mScene.objects[i].meshPath, &notes);
+        for (const std::string& note : notes) mNotes.push_back(mScene.objects[i].meshPath + ": " + note);
+    }
+    return meshes;
+}
+
+VoxeliseResult Simulation::voxeliseObject(const ObjectSpec& spec, const TriangleMesh& mesh, Interrupter* interrupter)
+{
+    VoxeliseSettings vs;
+    vs.voxelSizeM = mScene.voxelSizeM;
+    vs.maxVoxels = mScene.maxVoxels - mState.initialVoxels;  // the limit is the scene's, over all objects
+    vs.insideTest = spec.inside;
+    vs.shellThicknessM = spec.shellThicknessM;
+    VoxeliseResult vox = spec.primitive ? voxelisePrimitive(*spec.primitive, vs) : voxeliseMesh(mesh, vs, spec.meshPath, interrupter);
+    for (const std::string& note : vox.notes) mNotes.push_back(spec.meshPath + ": " + note);
+    return vox;
+}
+
+Body Simulation::placeObject(size_t index, const VoxeliseResult& vox)
+{
+    const ObjectSpec& spec = mScene.objects[index];
+    const Material material = mScene.material(spec.material);
+    validateMaterial(material);
+    Body body = makeBody(vox.grid, mScene.voxelSizeM, material.densityKgM3);
+    body.id = mState.nextId++;
+    const auto known = std::find_if(mScene.materials.begin(), mScene.materials.end(), [&](const Material& m) { return m.name == spec.material; });
+    body.materialIndex = static_cast<int>(known - mScene.materials.begin());
+    if (known == mScene.materials.end()) mScene.materials.push_back(material);  // a preset the scene did not list
+    // world = t + Q (index h + offset): the centre of mass goes to t + Q (c + offset).
+    body.motion.orientation = rotationFromDegrees(spec.rotationDeg);
+    body.motion.positionM = spec.positionM + body.motion.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
+    if (spec.anchor != AnchorMode::None) {
+        if (spec.anchor == AnchorMode::Ground || mScene.world.ground.enabled) anchorToGround(body, mScene.world.ground);
+        if (spec.anchor == AnchorMode::Supports) anchorToColliders(body, mScene.world.colliders);
+        refreshDerivedData(body);
+        body.motion.positionM = spec.positionM + body.motion.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
+        if (!body.anchored)
+            throw InputError(mScene.sourceName + ": objects[" + std::to_string(index) + "].anchor: no voxel of '" + spec.name + "' touches the ground" +
+                             (spec.anchor == AnchorMode::Supports ? " or a collider" : ""));
+    }
+    refuseChargesInside(body, spec.name, mScene);
+    return body;
+}
+
+void Simulation::noteFragmentMemory()
+{
+    const double available = availableMemoryBytes();
+    const double allBroken = estimateMemory(static_cast<double>(mState.initialVoxels)).allBrokenBytes;
+    if (available < 0 || allBroken <= available) return;
+    std::ostringstream note;
+    note.precision(3);
+    note << "if all " << mState.initialVoxels << " voxels broke free (the fracture rules can do that under a strong blast) "
+         << "the run would need about " << allBroken / 1e9 << " GB, and " << available / 1e9
+         << " GB is available: a larger voxel_size_m needs fewer (memory falls with its cube)";
+    mNotes.push_back(note.str());
+}
+
+Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene), mState(std::move(state))
+{
+    requireVoxelSize(mState.bodies, scene.voxelSizeM);
+    initialiseOpenVdb();
+    mField = makeField(scene);
+    buildStaticWorldViews();
+    // A saved lattice holds its state; its bonds and stiffness follow from its body again.
+    for (DeformableBody& d : mState.deformable) {
+        const auto body = std::find_if(mState.bodies.begin(), mState.bodies.end(), [&](const Body& b) { return b.id == d.bodyId; });
+        if (body == mState.bodies.end()) throw InputError("saved state: deformable body " + std::to_string(d.bodyId) + " is not among the bodies");
+        restoreDeformable(d, *body, mScene.materials[body->materialIndex], mScene.lattice, mLatticeSupports);
+    }
+}
+
+void Simulation::buildStaticWorldViews()
+{
+    const GroundPlane& g = mScene.world.ground;
+    mLoadGeometry.ground = {g.enabled, g.normal.normalized(), g.offsetM};
+    mLatticeSupports.ground = {g.enabled, g.normal.normalized(), g.offsetM};
+    for (const StaticBox& box : mScene.world.colliders) {
+        mLoadGeometry.obstacles.push_back(obstacleOf(box));
+        mLatticeSupports.boxes.push_back(obstacleOf(box));
+        mLatticeSupports.pinned.push_back(box.holds == SupportHold::Pinned ? 1 : 0);
+    }
+}
+
+Simulation rigidBodySimulation(std::vector<Body> bodies, const WorldSettings& world, const CollisionSettings& collisions,
+                               const SleepSettings& sleep, double maxStepS, bool fixedStep)
+{
+    Scene scene;
+    scene.world = world;
+    scene.collisions = collisions;
+    scene.sleep = sleep;
+    scene.fracture.algorithm = FractureAlgorithm::None;
+    scene.timeStep.maxTimeStepS = maxStepS;
+    if (fixedStep) scene.timeStep.minTimeStepS = maxStepS;
+    if (!bodies.empty()) scene.voxelSizeM = bodies.front().voxelSizeM;
+    SimulationState state;
+    state.bodies = std::move(bodies);
+    return Simulation(scene, std::move(state));
+}
+
+
+}  // namespace spall
