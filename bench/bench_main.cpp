@@ -236,9 +236,9 @@ void loadsPass(benchmark::State& state, LoadModel model, bool behindABarrier = f
     }
     const double t = field.tableParameters(0, 4.5).arrivalTimeS + 1e-4;
     const std::vector<OpenWindow> windows = field.openWindows(t);
-    LoadGeometry geometry{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
+    StaticWorld geometry{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
     if (behindABarrier)
-        geometry.obstacles.push_back({Eigen::Vector3d(3.5, 0.5, 1.0), Eigen::Vector3d(0.05, 5.0, 1.0), Eigen::Quaterniond::Identity()});
+        geometry.boxes.push_back({Eigen::Vector3d(3.5, 0.5, 1.0), Eigen::Vector3d(0.05, 5.0, 1.0), Eigen::Quaterniond::Identity()});
     const BlastLoads loads(field, windows, LoadSettings{model}, geometry);
     const std::vector<char> loaded(bodies.size(), 1);
     for (auto _ : state) benchmark::DoNotOptimize(loads.stepWrenches(bodies, loaded, t, 2e-5));

@@ -56,7 +56,7 @@ inline void stepUnderTriangularPulse(Lattice& lattice, const std::vector<size_t>
         const double s = std::min(t, durationS);
         return s - s * s / (2.0 * durationS);
     };
-    const double dt = lattice.stableTimeStepS(), faceAreaM2 = lattice.voxelSizeM * lattice.voxelSizeM;
+    const double dt = lattice.stableTimeStepS(), faceAreaM2 = lattice.model().voxelSizeM * lattice.model().voxelSizeM;
     for (double t = 0.0; t < runS; t += dt) {
         const double meanPa = peakPa * (impulsePerPa(t + dt) - impulsePerPa(t)) / dt;
         for (const size_t p : loaded) lattice.externalForceN[p] = meanPa * faceAreaM2 * direction;
@@ -75,8 +75,8 @@ inline ClosestToFailing closestToFailing(const Lattice& lattice)
 {
     ClosestToFailing c;
     for (size_t b = 0; b < lattice.bondCount(); ++b) {
-        const LatticeBond& bond = lattice.bonds[b];
-        const double u0 = lattice.state.bondHistory[b].strengthScale * lattice.stiffness.strength[bond.strengthClass].peakStretchM;
+        const LatticeBond& bond = lattice.model().bonds[b];
+        const double u0 = lattice.state.bondHistory[b].strengthScale * lattice.model().stiffness.strength[bond.strengthClass].peakStretchM;
         const double index = lattice.state.bondHistory[b].maxEquivalentStretchM / u0;
         c.damaged = c.damaged || lattice.bondDamage(b) > 0.0;
         if (index > c.peakFailureIndex) c = {b, index, c.damaged};

@@ -130,7 +130,7 @@ TEST(BlastForce, PaperRuleGivesTheAnalyticImpulse)
     const double dt = p.positiveDurationS / 4000;  // the paper's rule samples each step's start: first order
     for (double t = p.arrivalTimeS - 10 * dt; t < p.arrivalTimeS + p.positiveDurationS + p.negativeDurationS + 10 * dt; t += dt) {
         const auto windows = field.openWindows(t);
-        const Wrench blast = BlastLoads(field, windows, LoadSettings{LoadModel::Paper}, LoadGeometry()).stepWrench(b, t, dt);
+        const Wrench blast = BlastLoads(field, windows, LoadSettings{LoadModel::Paper}, StaticWorld()).stepWrench(b, t, dt);
         integrateBody(b, t, dt, Integrator::RungeKutta4,
                       [&](double, const Eigen::Vector3d&, const Eigen::Quaterniond&, const Eigen::Vector3d&, const Eigen::Vector3d&) { return blast; });
     }
@@ -157,7 +157,7 @@ TEST(BlastForce, StressFromOneGramToOneTonne)
             // ... and the front and pulse limits while the wave is on the body.
             const BlastParameters p = field.tableParameters(0, 0.5);
             dt = std::min({dt, 0.5 * h / field.shockSpeedMS(0, 0.5), p.positiveDurationS / 32});
-            const Wrench blast = BlastLoads(field, windows, LoadSettings(), LoadGeometry()).stepWrench(b, t, dt);
+            const Wrench blast = BlastLoads(field, windows, LoadSettings(), StaticWorld()).stepWrench(b, t, dt);
             const Eigen::Vector3d before = b.motion.positionM;
             integrateBody(b, t, dt, Integrator::SemiImplicitEuler,
                           [&](double, const Eigen::Vector3d&, const Eigen::Quaterniond&, const Eigen::Vector3d&, const Eigen::Vector3d&) { return blast; });

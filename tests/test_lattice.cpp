@@ -36,7 +36,7 @@ constexpr double kH = 0.01;
 Lattice latticeOfBox(int nx, int ny, int nz, const Material& material = kConcrete, const LatticeSettings& settings = LatticeSettings())
 {
     Body body = test::boxBody(nx, ny, nz, kH, material.densityKgM3);
-    return Lattice::fromBody(body, material, LatticeSupports(), settings);
+    return Lattice::fromBody(body, material, StaticWorld(), settings);
 }
 
 /// `material` with the damping ratio `zeta`.
@@ -137,7 +137,7 @@ TEST(Lattice, MomentumIsConservedExactly)
     const Eigen::Vector3d p0 = lattice.linearMomentum(), l0 = lattice.angularMomentumAboutOrigin();
     const double dt = lattice.stableTimeStepS();
     for (int i = 0; i < 2000; ++i) lattice.step(dt);
-    const double scale = lattice.particleMassKg * std::sqrt(double(lattice.particleCount()));
+    const double scale = lattice.model().particleMassKg * std::sqrt(double(lattice.particleCount()));
     EXPECT_LT((lattice.linearMomentum() - p0).norm(), 1e-12 * scale);
     EXPECT_LT((lattice.angularMomentumAboutOrigin() - l0).norm(), 1e-12 * scale * 0.1);
 }
@@ -149,7 +149,7 @@ TEST(Lattice, DampingKeepsMomentaAndRigidMotionAndTakesOnlyVibration)
     // vibration dies; a block spinning rigidly keeps its kinetic energy.
     Lattice lattice = latticeOfBox(8, 4, 3, damped(kConcrete, 0.05));
     for (size_t b = 0; b < lattice.bondCount(); ++b)
-        if (lattice.bonds[b].axis == 0 && lattice.voxel[lattice.bonds[b].low].x() == 3) lattice.state.bondHistory[b].damageDriverM = 1.0;
+        if (lattice.model().bonds[b].axis == 0 && lattice.model().voxel[lattice.model().bonds[b].low].x() == 3) lattice.state.bondHistory[b].damageDriverM = 1.0;
     std::mt19937 random(11);
     std::normal_distribution<double> normal(0.0, 1.0);
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
@@ -161,7 +161,7 @@ TEST(Lattice, DampingKeepsMomentaAndRigidMotionAndTakesOnlyVibration)
     const double energyStart = lattice.kineticEnergyJ() + lattice.strainEnergyJ();
     const double dt = lattice.stableTimeStepS();
     for (int i = 0; i < 2000; ++i) lattice.step(dt);
-    const double scale = lattice.particleMassKg * std::sqrt(double(lattice.particleCount()));
+    const double scale = lattice.model().particleMassKg * std::sqrt(double(lattice.particleCount()));
     EXPECT_LT((lattice.linearMomentum() - p0).norm(), 1e-12 * scale);
     EXPECT_LT((lattice.angularMomentumAboutOrigin() - l0).norm(), 1e-12 * scale * 0.1);
     const double energyEnd = lattice.kineticEnergyJ() + lattice.strainEnergyJ();
@@ -195,14 +195,14 @@ TEST(Lattice, DampedCantileverDecaysAtTheMaterialsDampingRatio)
     auto acc = body.grid->getAccessor();
     for (int y = 0; y < thick; ++y)
         for (int z = 0; z < thick; ++z) acc.setValue(openvdb::Coord(0, y, z), acc.getValue(openvdb::Coord(0, y, z)) | kAnchorBit);
-    Lattice lattice = Lattice::fromBody(body, damped(kConcrete, zeta), LatticeSupports(), withoutBulkViscosity());
+    Lattice lattice = Lattice::fromBody(body, damped(kConcrete, zeta), StaticWorld(), withoutBulkViscosity());
     const double lengthM = (free + 0.5) * kH;
     const double beta = 1.8751 / lengthM, sigma = 0.7341;
     const double x0 = lattice.state.positionM[0].x();
     size_t tip = 0;
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
-        if (lattice.voxel[p] == openvdb::Coord(free, thick / 2, thick / 2)) tip = p;
-        if (lattice.held[p]) continue;
+        if (lattice.model().voxel[p] == openvdb::Coord(free, thick / 2, thick / 2)) tip = p;
+        if (lattice.model().held[p]) continue;
         const double x = beta * (lattice.state.positionM[p].x() - x0);
         lattice.state.velocityMS[p] = Eigen::Vector3d(0, 0.005 * (std::cosh(x) - std::cos(x) - sigma * (std::sinh(x) - std::sin(x))), 0);
     }
@@ -243,13 +243,13 @@ TEST(Lattice, AWallHeldAlongItsBaseIsDampedAtItsHeightsCantileverMode)
     Body body = test::boxBody(length, thick, high + 1, kH, kConcrete.densityKgM3);
     for (auto it = body.grid->beginValueOn(); it; ++it)
         if (it.getCoord().z() == 0) it.setValue(*it | kAnchorBit);
-    Lattice lattice = Lattice::fromBody(body, damped(kConcrete, zeta), LatticeSupports(), withoutBulkViscosity());
+    Lattice lattice = Lattice::fromBody(body, damped(kConcrete, zeta), StaticWorld(), withoutBulkViscosity());
     const double heightM = (high + 0.5) * kH, beta = 1.8751 / heightM, sigma = 0.7341;
     const double z0 = lattice.state.positionM[0].z();
     size_t tip = 0;
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
-        if (lattice.voxel[p] == openvdb::Coord(length / 2, thick / 2, high)) tip = p;
-        if (lattice.held[p]) continue;
+        if (lattice.model().voxel[p] == openvdb::Coord(length / 2, thick / 2, high)) tip = p;
+        if (lattice.model().held[p]) continue;
         const double x = beta * (lattice.state.positionM[p].z() - z0);
         lattice.state.velocityMS[p] = Eigen::Vector3d(0, 0.005 * (std::cosh(x) - std::cos(x) - sigma * (std::sinh(x) - std::sin(x))), 0);
     }
@@ -297,7 +297,7 @@ TEST(Lattice, ParticlesThatShareNoBondCollideAsSmoothSpheres)
     // spheres slide 27 µm past each other while they touch, turning the line of centres.
     EXPECT_LT((lattice.state.velocityMS[0] - (Eigen::Vector3d(5, 0, 0) - exchange)).norm(), 5e-3 * 10);
     EXPECT_LT((lattice.state.velocityMS[1] - (Eigen::Vector3d(-5, 0, 0) + exchange)).norm(), 5e-3 * 10);
-    EXPECT_LT((lattice.linearMomentum() - p0).norm(), 1e-12 * lattice.particleMassKg * 5);
+    EXPECT_LT((lattice.linearMomentum() - p0).norm(), 1e-12 * lattice.model().particleMassKg * 5);
     // The contact lasts about four steps: velocity Verlet with a force that starts within a step
     // loses a little (0.47 %), and must not gain.
     EXPECT_LT(lattice.kineticEnergyJ(), e0);
@@ -335,13 +335,13 @@ TEST(Lattice, ABeamHeldByTwoBoxesBendsAtTheClampedClampedFrequency)
     for (auto it = body.grid->beginValueOn(); it; ++it)
         if (it.getCoord().x() == 0 || it.getCoord().x() == length - 1) it.setValue(*it | kAnchorBit);
     const double halfLengthM = 0.5 * length * kH;
-    LatticeSupports supports;
+    StaticWorld supports;
     for (const double side : {-1.0, 1.0})
         supports.boxes.push_back({Eigen::Vector3d(side * (halfLengthM + 0.5), 0, 0), Eigen::Vector3d(0.5, 1, 1), Eigen::Quaterniond::Identity()});
     Lattice lattice = Lattice::fromBody(body, kConcrete, supports, withoutBulkViscosity());
-    ASSERT_EQ(lattice.particleCount() - lattice.voxelParticleCount, size_t(2 * thick * 2)) << "one held point per anchored voxel";
-    for (size_t p = lattice.voxelParticleCount; p < lattice.particleCount(); ++p) {
-        const int x = lattice.voxel[p].x();
+    ASSERT_EQ(lattice.particleCount() - lattice.model().voxelParticleCount, size_t(2 * thick * 2)) << "one held point per anchored voxel";
+    for (size_t p = lattice.model().voxelParticleCount; p < lattice.particleCount(); ++p) {
+        const int x = lattice.model().voxel[p].x();
         ASSERT_TRUE(x == -1 || x == length) << "a held point beyond an end face, not a side";
     }
     const double spanM = (length + 1) * kH, t = thick * kH;
@@ -350,11 +350,11 @@ TEST(Lattice, ABeamHeldByTwoBoxesBendsAtTheClampedClampedFrequency)
     const double beta = 4.7300 / spanM, sigma = 0.982502;
     const double x0 = -halfLengthM - 0.5 * kH;
     size_t middle = 0;
-    for (size_t p = 0; p < lattice.voxelParticleCount; ++p) {
+    for (size_t p = 0; p < lattice.model().voxelParticleCount; ++p) {
         const double x = beta * (lattice.state.positionM[p].x() - x0);
         const double shape = std::cosh(x) - std::cos(x) - sigma * (std::sinh(x) - std::sin(x));
         lattice.state.velocityMS[p] = Eigen::Vector3d(0, 0.01 * shape / 1.6, 0);
-        if (lattice.voxel[p] == openvdb::Coord(length / 2, thick / 2, 0)) middle = p;
+        if (lattice.model().voxel[p] == openvdb::Coord(length / 2, thick / 2, 0)) middle = p;
     }
     const double dt = lattice.stableTimeStepS();
     const std::vector<double> upCrossings = upCrossingTimesS(lattice, middle, dt, int(2.2 / expected / dt));
@@ -381,7 +381,7 @@ std::pair<double, double> paneFrequencyHz(int side, int layers, bool pinned)
         if (c.x() == 0 || c.x() == side - 1 || c.z() == 0 || c.z() == side - 1) it.setValue(*it | kAnchorBit);
     }
     const double halfM = 0.5 * side * h;
-    LatticeSupports supports;
+    StaticWorld supports;
     for (const double sign : {-1.0, 1.0}) {
         supports.boxes.push_back({Eigen::Vector3d(sign * (halfM + 0.5), 0, 0), Eigen::Vector3d(0.5, 1, 1), Eigen::Quaterniond::Identity()});
         supports.boxes.push_back({Eigen::Vector3d(0, 0, sign * (halfM + 0.5)), Eigen::Vector3d(1, 1, 0.5), Eigen::Quaterniond::Identity()});
@@ -390,10 +390,10 @@ std::pair<double, double> paneFrequencyHz(int side, int layers, bool pinned)
     Lattice lattice = Lattice::fromBody(body, glass, supports, withoutBulkViscosity());
     const double spanM = (side - 1) * h;
     size_t centre = 0;
-    for (size_t p = 0; p < lattice.voxelParticleCount; ++p) {
+    for (size_t p = 0; p < lattice.model().voxelParticleCount; ++p) {
         const Eigen::Vector3d fromEdgeM = lattice.state.positionM[p] + Eigen::Vector3d::Constant(halfM - 0.5 * h);
         lattice.state.velocityMS[p] = Eigen::Vector3d(0, 0.01 * std::sin(M_PI * fromEdgeM.x() / spanM) * std::sin(M_PI * fromEdgeM.z() / spanM), 0);
-        if (lattice.voxel[p] == openvdb::Coord(side / 2, 0, side / 2)) centre = p;
+        if (lattice.model().voxel[p] == openvdb::Coord(side / 2, 0, side / 2)) centre = p;
     }
     const double dt = lattice.stableTimeStepS();
     // Simply supported (Leissa, Vibration of Plates, NASA SP-160, 1969, eq. 4.20): ω = 2π² / a²
@@ -448,17 +448,17 @@ TEST(Lattice, APinnedEdgePushedAlongItsPinStopsAtTheFrame)
     for (auto it = body.grid->beginValueOn(); it; ++it)
         if (it.getCoord().x() == 0) it.setValue(*it | kAnchorBit);
     const double boxFaceM = -2.0 * h;  // the row spans x from -2h to 2h
-    LatticeSupports supports;
+    StaticWorld supports;
     supports.boxes.push_back({Eigen::Vector3d(boxFaceM - 0.05, 0, 0), Eigen::Vector3d(0.05, 0.05, 0.05), Eigen::Quaterniond::Identity()});
     supports.pinned = {1};
     Lattice lattice = Lattice::fromBody(body, glass, supports);
     ASSERT_EQ(lattice.particleCount(), size_t(5)) << "one pin";
     const size_t first = size_t(lattice.particleAt(openvdb::Coord(0, 0, 0)));
-    const Eigen::Vector3d push(-100.0 * lattice.particleMassKg * 9.81, 0, 0);
+    const Eigen::Vector3d push(-100.0 * lattice.model().particleMassKg * 9.81, 0, 0);
     const double dt = lattice.stableTimeStepS();
     double deepestM = -1.0;
     for (int step = 0; step < 20000; ++step) {
-        for (size_t p = 0; p < lattice.voxelParticleCount; ++p) lattice.externalForceN[p] = push;
+        for (size_t p = 0; p < lattice.model().voxelParticleCount; ++p) lattice.externalForceN[p] = push;
         lattice.step(dt);
         // How far the first voxel's cube reaches into the box.
         deepestM = std::max(deepestM, boxFaceM - (lattice.state.positionM[first].x() - 0.5 * h));
@@ -468,7 +468,7 @@ TEST(Lattice, APinnedEdgePushedAlongItsPinStopsAtTheFrame)
     EXPECT_GT(deepestM, 0.2 * h) << "the pin does not stop it";
     EXPECT_LE(deepestM, 0.25 * h + 1e-12);
     // Stopped, but for one step's push of the whole row on it.
-    EXPECT_LE(std::abs(lattice.state.velocityMS[first].x()), dt * 4.0 * push.norm() / lattice.particleMassKg);
+    EXPECT_LE(std::abs(lattice.state.velocityMS[first].x()), dt * 4.0 * push.norm() / lattice.model().particleMassKg);
 }
 
 TEST(Lattice, LongitudinalPulseTravelsAtTheBarSpeed)
@@ -486,14 +486,14 @@ TEST(Lattice, LongitudinalPulseTravelsAtTheBarSpeed)
         double sum = 0.0;
         int count = 0;
         for (size_t p = 0; p < lattice.particleCount(); ++p)
-            if (lattice.voxel[p].x() == x) sum += lattice.state.velocityMS[p].x(), ++count;
+            if (lattice.model().voxel[p].x() == x) sum += lattice.state.velocityMS[p].x(), ++count;
         return sum / count;
     };
     const int steps = int((stationB + 40) * kH / c / dt);
     for (int i = 0; i < steps; ++i) {
         const double t = i * dt;
         const double force = t < pulseS ? 1e3 * std::sin(M_PI * t / pulseS) : 0.0;
-        for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = Eigen::Vector3d(lattice.voxel[p].x() == 0 ? force : 0.0, 0, 0);
+        for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = Eigen::Vector3d(lattice.model().voxel[p].x() == 0 ? force : 0.0, 0, 0);
         lattice.step(dt);
         const double va = meanVelocityX(stationA), vb = meanVelocityX(stationB);
         if (va > peakA) peakA = va, timeA = t + dt;
@@ -514,14 +514,14 @@ TEST(Lattice, CantileverBendsAtTheEulerBernoulliFrequency)
     auto acc = body.grid->getAccessor();
     for (int y = 0; y < thick; ++y)
         for (int z = 0; z < 2; ++z) acc.setValue(openvdb::Coord(0, y, z), acc.getValue(openvdb::Coord(0, y, z)) | kAnchorBit);
-    Lattice lattice = Lattice::fromBody(body, kConcrete, LatticeSupports(), withoutBulkViscosity());  // energy must be conserved
+    Lattice lattice = Lattice::fromBody(body, kConcrete, StaticWorld(), withoutBulkViscosity());  // energy must be conserved
     const double lengthM = (free + 0.5) * kH, t = thick * kH;
     const double expected = 1.8751 * 1.8751 / (2 * M_PI * lengthM * lengthM) * std::sqrt(kConcrete.youngsModulusPa * t * t / 12 / kConcrete.densityKgM3);
     // The first mode's shape (Euler–Bernoulli, clamped–free), as velocities in y.
     const double beta = 1.8751 / lengthM, sigma = 0.7341;
     const double x0 = lattice.state.positionM[0].x();
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
-        if (lattice.held[p]) continue;
+        if (lattice.model().held[p]) continue;
         const double x = beta * (lattice.state.positionM[p].x() - x0);
         const double shape = std::cosh(x) - std::cos(x) - sigma * (std::sinh(x) - std::sin(x));
         lattice.state.velocityMS[p] = Eigen::Vector3d(0, 0.01 * shape / 2.0, 0);
@@ -530,7 +530,7 @@ TEST(Lattice, CantileverBendsAtTheEulerBernoulliFrequency)
     const int steps = int(2.2 / expected / dt);
     size_t tip = 0;
     for (size_t p = 0; p < lattice.particleCount(); ++p)
-        if (lattice.voxel[p] == openvdb::Coord(free, thick / 2, 0)) tip = p;
+        if (lattice.model().voxel[p] == openvdb::Coord(free, thick / 2, 0)) tip = p;
     double energyStart = 0.0, energyEnd = 0.0;
     const int window = 500;
     const std::vector<double> upCrossings = upCrossingTimesS(lattice, tip, dt, steps, [&](int i) {
@@ -591,32 +591,32 @@ BarPull pullBarApart(const BarSpec& spec)
     LatticeSettings settings;
     settings.damageLaw = spec.law;
     settings.bulkViscosity = spec.bulkViscosity;
-    Lattice lattice = Lattice::fromBody(body, material, LatticeSupports(), settings);
+    Lattice lattice = Lattice::fromBody(body, material, StaticWorld(), settings);
     const double x0 = lattice.state.positionM[0].x(), gaugeM = (nx - 1) * h;
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
         lattice.state.velocityMS[p] = Eigen::Vector3d(pullMS * (lattice.state.positionM[p].x() - x0) / gaugeM, 0, 0);
-        if (lattice.held[p] && lattice.voxel[p].x() == 0) lattice.state.velocityMS[p].setZero();
+        if (lattice.model().held[p] && lattice.model().voxel[p].x() == 0) lattice.state.velocityMS[p].setZero();
     }
     // Held layers cannot contract sideways, which concentrates stress at the grips' corners (more
     // sharply the finer h): the quarters next to the grips are 50 % stronger, as a dog-bone
     // specimen's are thicker.
     for (size_t b = 0; b < lattice.bondCount(); ++b) {
-        const int x = lattice.voxel[lattice.bonds[b].low].x();
+        const int x = lattice.model().voxel[lattice.model().bonds[b].low].x();
         if (x < nx / 4 || x >= nx - nx / 4) lattice.state.bondHistory[b].strengthScale = 1.5;
-        if (lattice.bonds[b].axis == 0 && x == nx / 2 - 1) lattice.state.bondHistory[b].strengthScale = spec.notch;
+        if (lattice.model().bonds[b].axis == 0 && x == nx / 2 - 1) lattice.state.bondHistory[b].strengthScale = spec.notch;
     }
     const double energy0 = lattice.kineticEnergyJ() + lattice.strainEnergyJ();
     const double dt = lattice.stableTimeStepS();
     // Long enough to stretch the bar to its strength and open the crack through.
     const double pullTimeS =
-        1.5 * (lattice.stiffness.strength[target.strengthClass].zeroTractionStretchM + target.tensileStrengthPa / target.youngsModulusPa * gaugeM) /
+        1.5 * (lattice.model().stiffness.strength[target.strengthClass].zeroTractionStretchM + target.tensileStrengthPa / target.youngsModulusPa * gaugeM) /
         pullMS;
 BarPull result;
     double workJ = 0.0;
     auto heldPower = [&] {  // the agent holding the ends balances the bonds' force on them
         double power = 0.0;
         for (size_t p = 0; p < lattice.particleCount(); ++p)
-            if (lattice.held[p]) power -= lattice.state.bondForceN[p].dot(lattice.state.velocityMS[p]);
+            if (lattice.model().held[p]) power -= lattice.state.bondForceN[p].dot(lattice.state.velocityMS[p]);
         return power;
     };
     for (double t = 0.0; t < pullTimeS; t += dt) {
@@ -631,8 +631,8 @@ BarPull result;
     result.dissipatedJ = workJ - (lattice.kineticEnergyJ() + lattice.strainEnergyJ() - energy0);
     for (size_t b = 0; b < lattice.bondCount(); ++b) {
         result.brokenAnywhere += lattice.bondDamage(b) == 1.0;
-        if (lattice.bonds[b].axis != 0) continue;
-        const bool middle = lattice.voxel[lattice.bonds[b].low].x() == nx / 2 - 1;
+        if (lattice.model().bonds[b].axis != 0) continue;
+        const bool middle = lattice.model().voxel[lattice.model().bonds[b].low].x() == nx / 2 - 1;
         result.across += middle;
         result.broken += middle && lattice.bondDamage(b) == 1.0;
         result.damagedElsewhere += !middle && lattice.bondDamage(b) > 0.5;
@@ -818,11 +818,11 @@ TEST(Lattice, SpallStartsWhereOneDimensionalWaveTheoryPutsIt)
             const double riseS = 4.0 * kH / c;  // a front over 4 voxels: a lattice cannot carry a jump without ringing
             const double pressure = t < riseS ? faceForceN * t / riseS : t < pulseS ? faceForceN * (1.0 - (t - riseS) / (pulseS - riseS)) : 0.0;
             for (size_t p = 0; p < lattice.particleCount(); ++p)
-                lattice.externalForceN[p] = Eigen::Vector3d(lattice.voxel[p].x() == 0 ? pressure : 0.0, 0, 0);
+                lattice.externalForceN[p] = Eigen::Vector3d(lattice.model().voxel[p].x() == 0 ? pressure : 0.0, 0, 0);
             lattice.step(dt);
             for (size_t b = 0; b < lattice.bondCount(); ++b)
-                if (lattice.bonds[b].axis == 0 && lattice.bondDamage(b) > 0.0)
-                    firstDamagedLayer = std::max(firstDamagedLayer, lattice.voxel[lattice.bonds[b].low].x());
+                if (lattice.model().bonds[b].axis == 0 && lattice.bondDamage(b) > 0.0)
+                    firstDamagedLayer = std::max(firstDamagedLayer, lattice.model().voxel[lattice.model().bonds[b].low].x());
         }
         ASSERT_GE(firstDamagedLayer, 0) << "nothing failed";
         // The bond between layers i and i + 1 lies (length - 1 - i) voxels from the rear face.
@@ -853,21 +853,21 @@ TEST(Lattice, DirectShearFollowsTheMohrCoulombEnvelope)
         // Everything is held: the state is quasi-static, with no wave to wait for. Two layers of
         // particles, each with one bond across: the normal stiffness is kn/h + 2λ.
         const double pressDownM = compressionOverCohesion * material.shearStrengthPa * kH /
-                                  (lattice.stiffness.normalNPerM[2] / kH + 2.0 * lattice.stiffness.lameLambdaPa);
-        const double liftM = compressionOverCohesion < 0.0 ? 0.6 * lattice.stiffness.strength[0].peakStretchM : 0.0;
+                                  (lattice.model().stiffness.normalNPerM[2] / kH + 2.0 * lattice.model().stiffness.lameLambdaPa);
+        const double liftM = compressionOverCohesion < 0.0 ? 0.6 * lattice.model().stiffness.strength[0].peakStretchM : 0.0;
         for (size_t p = 0; p < lattice.particleCount(); ++p)
-            if (lattice.voxel[p].z() == 1) lattice.state.positionM[p].z() += compressionOverCohesion < 0.0 ? liftM : -pressDownM;
+            if (lattice.model().voxel[p].z() == 1) lattice.state.positionM[p].z() += compressionOverCohesion < 0.0 ? liftM : -pressDownM;
         lattice.refreshForces();
         auto upperLayerStressPa = [&]() -> Eigen::Vector3d {
             Eigen::Vector3d force = Eigen::Vector3d::Zero();
             for (size_t p = 0; p < lattice.particleCount(); ++p)
-                if (lattice.voxel[p].z() == 1) force += lattice.state.bondForceN[p];
+                if (lattice.model().voxel[p].z() == 1) force += lattice.state.bondForceN[p];
             return force / areaM2;
         };
         const double compressionPa = upperLayerStressPa().z();
         const double shearMS = 1e-3, dt = lattice.stableTimeStepS();
         for (size_t p = 0; p < lattice.particleCount(); ++p)
-            if (lattice.voxel[p].z() == 1) lattice.state.velocityMS[p] = Eigen::Vector3d(shearMS, 0, 0);
+            if (lattice.model().voxel[p].z() == 1) lattice.state.velocityMS[p] = Eigen::Vector3d(shearMS, 0, 0);
         // The failure surface is where damage starts: the shear stress of the last step before.
         double onsetShearPa = 0.0;
         auto damaged = [&] {
@@ -908,7 +908,7 @@ TEST(Lattice, ConcreteIsStrongerWhenPulledFaster)
         Body body = test::boxBody(nx, 2, 2, kH, material.densityKgM3);
         for (auto it = body.grid->tree().beginValueOn(); it; ++it)
             if (it.getCoord().x() == 0 || it.getCoord().x() == nx - 1) it.setValue(*it | kAnchorBit);
-        Lattice lattice = Lattice::fromBody(body, material, LatticeSupports(), withoutBulkViscosity());
+        Lattice lattice = Lattice::fromBody(body, material, StaticWorld(), withoutBulkViscosity());
         double x0 = lattice.state.positionM[0].x();
         for (const Eigen::Vector3d& x : lattice.state.positionM) x0 = std::min(x0, x.x());
         // From rest length on the velocity field of a uniform strain rate, so no wave runs ahead.
@@ -920,7 +920,7 @@ TEST(Lattice, ConcreteIsStrongerWhenPulledFaster)
             lattice.step(dt);
             double forceN = 0.0;
             for (size_t p = 0; p < lattice.particleCount(); ++p)
-                if (lattice.voxel[p].x() == nx - 1) forceN -= lattice.state.bondForceN[p].x();
+                if (lattice.model().voxel[p].x() == nx - 1) forceN -= lattice.state.bondForceN[p].x();
             peakPa = std::max(peakPa, forceN / areaM2);
             if (forceN / areaM2 < 0.5 * peakPa) break;
         }
@@ -986,27 +986,27 @@ TEST(Lattice, MasonryPulledAcrossItsBedJointsBreaksInAJointAtTheJointsStrength)
     Lattice lattice = Lattice::fromBody(body, material);
     int unitBonds = 0;
     for (size_t b = 0; b < lattice.bondCount(); ++b) {
-        const LatticeBond& bond = lattice.bonds[b];
-        const bool acrossBedJoint = bond.axis == 2 && lattice.voxel[bond.low].z() % 3 == 2;
+        const LatticeBond& bond = lattice.model().bonds[b];
+        const bool acrossBedJoint = bond.axis == 2 && lattice.model().voxel[bond.low].z() % 3 == 2;
         EXPECT_EQ(bond.strengthClass == 0, acrossBedJoint) << "bond " << b << ": a bed joint lies between every third layer";
         unitBonds += bond.strengthClass;
     }
     const double z0 = lattice.state.positionM[0].z();
     for (size_t p = 0; p < lattice.particleCount(); ++p)
-        lattice.state.velocityMS[p] = lattice.voxel[p].z() == 0 ? Eigen::Vector3d::Zero()
+        lattice.state.velocityMS[p] = lattice.model().voxel[p].z() == 0 ? Eigen::Vector3d::Zero()
                                                           : Eigen::Vector3d(0, 0, pullMS * (lattice.state.positionM[p].z() - z0) / ((nz - 1) * h));
     const double dt = lattice.stableTimeStepS();
     double peakStressPa = 0.0;
-    for (double t = 0.0; t < 1.5 * lattice.stiffness.strength[0].zeroTractionStretchM / pullMS; t += dt) {
+    for (double t = 0.0; t < 1.5 * lattice.model().stiffness.strength[0].zeroTractionStretchM / pullMS; t += dt) {
         lattice.step(dt);
         double pullN = 0.0;
         for (size_t p = 0; p < lattice.particleCount(); ++p)
-            if (lattice.voxel[p].z() == nz - 1) pullN -= lattice.state.bondForceN[p].z();
+            if (lattice.model().voxel[p].z() == nz - 1) pullN -= lattice.state.bondForceN[p].z();
         peakStressPa = std::max(peakStressPa, pullN / (sideM * sideM));
     }
     int brokenInJoints = 0, brokenInUnits = 0;
     for (size_t b = 0; b < lattice.bondCount(); ++b)
-        if (lattice.bondDamage(b) == 1.0) (lattice.bonds[b].strengthClass ? brokenInUnits : brokenInJoints) += 1;
+        if (lattice.bondDamage(b) == 1.0) (lattice.model().bonds[b].strengthClass ? brokenInUnits : brokenInJoints) += 1;
     std::printf("masonry prism pulled across its bed joints: peak %.3f MPa, joint strength %.3f MPa (%+.1f %%); bonds broken: %d in joints, "
                 "%d in bricks (of %d bonds, %d inside bricks)\n",
                 peakStressPa / 1e6, material.tensileStrengthPa / 1e6, 100 * (peakStressPa / material.tensileStrengthPa - 1), brokenInJoints,
@@ -1016,7 +1016,7 @@ TEST(Lattice, MasonryPulledAcrossItsBedJointsBreaksInAJointAtTheJointsStrength)
     EXPECT_EQ(brokenInUnits, 0);
     // Voxels taller than a course (75 mm) do not resolve the bricks: every bond is a joint's.
     const Lattice coarse = Lattice::fromBody(test::boxBody(6, 3, 4, 0.1, material.densityKgM3), material);
-    for (const LatticeBond& bond : coarse.bonds) EXPECT_EQ(bond.strengthClass, 0);
+    for (const LatticeBond& bond : coarse.model().bonds) EXPECT_EQ(bond.strengthClass, 0);
 }
 
 TEST(Lattice, StrengthScatterHasTheMaterialsMeanCovAndCorrelation)
@@ -1064,8 +1064,8 @@ TEST(Lattice, StrengthScatterHasTheMaterialsMeanCovAndCorrelation)
     LatticeSettings seed3, seed4;
     seed3.seed = 3;
     seed4.seed = 4;
-    const Lattice a = Lattice::fromBody(body, concrete, LatticeSupports(), seed3), again = Lattice::fromBody(body, concrete, LatticeSupports(), seed3),
-                  other = Lattice::fromBody(body, concrete, LatticeSupports(), seed4);
+    const Lattice a = Lattice::fromBody(body, concrete, StaticWorld(), seed3), again = Lattice::fromBody(body, concrete, StaticWorld(), seed3),
+                  other = Lattice::fromBody(body, concrete, StaticWorld(), seed4);
     double mean = 0, meanSquare = 0;
     size_t same = 0, differ = 0;
     for (size_t b = 0; b < a.bondCount(); ++b) {

@@ -46,7 +46,7 @@ double fineImpulse(const PointPulse& p, const FaceExposure& face, double from, d
 
 /// The blast impulse (unit: N s) and angular impulse on a body held still through the whole
 /// wave, in steps of `dtS` from detonation.
-Wrench impulseOnHeldBody(const Body& body, const BlastField& field, const LoadSettings& settings, const LoadGeometry& ground,
+Wrench impulseOnHeldBody(const Body& body, const BlastField& field, const LoadSettings& settings, const StaticWorld& ground,
                          double dtS, double untilS)
 {
     Wrench total;
@@ -63,7 +63,7 @@ Wrench impulseOnHeldBody(const Body& body, const BlastField& field, const LoadSe
 /// Sum over the body's exposed faces whose centre satisfies `select` of the impulse per area
 /// pushing into them, times their area (unit: N s), from detonation to `untilS`.
 template <typename Select>
-double faceImpulseOn(const Body& body, const BlastField& field, const LoadGeometry& ground, double dtS, double untilS, Select&& select)
+double faceImpulseOn(const Body& body, const BlastField& field, const StaticWorld& ground, double dtS, double untilS, Select&& select)
 {
     double total = 0;
     const double area = body.voxelSizeM * body.voxelSizeM;
@@ -165,7 +165,7 @@ TEST(Loads, LargeWallAtNormalIncidenceTakesTheKingeryBulmashReflectedImpulse)
     const double h = 0.5;
     const Body wall = test::boxBody(1, 61, 61, h, 2000.0, Eigen::Vector3d(3.0 + 0.5 * h, 0, 0));
     const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::FreeAir, 1.0, 3.0);
-    const double impulse = faceImpulseOn(wall, field, LoadGeometry(), p.positiveDurationS / 200, p.arrivalTimeS + p.positiveDurationS,
+    const double impulse = faceImpulseOn(wall, field, StaticWorld(), p.positiveDurationS / 200, p.arrivalTimeS + p.positiveDurationS,
                                          [](const ExposedFace& f) { return f.voxel == openvdb::Coord(0, 30, 30) && f.face == kNegX; });
     EXPECT_NEAR(impulse / (h * h), p.reflectedImpulsePaS, 0.05 * p.reflectedImpulsePaS);
 }
@@ -182,10 +182,10 @@ TEST(Loads, TiltedPlateIsPushedAlongItsNormal)
     const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::FreeAir, 5.0, 5.0);
     const double until = p.arrivalTimeS + 2 * p.positiveDurationS, dt = p.positiveDurationS / 100;
     auto degreesOff = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return std::acos(std::abs(a.normalized().dot(b.normalized()))) * 180 / M_PI; };
-    const Wrench engineering = impulseOnHeldBody(plate, field, LoadSettings(), LoadGeometry(), dt, until);
+    const Wrench engineering = impulseOnHeldBody(plate, field, LoadSettings(), StaticWorld(), dt, until);
     EXPECT_LT(degreesOff(engineering.forceN, normal), 3.0);
     EXPECT_GT(engineering.forceN.dot(normal), 0.0);
-    const Wrench paper = impulseOnHeldBody(plate, field, LoadSettings{LoadModel::Paper}, LoadGeometry(), dt, until);
+    const Wrench paper = impulseOnHeldBody(plate, field, LoadSettings{LoadModel::Paper}, StaticWorld(), dt, until);
     EXPECT_GT(degreesOff(paper.forceN, normal), 40.0);
 }
 
@@ -204,7 +204,7 @@ TEST(Loads, NothingEndsMovingTowardAFreeAirCharge)
         double momentum = 0, afterPositivePhase = 0;
         for (double t = 0; t < end; t += dt) {
             const auto windows = field.openWindows(t);
-            momentum += BlastLoads(field, windows, LoadSettings(), LoadGeometry()).stepWrench(cube, t, dt).forceN.x() * dt;
+            momentum += BlastLoads(field, windows, LoadSettings(), StaticWorld()).stepWrench(cube, t, dt).forceN.x() * dt;
             if (t < rear.arrivalTimeS + rear.positiveDurationS) afterPositivePhase = momentum;
         }
         EXPECT_GT(momentum, 0.0) << distance << " m";
@@ -235,9 +235,9 @@ TEST(Loads, SmallCubeMatchesTheUfcFrontMinusRearProcedure)
     const double byHand = (frontByHand - rearByHand) * side * side;
 
     const double dt = front.positiveDurationS / 200;
-    const double frontImpulse = faceImpulseOn(cube, field, LoadGeometry(), dt, front.arrivalTimeS + front.positiveDurationS,
+    const double frontImpulse = faceImpulseOn(cube, field, StaticWorld(), dt, front.arrivalTimeS + front.positiveDurationS,
                                               [](const ExposedFace& f) { return f.face == kNegX; });
-    const double rearImpulse = faceImpulseOn(cube, field, LoadGeometry(), dt, rear.arrivalTimeS + rear.positiveDurationS,
+    const double rearImpulse = faceImpulseOn(cube, field, StaticWorld(), dt, rear.arrivalTimeS + rear.positiveDurationS,
                                              [](const ExposedFace& f) { return f.face == kPosX; });
     std::printf("0.4 m cube: front %.3f N s (by hand %.3f), rear %.3f N s (by hand %.3f)\n", frontImpulse, frontByHand * side * side, rearImpulse,
                 rearByHand * side * side);
@@ -250,7 +250,7 @@ TEST(Loads, FiniteWallClearsAsTheCfdReferenceSays)
     // take, over their face, this part of the front impulse a very tall wall takes over the
     // same face (positive phase): 0.875 for H = 0.5 m, 0.994 for H = 2 m. Long walls (20 m),
     // so only the top edge clears, as in the axisymmetric reference.
-    const LoadGeometry ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
+    const StaticWorld ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
     const double h = 0.1, p0 = 101325.0;
     auto wallOfHeight = [&](int voxels) { return test::boxBody(1, 200, voxels, h, 2000.0, Eigen::Vector3d(2.0 + 0.5 * h, 0, 0.5 * h * voxels)); };
     const Body tall = wallOfHeight(35);
@@ -334,7 +334,7 @@ TEST(Loads, SlabTakesTheSameImpulseIntactOrInTouchingLayers)
         const std::vector<char> loaded(bodies.size(), 1);
         for (double t = 0; t < until; t += dt) {
             const auto windows = field.openWindows(t);
-            for (const Wrench& w : BlastLoads(field, windows, LoadSettings(), LoadGeometry()).stepWrenches(bodies, loaded, t, dt))
+            for (const Wrench& w : BlastLoads(field, windows, LoadSettings(), StaticWorld()).stepWrenches(bodies, loaded, t, dt))
                 total += w.forceN * dt;
         }
         return total;
@@ -342,7 +342,9 @@ TEST(Loads, SlabTakesTheSameImpulseIntactOrInTouchingLayers)
     const Eigen::Vector3d whole = momentum(intact), broken = momentum(layers);
     std::printf("slab momentum: intact %.1f N s, in touching layers %.1f N s\n", whole.y(), broken.y());
     EXPECT_GT(whole.y(), 0.0);
-    EXPECT_NEAR(broken.y(), whole.y(), 0.15 * whole.y()) << "intact " << whole.y() << " N s, in layers " << broken.y() << " N s";
+    // docs/accuracy.md: -0.3 %; the bound is three times that (15 % let a regression that
+    // covered no face at all through for two days).
+    EXPECT_NEAR(broken.y(), whole.y(), 0.01 * whole.y()) << "intact " << whole.y() << " N s, in layers " << broken.y() << " N s";
 }
 
 TEST(Loads, BoxBehindABlastWallTakesTheDiffractedLoad)
@@ -357,9 +359,9 @@ TEST(Loads, BoxBehindABlastWallTakesTheDiffractedLoad)
     // and 0.105, T2 0.39 and 0.30. Reflecting the diffracted wave as a shock gave T1's net push
     // twice the CFD's (0.18).
     const BlastField field({Charge{Eigen::Vector3d::Zero(), 0.365, 0.0, BurstType::Surface}}, BlastSettings());
-    const LoadGeometry open{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
-    LoadGeometry walled = open;
-    walled.obstacles.push_back({Eigen::Vector3d(2.05, 0, 0.5), Eigen::Vector3d(0.05, 10, 0.5), Eigen::Quaterniond::Identity()});
+    const StaticWorld open{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
+    StaticWorld walled = open;
+    walled.boxes.push_back({Eigen::Vector3d(2.05, 0, 0.5), Eigen::Vector3d(0.05, 10, 0.5), Eigen::Quaterniond::Identity()});
     struct Target {
         Eigen::Vector3d centreM;
         double frontRatio, netRatio;
@@ -368,7 +370,7 @@ TEST(Loads, BoxBehindABlastWallTakesTheDiffractedLoad)
         const std::vector<Body> block{test::boxBody(2, 2, 2, 0.1, 2000.0, target.centreM)};
         const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::Surface, 0.365, target.centreM.norm());
         const double dt = p.positiveDurationS / 200, until = p.arrivalTimeS + p.positiveDurationS + p.negativeDurationS;
-        auto netImpulse = [&](const LoadGeometry& geometry) {  // as the CFD's: the running integral's maximum
+        auto netImpulse = [&](const StaticWorld& geometry) {  // as the CFD's: the running integral's maximum
             double total = 0, largest = 0;
             for (double t = 0; t < until; t += dt) {
                 const auto windows = field.openWindows(t);
@@ -398,7 +400,7 @@ TEST(Loads, DiffractedWaveBehindABarrierKeepsWhatTheCfdFinds)
     // ray model has no penumbra; docs/accuracy.md). Checked: the weakest point within 30 % of
     // the CFD's, every point weakened, and the wave travelling on over the top.
     const BlastField field({Charge{Eigen::Vector3d::Zero(), 0.365, 0.0, BurstType::Surface}}, BlastSettings());
-    LoadGeometry walled{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
+    StaticWorld walled{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
     const ObstacleBox barrier{Eigen::Vector3d(2.05, 0, 0.5), Eigen::Vector3d(0.05, 10, 0.5), Eigen::Quaterniond::Identity()};
     auto sideOnImpulse = [](const PointPulse& p) {
         return p.peakOverpressurePa * p.positiveDurationS * friedlanderImpulseFraction(p.decayCoefficient);
@@ -432,7 +434,7 @@ TEST(Loads, GroundReflectsAFreeAirCharge)
     // wall standing on the ground is Kingery–Bulmash's hemispherical surface burst; the linear
     // image sums two free-air waves where the real ones merge (docs/accuracy.md).
     const double tnt = 1.0, h = 0.1;
-    const LoadGeometry ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
+    const StaticWorld ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
     const Body wall = test::boxBody(1, 100, 20, h, 2000.0, Eigen::Vector3d(3.0 + 0.5 * h, 0, 1.0));
     auto strip = [](const ExposedFace& f) { return f.face == kNegX && f.voxel.y() >= 48 && f.voxel.y() <= 51 && f.voxel.z() < 5; };
     const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::Surface, tnt, 3.0);
@@ -459,13 +461,13 @@ TEST(Loads, AWindowInAWallOfCollidersIsLoadedAsThatPartOfASolidWall)
     // as a 0.6 m plate standing free, it cleared round its own edges and filled behind at once.
     const double h = 0.1, tnt = 1.0, distance = 6.0;
     const BlastField field({Charge{Eigen::Vector3d::Zero(), tnt, 0.0, BurstType::Surface}}, BlastSettings());
-    const LoadGeometry open{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
+    const StaticWorld open{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
     const Body solid = test::boxBody(1, 40, 30, h, 2500.0, Eigen::Vector3d(distance + 0.5 * h, 0, 1.5));
     Body pane = test::boxBody(1, 6, 6, h, 2500.0, Eigen::Vector3d(distance + 0.5 * h, 0, 1.5));
     pane.anchored = true;
-    LoadGeometry walled = open;
+    StaticWorld walled = open;
     const double cx = distance + 0.5 * h, hx = 0.5 * h;
-    walled.obstacles = {{Eigen::Vector3d(cx, -1.15, 1.5), Eigen::Vector3d(hx, 0.85, 1.5), Eigen::Quaterniond::Identity()},
+    walled.boxes = {{Eigen::Vector3d(cx, -1.15, 1.5), Eigen::Vector3d(hx, 0.85, 1.5), Eigen::Quaterniond::Identity()},
                         {Eigen::Vector3d(cx, 1.15, 1.5), Eigen::Vector3d(hx, 0.85, 1.5), Eigen::Quaterniond::Identity()},
                         {Eigen::Vector3d(cx, 0, 0.6), Eigen::Vector3d(hx, 0.3, 0.6), Eigen::Quaterniond::Identity()},
                         {Eigen::Vector3d(cx, 0, 2.4), Eigen::Vector3d(hx, 0.3, 0.6), Eigen::Quaterniond::Identity()}};
@@ -490,7 +492,7 @@ TEST(Loads, ABlockOnTheGroundIsPressedIntoItNotLifted)
 {
     // No air under a face resting on the ground, and the ground's reflection does not wrap round
     // what stands on it: a block under an air burst is pushed down.
-    const LoadGeometry ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
+    const StaticWorld ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
     const Charge air{Eigen::Vector3d(0.5, 0, 1.5), 1.0, 0.0, BurstType::FreeAir};
     const BlastField field(withGroundImages({air}, Eigen::Vector3d::UnitZ(), 0.0), BlastSettings());
     const Body block = test::boxBody(4, 4, 4, 0.1, 2000.0, Eigen::Vector3d(0, 0, 0.2));
@@ -503,7 +505,7 @@ TEST(Loads, TheWaveGoesRoundANarrowObstacleAlongTheGround)
 {
     // A post 0.2 m wide and 3 m high between a surface charge and a point on the ground behind
     // it: the shortest way is round its side at ground level, not over its top.
-    const LoadGeometry ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}};
+    const StaticWorld ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
     const ObstacleBox post{Eigen::Vector3d(2.0, 0, 1.5), Eigen::Vector3d(0.1, 0.1, 1.5), Eigen::Quaterniond::Identity()};
     const Eigen::Vector3d behind(4.0, 0, 0.05);
     const EdgePath path = shortestPathAround(post, Eigen::Vector3d::Zero(), behind, ground, 0.01);

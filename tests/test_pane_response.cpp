@@ -83,18 +83,18 @@ PaneResponse loadPane(const Pane& pane, double peakPa, double durationS, double 
         if (c.x() == 0 || c.x() == pane.side - 1 || c.z() == 0 || c.z() == pane.side - 1) it.setValue(*it | kAnchorBit);
     }
     const double halfM = 0.5 * pane.side * h;
-    LatticeSupports frame;
+    StaticWorld frame;
     for (const double sign : {-1.0, 1.0}) {
         frame.boxes.push_back({Eigen::Vector3d(sign * (halfM + 0.5), 0, 0), Eigen::Vector3d(0.5, 1, 1), Eigen::Quaterniond::Identity()});
         frame.boxes.push_back({Eigen::Vector3d(0, 0, sign * (halfM + 0.5)), Eigen::Vector3d(1, 1, 0.5), Eigen::Quaterniond::Identity()});
     }
     frame.pinned.assign(frame.boxes.size(), 1);
     Lattice lattice = Lattice::fromBody(body, pane.glass, frame);
-    std::vector<size_t> everyVoxel(lattice.voxelParticleCount);
+    std::vector<size_t> everyVoxel(lattice.model().voxelParticleCount);
     for (size_t p = 0; p < everyVoxel.size(); ++p) everyVoxel[p] = p;
     test::stepUnderTriangularPulse(lattice, everyVoxel, Eigen::Vector3d::UnitY(), peakPa, durationS, runS);
     const test::ClosestToFailing worst = test::closestToFailing(lattice);
-    const LatticeBond& bond = lattice.bonds[worst.bond];
+    const LatticeBond& bond = lattice.model().bonds[worst.bond];
     const Eigen::Vector3d faceM = 0.5 * (lattice.state.positionM[bond.low] + lattice.state.positionM[bond.high]);
     PaneResponse r;
     r.peakFailureIndex = worst.peakFailureIndex;

@@ -138,13 +138,13 @@ LatticeResponse loadWall(const WallStrip& wall, double peakPa, double durationS,
         if (it.getCoord().z() == 0) it.setValue(*it | kAnchorBit);
     refreshDerivedData(body);
     body.motion.positionM = Eigen::Vector3d(0.0, 0.0, 0.5 * wall.heightM);  // the base's faces on z = 0
-    Lattice lattice = Lattice::fromBody(body, wall.material, LatticeSupports{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}});
+    Lattice lattice = Lattice::fromBody(body, wall.material, StaticWorld{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}});
     std::vector<size_t> front;
-    for (size_t p = 0; p < lattice.voxelParticleCount; ++p)
-        if (lattice.voxel[p].y() == 0) front.push_back(p);
+    for (size_t p = 0; p < lattice.model().voxelParticleCount; ++p)
+        if (lattice.model().voxel[p].y() == 0) front.push_back(p);
     test::stepUnderTriangularPulse(lattice, front, Eigen::Vector3d::UnitY(), peakPa, durationS, runS);
     const test::ClosestToFailing worst = test::closestToFailing(lattice);
-    const LatticeBond& bond = lattice.bonds[worst.bond];
+    const LatticeBond& bond = lattice.model().bonds[worst.bond];
     LatticeResponse r;
     r.peakFailureIndex = worst.peakFailureIndex;
     r.damaged = worst.damaged;

@@ -95,7 +95,7 @@ void integratorStudy(std::vector<Row>& rows)
             for (int i = 0; i * dt < p.positiveDurationS + p.negativeDurationS + dt; ++i) {
                 const double t = p.arrivalTimeS + i * dt;
                 const auto windows = field.openWindows(t);
-                const Wrench blast = BlastLoads(field, windows, LoadSettings{LoadModel::Paper}, LoadGeometry()).stepWrench(b, t, dt);
+                const Wrench blast = BlastLoads(field, windows, LoadSettings{LoadModel::Paper}, StaticWorld()).stepWrench(b, t, dt);
                 integrateBody(b, t, dt, integrator, [&](double, const Eigen::Vector3d&, const Eigen::Quaterniond&, const Eigen::Vector3d&,
                                                         const Eigen::Vector3d&) { return blast; });
             }

@@ -2,40 +2,6 @@
 
 namespace spall {
 
-namespace {
-
-constexpr double kMaxRestitution = 1.0;
-constexpr double kMaxFriction = 100.0;
-
-}  // namespace
-
-template <>
-const std::vector<Field<GroundPlane>>& fieldTable<GroundPlane>()
-{
-    static const std::vector<Field<GroundPlane>> table = {
-        {"ground.enabled", &GroundPlane::enabled},
-        {"ground.normal", &GroundPlane::normal, {}, 1.0, VectorCheck::NonZero},
-        {"ground.height_m", &GroundPlane::offsetM, closed(-1e6, 1e6)},
-        {"ground.restitution", &GroundPlane::restitution, closed(0, kMaxRestitution)},
-        {"ground.friction", &GroundPlane::friction, closed(0, kMaxFriction)},
-    };
-    return table;
-}
-
-template <>
-const std::vector<Field<StaticBox>>& fieldTable<StaticBox>()
-{
-    static const std::vector<Field<StaticBox>> table = {
-        {"position_m", &StaticBox::centreM},
-        {"size_m", &StaticBox::halfExtentM, {}, 2.0, VectorCheck::Positive},
-        {"rotation_deg", &StaticBox::rotationDeg},
-        {"restitution", &StaticBox::restitution, closed(0, kMaxRestitution)},
-        {"friction", &StaticBox::friction, closed(0, kMaxFriction)},
-        {"holds", choice(&StaticBox::holds)},
-    };
-    return table;
-}
-
 template <>
 const std::vector<Field<WorldSettings>>& fieldTable<WorldSettings>()
 {

@@ -1,5 +1,7 @@
 #include <spall/io/History.h>
 
+#include "HistorySeries.h"
+
 #include <spall/io/H5Out.h>
 
 #include <spall/core/Error.h>
@@ -8,125 +10,16 @@
 
 #include <cstring>
 #include <filesystem>
+#include <string>
+#include <variant>
 
 namespace spall {
 
-namespace {
-
-void check(herr_t status, const std::string& what)
-{
-    if (status < 0) throw IoError("history.h5: " + what + " failed");
-}
-
-hid_t checkId(hid_t id, const std::string& what)
-{
-    if (id < 0) throw IoError("history.h5: " + what + " failed");
-    return id;
-}
-
-/// One extensible, chunked dataset of rows x cols. Uncompressed on purpose: an uncompressed chunk
-/// keeps its place in the file, so appending rewrites the old rows with the same bytes and a run
-/// killed in the middle of a write cannot damage the frames before it. (A compressed chunk
-/// moves when it grows, and its old place can be handed to another dataset's chunk before the
-/// index is updated: a kill then leaves earlier rows unreadable. It was seen in testing.)
-class Series {
-public:
-    Series() = default;
-    Series(hid_t parent, const char* name, hid_t type, hsize_t cols, hsize_t chunkRows = 1024) : mType(type), mCols(cols)
-    {
-        const int rank = cols > 1 ? 2 : 1;
-        hsize_t dims[2] = {0, cols}, maxDims[2] = {H5S_UNLIMITED, cols}, chunk[2] = {chunkRows, cols};
-        const hid_t space = checkId(H5Screate_simple(rank, dims, maxDims), "dataspace");
-        const hid_t plist = checkId(H5Pcreate(H5P_DATASET_CREATE), "property list");
-        check(H5Pset_chunk(plist, rank, chunk), "chunking");
-        mId = checkId(H5Dcreate2(parent, name, type, space, H5P_DEFAULT, plist, H5P_DEFAULT), std::string("creating ") + name);
-        H5Pclose(plist);
-        H5Sclose(space);
-    }
-    /// Opens an existing dataset and cuts it to its first `rows` rows.
-    static Series open(hid_t parent, const char* name, hid_t type, hsize_t cols, hsize_t rows)
-    {
-        Series s;
-        s.mType = type;
-        s.mCols = cols;
-        s.mId = checkId(H5Dopen2(parent, name, H5P_DEFAULT), std::string("opening ") + name);
-        const hid_t space = H5Dget_space(s.mId);
-        hsize_t dims[2] = {0, cols};
-        H5Sget_simple_extent_dims(space, dims, nullptr);
-        H5Sclose(space);
-        if (dims[0] < rows) throw IoError(std::string("history.h5: ") + name + " has " + std::to_string(dims[0]) + " rows, fewer than the checkpoint's " + std::to_string(rows));
-        hsize_t newDims[2] = {rows, cols};
-        check(H5Dset_extent(s.mId, newDims), std::string("cutting ") + name);
-        s.mRows = rows;
-        return s;
-    }
-    /// One value of a one-column int64 dataset.
-    int64_t int64At(hsize_t row) const
-    {
-        const hid_t file = H5Dget_space(mId);
-        hsize_t start[1] = {row}, count[1] = {1};
-        check(H5Sselect_hyperslab(file, H5S_SELECT_SET, start, nullptr, count, nullptr), "selecting a row");
-        const hid_t memory = H5Screate_simple(1, count, nullptr);
-        int64_t value = 0;
-        check(H5Dread(mId, H5T_NATIVE_INT64, memory, file, H5P_DEFAULT, &value), "reading a row");
-        H5Sclose(memory);
-        H5Sclose(file);
-        return value;
-    }
-    void append(const void* data, hsize_t rows)
-    {
-        if (rows == 0) return;
-        const int rank = mCols > 1 ? 2 : 1;
-        hsize_t newDims[2] = {mRows + rows, mCols};
-        check(H5Dset_extent(mId, newDims), "extending a dataset");
-        const hid_t file = H5Dget_space(mId);
-        hsize_t start[2] = {mRows, 0}, count[2] = {rows, mCols};
-        check(H5Sselect_hyperslab(file, H5S_SELECT_SET, start, nullptr, count, nullptr), "selecting rows");
-        const hid_t memory = H5Screate_simple(rank, count, nullptr);
-        check(H5Dwrite(mId, mType, memory, file, H5P_DEFAULT, data), "writing rows (disk full?)");
-        H5Sclose(memory);
-        H5Sclose(file);
-        mRows += rows;
-    }
-    void close()
-    {
-        if (mId >= 0) H5Dclose(mId);
-        mId = -1;
-    }
-
-private:
-    hid_t mId = -1;
-    hid_t mType = -1;
-    hsize_t mCols = 1;
-    hsize_t mRows = 0;
-};
-
-void writeStringAttribute(hid_t object, const char* name, const std::string& value)
-{
-    const hid_t type = H5Tcopy(H5T_C_S1);
-    H5Tset_size(type, value.empty() ? 1 : value.size());
-    H5Tset_strpad(type, H5T_STR_NULLTERM);
-    const hid_t space = H5Screate(H5S_SCALAR);
-    const hid_t attr = checkId(H5Acreate2(object, name, type, space, H5P_DEFAULT, H5P_DEFAULT), name);
-    check(H5Awrite(attr, type, value.empty() ? "" : value.c_str()), name);
-    H5Aclose(attr);
-    H5Sclose(space);
-    H5Tclose(type);
-}
-
-template <typename T>
-void writeScalarAttribute(hid_t object, const char* name, hid_t type, T value)
-{
-    const hid_t space = H5Screate(H5S_SCALAR);
-    hid_t attr = H5Aexists(object, name) > 0 ? H5Aopen(object, name, H5P_DEFAULT)
-                                             : H5Acreate2(object, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
-    checkId(attr, name);
-    check(H5Awrite(attr, type, &value), name);
-    H5Aclose(attr);
-    H5Sclose(space);
-}
-
-}  // namespace
+using history::check;
+using history::checkId;
+using history::Series;
+using history::writeScalarAttribute;
+using history::writeStringAttribute;
 
 struct HistoryWriter::Impl {
     std::string path;
@@ -144,25 +37,20 @@ struct HistoryWriter::Impl {
     void appendEvents(const std::vector<FractureEvent>& events, const std::vector<DustRecord>& dust);
     void appendFrameRow(const FrameRow& f);
     void flush() { check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flushing (disk full?)"); }
-    void close()
-    {
-        for (Series* s : {&time, &bodyOffset, &kinetic, &linear, &angular, &broken, &steps, &minDt, &bodyCount, &voxelCount, &dustMass,
-                          &latticeParticleSteps, &discardedVibration,
-                          &id, &parent, &position, &orientation, &linVel, &angVel, &mass, &voxels, &asleep, &anchored, &eventTime,
-                          &eventParent, &eventChildOffset, &eventChild, &dustTime, &dustParent, &dustVoxels, &dustMassRows, &dustMomentum})
-            s->close();
-        for (hid_t& g : groups)
-            if (g >= 0) H5Gclose(g), g = -1;
-        if (file >= 0) H5Fclose(file);
-        file = -1;
-    }
+    void close();
 };
 
 namespace {
 
 enum Group { kFrames, kBodies, kFracture, kDust };
 
-/// Every growing dataset of the history: where it lives, its type and shape.
+/// Where readHistory puts a dataset (nothing: it is written for notebooks only).
+using HistoryField = std::variant<std::monostate, std::vector<double> History::*, std::vector<int64_t> History::*,
+                                  std::vector<int8_t> History::*, std::vector<Eigen::Vector3d> History::*>;
+constexpr std::monostate kNotRead{};
+
+/// Every growing dataset of the history: where it lives, its type and shape, and where the reader
+/// puts it. The one list the writer creates and appends by and the reader reads by.
 struct SeriesSpec {
     Series HistoryWriter::Impl::*member;
     Group group;
@@ -170,6 +58,7 @@ struct SeriesSpec {
     hid_t type;
     hsize_t cols;
     hsize_t chunkRows;
+    HistoryField readInto;
 };
 
 std::vector<SeriesSpec> seriesSpecs()
@@ -177,44 +66,53 @@ std::vector<SeriesSpec> seriesSpecs()
     using I = HistoryWriter::Impl;
     const hid_t d = H5T_NATIVE_DOUBLE, i64 = H5T_NATIVE_INT64, i8 = H5T_NATIVE_INT8;
     return {
-        {&I::time, kFrames, "time_s", d, 1, 256},
-        {&I::bodyOffset, kFrames, "body_offset", i64, 1, 256},
-        {&I::kinetic, kFrames, "kinetic_energy_J", d, 1, 256},
-        {&I::linear, kFrames, "linear_momentum_kg_m_s", d, 3, 256},
-        {&I::angular, kFrames, "angular_momentum_kg_m2_s", d, 3, 256},
-        {&I::broken, kFrames, "broken_links", i64, 1, 256},
-        {&I::steps, kFrames, "steps", i64, 1, 256},
-        {&I::minDt, kFrames, "min_dt_s", d, 1, 256},
-        {&I::bodyCount, kFrames, "body_count", i64, 1, 256},
-        {&I::voxelCount, kFrames, "voxel_count", i64, 1, 256},
-        {&I::dustMass, kFrames, "dust_mass_kg", d, 1, 256},
-        {&I::latticeParticleSteps, kFrames, "lattice_particle_steps", i64, 1, 256},
-        {&I::discardedVibration, kFrames, "discarded_vibration_J", d, 1, 256},
-        {&I::id, kBodies, "id", i64, 1, 1024},
-        {&I::parent, kBodies, "parent_id", i64, 1, 1024},
-        {&I::position, kBodies, "position_m", d, 3, 1024},
-        {&I::orientation, kBodies, "orientation_wxyz", d, 4, 1024},
-        {&I::linVel, kBodies, "linear_velocity_m_s", d, 3, 1024},
-        {&I::angVel, kBodies, "angular_velocity_rad_s", d, 3, 1024},
-        {&I::mass, kBodies, "mass_kg", d, 1, 1024},
-        {&I::voxels, kBodies, "voxel_count", i64, 1, 1024},
-        {&I::asleep, kBodies, "asleep", i8, 1, 1024},
-        {&I::anchored, kBodies, "anchored", i8, 1, 1024},
-        {&I::eventTime, kFracture, "time_s", d, 1, 256},
-        {&I::eventParent, kFracture, "parent_id", i64, 1, 256},
-        {&I::eventChildOffset, kFracture, "child_offset", i64, 1, 256},
-        {&I::eventChild, kFracture, "child_id", i64, 1, 1024},
-        {&I::dustTime, kDust, "time_s", d, 1, 256},
-        {&I::dustParent, kDust, "parent_id", i64, 1, 256},
-        {&I::dustVoxels, kDust, "voxel_count", i64, 1, 256},
-        {&I::dustMassRows, kDust, "mass_kg", d, 1, 256},
-        {&I::dustMomentum, kDust, "linear_momentum_kg_m_s", d, 3, 256},
+        {&I::time, kFrames, "time_s", d, 1, 256, &History::timeS},
+        {&I::bodyOffset, kFrames, "body_offset", i64, 1, 256, &History::bodyOffset},
+        {&I::kinetic, kFrames, "kinetic_energy_J", d, 1, 256, &History::kineticEnergyJ},
+        {&I::linear, kFrames, "linear_momentum_kg_m_s", d, 3, 256, &History::linearMomentum},
+        {&I::angular, kFrames, "angular_momentum_kg_m2_s", d, 3, 256, &History::angularMomentum},
+        {&I::broken, kFrames, "broken_links", i64, 1, 256, &History::brokenLinks},
+        {&I::steps, kFrames, "steps", i64, 1, 256, &History::steps},
+        {&I::minDt, kFrames, "min_dt_s", d, 1, 256, &History::minDtS},
+        {&I::bodyCount, kFrames, "body_count", i64, 1, 256, &History::bodyCount},
+        {&I::voxelCount, kFrames, "voxel_count", i64, 1, 256, &History::voxelCount},
+        {&I::dustMass, kFrames, "dust_mass_kg", d, 1, 256, &History::dustMassKg},
+        {&I::latticeParticleSteps, kFrames, "lattice_particle_steps", i64, 1, 256, &History::latticeParticleSteps},
+        {&I::discardedVibration, kFrames, "discarded_vibration_J", d, 1, 256, &History::discardedVibrationJ},
+        {&I::id, kBodies, "id", i64, 1, 1024, &History::bodyId},
+        {&I::parent, kBodies, "parent_id", i64, 1, 1024, &History::bodyParentId},
+        {&I::position, kBodies, "position_m", d, 3, 1024, &History::bodyPositionM},
+        {&I::orientation, kBodies, "orientation_wxyz", d, 4, 1024, kNotRead},
+        {&I::linVel, kBodies, "linear_velocity_m_s", d, 3, 1024, &History::bodyLinearVelocityMS},
+        {&I::angVel, kBodies, "angular_velocity_rad_s", d, 3, 1024, kNotRead},
+        {&I::mass, kBodies, "mass_kg", d, 1, 1024, &History::bodyMassKg},
+        {&I::voxels, kBodies, "voxel_count", i64, 1, 1024, &History::bodyVoxelCount},
+        {&I::asleep, kBodies, "asleep", i8, 1, 1024, &History::bodyAsleep},
+        {&I::anchored, kBodies, "anchored", i8, 1, 1024, &History::bodyAnchored},
+        {&I::eventTime, kFracture, "time_s", d, 1, 256, &History::eventTimeS},
+        {&I::eventParent, kFracture, "parent_id", i64, 1, 256, &History::eventParentId},
+        {&I::eventChildOffset, kFracture, "child_offset", i64, 1, 256, &History::eventChildOffset},
+        {&I::eventChild, kFracture, "child_id", i64, 1, 1024, kNotRead},
+        {&I::dustTime, kDust, "time_s", d, 1, 256, kNotRead},
+        {&I::dustParent, kDust, "parent_id", i64, 1, 256, kNotRead},
+        {&I::dustVoxels, kDust, "voxel_count", i64, 1, 256, kNotRead},
+        {&I::dustMassRows, kDust, "mass_kg", d, 1, 256, kNotRead},
+        {&I::dustMomentum, kDust, "linear_momentum_kg_m_s", d, 3, 256, kNotRead},
     };
 }
 
 const char* const kGroupPaths[] = {"frames", "bodies", "events/fracture", "dust"};
 
 }  // namespace
+
+void HistoryWriter::Impl::close()
+{
+    for (const SeriesSpec& spec : seriesSpecs()) (this->*spec.member).close();
+    for (hid_t& g : groups)
+        if (g >= 0) H5Gclose(g), g = -1;
+    if (file >= 0) H5Fclose(file);
+    file = -1;
+}
 
 HistoryWriter::HistoryWriter(const std::string& path, const HistoryHeader& header) : mImpl(std::make_unique<Impl>())
 {
@@ -463,6 +361,19 @@ private:
     hid_t mFile = -1;
 };
 
+void readSeries(Reader&, const std::string&, hid_t, History&, std::monostate) {}
+
+template <typename T>
+void readSeries(Reader& r, const std::string& name, hid_t type, History& h, std::vector<T> History::*field)
+{
+    h.*field = r.read<T>(name.c_str(), type);
+}
+
+void readSeries(Reader& r, const std::string& name, hid_t, History& h, std::vector<Eigen::Vector3d> History::*field)
+{
+    h.*field = r.readVec3(name.c_str());
+}
+
 }  // namespace
 
 History readHistory(const std::string& path)
@@ -476,33 +387,12 @@ History readHistory(const std::string& path)
     h.runComplete = r.attribute<int>("run_complete", H5T_NATIVE_INT) != 0;
     h.voxelSizeM = r.attribute<double>("voxel_size_m", H5T_NATIVE_DOUBLE);
     h.seed = r.attribute<uint64_t>("seed", H5T_NATIVE_UINT64);
-    const hid_t d = H5T_NATIVE_DOUBLE, i64 = H5T_NATIVE_INT64, i8 = H5T_NATIVE_INT8;
-    h.timeS = r.read<double>("/frames/time_s", d);
-    h.kineticEnergyJ = r.read<double>("/frames/kinetic_energy_J", d);
-    h.minDtS = r.read<double>("/frames/min_dt_s", d);
-    h.dustMassKg = r.read<double>("/frames/dust_mass_kg", d);
-    h.discardedVibrationJ = r.read<double>("/frames/discarded_vibration_J", d);
-    h.latticeParticleSteps = r.read<int64_t>("/frames/lattice_particle_steps", i64);
-    h.bodyOffset = r.read<int64_t>("/frames/body_offset", i64);
-    h.brokenLinks = r.read<int64_t>("/frames/broken_links", i64);
-    h.steps = r.read<int64_t>("/frames/steps", i64);
-    h.bodyCount = r.read<int64_t>("/frames/body_count", i64);
-    h.voxelCount = r.read<int64_t>("/frames/voxel_count", i64);
-    h.linearMomentum = r.readVec3("/frames/linear_momentum_kg_m_s");
-    h.angularMomentum = r.readVec3("/frames/angular_momentum_kg_m2_s");
-    h.bodyId = r.read<int64_t>("/bodies/id", i64);
-    h.bodyParentId = r.read<int64_t>("/bodies/parent_id", i64);
-    h.bodyVoxelCount = r.read<int64_t>("/bodies/voxel_count", i64);
-    h.bodyMassKg = r.read<double>("/bodies/mass_kg", d);
-    h.bodyPositionM = r.readVec3("/bodies/position_m");
-    h.bodyLinearVelocityMS = r.readVec3("/bodies/linear_velocity_m_s");
-    h.bodyAsleep = r.read<int8_t>("/bodies/asleep", i8);
-    h.bodyAnchored = r.read<int8_t>("/bodies/anchored", i8);
-    h.eventTimeS = r.read<double>("/events/fracture/time_s", d);
-    h.eventParentId = r.read<int64_t>("/events/fracture/parent_id", i64);
-    h.eventChildOffset = r.read<int64_t>("/events/fracture/child_offset", i64);
+    for (const SeriesSpec& spec : seriesSpecs()) {
+        const std::string name = std::string("/") + kGroupPaths[spec.group] + "/" + spec.name;
+        std::visit([&](auto field) { readSeries(r, name, spec.type, h, field); }, spec.readInto);
+    }
     h.chargePositionM = r.readVec3("/charges/position_m");
-    h.chargeTntKg = r.read<double>("/charges/tnt_kg", d);
+    h.chargeTntKg = r.read<double>("/charges/tnt_kg", H5T_NATIVE_DOUBLE);
     // A run killed mid-frame may hold body rows past the last complete frame: keep what the
     // frame rows describe.
     const size_t frames = std::min(h.timeS.size(), h.bodyOffset.size() - 1);

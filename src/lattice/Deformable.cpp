@@ -56,7 +56,7 @@ void setMotionsFromFit(const std::vector<Body*>& bodies, const RigidFit& fit, co
 /// The lattice particle of one of the body's voxels.
 uint32_t particleOfVoxel(const Lattice& lattice, const openvdb::Coord& voxel)
 {
-    const int32_t p = lattice.particleAt(particleCell(voxel, lattice.blocks));
+    const int32_t p = lattice.particleAt(particleCell(voxel, lattice.model().blocks));
     SPALL_CHECK(p >= 0);  // every voxel of the body has a particle
     return uint32_t(p);
 }
@@ -81,18 +81,18 @@ void forEachCellOfBlock(const openvdb::Coord& block, const VoxelBlocks& blocks, 
 /// A particle's place in the body frame, index h (unit: m).
 Eigen::Vector3d restPlaceM(const Lattice& lattice, uint32_t p)
 {
-    const openvdb::Coord& v = lattice.voxel[p];
-    return lattice.voxelSizeM * Eigen::Vector3d(v.x(), v.y(), v.z());
+    const openvdb::Coord& v = lattice.model().voxel[p];
+    return lattice.model().voxelSizeM * Eigen::Vector3d(v.x(), v.y(), v.z());
 }
 
 /// The rigid kinetic energy of a fit, with its own inertia (points plus each particle's cube).
 double rigidKineticEnergyJ(const Lattice& lattice, const std::vector<uint32_t>& particles, const RigidFit& fit)
 {
-    const double m = lattice.particleMassKg;
+    const double m = lattice.model().particleMassKg;
     Eigen::Vector3d restCentre = Eigen::Vector3d::Zero();
     for (const uint32_t p : particles) restCentre += restPlaceM(lattice, p);
     restCentre /= double(particles.size());
-    Eigen::Matrix3d inertia = double(particles.size()) * lattice.particleInertiaKgM2 * Eigen::Matrix3d::Identity();
+    Eigen::Matrix3d inertia = double(particles.size()) * lattice.model().particleInertiaKgM2 * Eigen::Matrix3d::Identity();
     for (const uint32_t p : particles) {
         const Eigen::Vector3d r = restPlaceM(lattice, p) - restCentre;
         inertia += m * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
@@ -103,9 +103,9 @@ double rigidKineticEnergyJ(const Lattice& lattice, const std::vector<uint32_t>& 
 
 /// A body's lattice in the given blocks, moving with the body.
 DeformableBody latticeInBlocks(const Body& body, const VoxelBlocks& blocks, const Material& material, const LatticeSettings& settings,
-                               const LatticeSupports& supports, double timeS)
+                               const StaticWorld& supports, double timeS)
 {
-    DeformableBody d{body.id, Lattice::fromBody(body, material, supports, settings, blocks), timeS, timeS, {}, 0.0, {}};
+    DeformableBody d{body.id, blocks, Lattice::fromBody(body, material, supports, settings, blocks), timeS, timeS, {}, 0.0, {}};
     // Faces come in leaf order, a voxel's together: a particle is looked up once per voxel.
     d.particleOfFace.reserve(body.exposedFaces.size());
     for (size_t f = 0; f < body.exposedFaces.size(); ++f)
@@ -125,18 +125,18 @@ void applyGatheredForces(DeformableBody& deformable)
 }  // namespace
 
 DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
-                                    const LatticeSupports& supports, double timeS)
+                                    const StaticWorld& supports, double timeS)
 {
     return latticeInBlocks(body, blocksFor(body, settings.particleVoxels), material, settings, supports, timeS);
 }
 
 void restoreDeformable(DeformableBody& saved, const Body& body, const Material& material, const LatticeSettings& settings,
-                       const LatticeSupports& supports)
+                       const StaticWorld& supports)
 {
-    if (saved.lattice.blocks.voxels < 1 || saved.lattice.blocks.voxels > 8)
+    if (saved.blocks.voxels < 1 || saved.blocks.voxels > 8)
         throw InputError("saved state: the lattice of body " + std::to_string(body.id) + " has particles of " +
-                         std::to_string(saved.lattice.blocks.voxels) + " voxels (1 to 8)");
-    DeformableBody fresh = latticeInBlocks(body, saved.lattice.blocks, material, settings, supports, saved.enteredS);
+                         std::to_string(saved.blocks.voxels) + " voxels (1 to 8)");
+    DeformableBody fresh = latticeInBlocks(body, saved.blocks, material, settings, supports, saved.enteredS);
     fresh.lastLoadedS = saved.lastLoadedS;
     Lattice& to = fresh.lattice;
     Lattice& from = saved.lattice;
@@ -166,13 +166,13 @@ void setExternalForces(DeformableBody& deformable, const Body& body, const std::
 {
     Lattice& lattice = deformable.lattice;
     // The body's weight, over its particles (blocks at the surface are heavier than its voxels).
-    const Eigen::Vector3d weight = body.mass.massKg / double(lattice.voxelParticleCount) * gravityMS2;
-    for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = lattice.held[p] ? Eigen::Vector3d::Zero() : weight;
+    const Eigen::Vector3d weight = body.mass.massKg / double(lattice.model().voxelParticleCount) * gravityMS2;
+    for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = lattice.model().held[p] ? Eigen::Vector3d::Zero() : weight;
     if (faceForcesN.empty()) return;
     SPALL_CHECK(deformable.particleOfFace.size() == faceForcesN.size());  // the lattice's own body's faces
     for (size_t f = 0; f < faceForcesN.size(); ++f) {
         const uint32_t p = deformable.particleOfFace[f];
-        if (!lattice.held[p]) lattice.externalForceN[p] += faceForcesN[f];
+        if (!lattice.model().held[p]) lattice.externalForceN[p] += faceForcesN[f];
     }
 }
 
@@ -216,8 +216,8 @@ int64_t advanceDeformable(DeformableBody& deformable, double dtS)
 RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& particles)
 {
     RigidFit fit;
-    const double m = lattice.particleMassKg, n = double(particles.size());
-    const double cubeMoment = lattice.voxelSizeM * lattice.voxelSizeM / 12.0;
+    const double m = lattice.model().particleMassKg, n = double(particles.size());
+    const double cubeMoment = lattice.model().voxelSizeM * lattice.model().voxelSizeM / 12.0;
     Eigen::Vector3d restCentre = Eigen::Vector3d::Zero();
     for (const uint32_t p : particles) {
         fit.centreM += lattice.state.positionM[p];
@@ -236,8 +236,8 @@ RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& par
     for (const uint32_t p : particles) {
         const Eigen::Vector3d d = lattice.state.positionM[p] - fit.centreM;
         covariance += d * (restPlaceM(lattice, p) - restCentre).transpose() + cubeMoment * lattice.state.orientation[p].toRotationMatrix();
-        fit.angularMomentumKgM2S += d.cross(m * (lattice.state.velocityMS[p] - fit.velocityMS)) + lattice.particleInertiaKgM2 * lattice.state.angularVelocityRadS[p];
-        fit.kineticEnergyJ += 0.5 * m * lattice.state.velocityMS[p].squaredNorm() + 0.5 * lattice.particleInertiaKgM2 * lattice.state.angularVelocityRadS[p].squaredNorm();
+        fit.angularMomentumKgM2S += d.cross(m * (lattice.state.velocityMS[p] - fit.velocityMS)) + lattice.model().particleInertiaKgM2 * lattice.state.angularVelocityRadS[p];
+        fit.kineticEnergyJ += 0.5 * m * lattice.state.velocityMS[p].squaredNorm() + 0.5 * lattice.model().particleInertiaKgM2 * lattice.state.angularVelocityRadS[p].squaredNorm();
     }
     const Eigen::JacobiSVD<Eigen::Matrix3d> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
     Eigen::Matrix3d flip = Eigen::Matrix3d::Identity();
@@ -249,18 +249,18 @@ RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& par
 void followLattice(Body& body, const Lattice& lattice)
 {
     if (body.anchored) return;
-    std::vector<uint32_t> voxels(lattice.voxelParticleCount);
+    std::vector<uint32_t> voxels(lattice.model().voxelParticleCount);
     std::iota(voxels.begin(), voxels.end(), 0u);
-    setMotionsFromFit({&body}, fitRigidMotion(lattice, voxels), blockCentreOffsetM(body.voxelSizeM, lattice.blocks));
+    setMotionsFromFit({&body}, fitRigidMotion(lattice, voxels), blockCentreOffsetM(body.voxelSizeM, lattice.model().blocks));
 }
 
 void addRigidMomentum(Lattice& lattice, const Eigen::Vector3d& linearKgMS, const Eigen::Vector3d& angularAboutOriginKgM2S)
 {
-    const double m = lattice.particleMassKg;
+    const double m = lattice.model().particleMassKg;
     double massKg = 0.0;
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
-        if (lattice.held[p]) continue;
+        if (lattice.model().held[p]) continue;
         massKg += m;
         centre += m * lattice.state.positionM[p];
     }
@@ -269,15 +269,15 @@ void addRigidMomentum(Lattice& lattice, const Eigen::Vector3d& linearKgMS, const
     // The free particles' inertia about their centre: their places' and each cube's own.
     Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
-        if (lattice.held[p]) continue;
+        if (lattice.model().held[p]) continue;
         const Eigen::Vector3d r = lattice.state.positionM[p] - centre;
-        inertia += m * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose()) + lattice.particleInertiaKgM2 * Eigen::Matrix3d::Identity();
+        inertia += m * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose()) + lattice.model().particleInertiaKgM2 * Eigen::Matrix3d::Identity();
     }
     // L about the origin = c × P + I ω about the centre, for the rigid field's increment.
     const Eigen::Vector3d dv = linearKgMS / massKg;
     const Eigen::Vector3d dw = inertia.ldlt().solve(angularAboutOriginKgM2S - centre.cross(linearKgMS));
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
-        if (lattice.held[p]) continue;
+        if (lattice.model().held[p]) continue;
         lattice.state.velocityMS[p] += dv + dw.cross(lattice.state.positionM[p] - centre);
         lattice.state.angularVelocityRadS[p] += dw;
     }
@@ -299,14 +299,14 @@ LatticePieces latticePieces(const Lattice& lattice)
         }
         pieces.pieceOf[p] = uint32_t(piece);
         pieces.particles[size_t(piece)].push_back(p);
-        pieces.held[size_t(piece)] |= lattice.held[p];
-        pieces.voxels[size_t(piece)] += p < lattice.voxelParticleCount;
+        pieces.held[size_t(piece)] |= lattice.model().held[p];
+        pieces.voxels[size_t(piece)] += p < lattice.model().voxelParticleCount;
     }
     pieces.vibrationJ.assign(pieces.particles.size(), 0.0);
     // A broken bond between two pieces holds only contact: its energy belongs to neither.
     for (size_t b = 0; b < lattice.bondCount(); ++b)
-        if (pieces.pieceOf[lattice.bonds[b].low] == pieces.pieceOf[lattice.bonds[b].high])
-            pieces.vibrationJ[pieces.pieceOf[lattice.bonds[b].low]] += lattice.bondStrainEnergyJ(b);
+        if (pieces.pieceOf[lattice.model().bonds[b].low] == pieces.pieceOf[lattice.model().bonds[b].high])
+            pieces.vibrationJ[pieces.pieceOf[lattice.model().bonds[b].low]] += lattice.bondStrainEnergyJ(b);
     for (uint32_t p = 0; p < lattice.particleCount(); ++p) pieces.vibrationJ[pieces.pieceOf[p]] += lattice.volumetricEnergyJ(p);
     for (size_t i = 0; i < pieces.particles.size(); ++i) {
         const RigidFit fit = fitRigidMotion(lattice, pieces.particles[i]);
@@ -327,9 +327,9 @@ double elasticCapacityPerVoxelJ(const Material& material, double voxelSizeM)
 }
 
 DeformableBody continueDeformable(const Body& part, const DeformableBody& whole, const Material& material, const LatticeSettings& settings,
-                                  const LatticeSupports& supports)
+                                  const StaticWorld& supports)
 {
-    DeformableBody d = latticeInBlocks(part, whole.lattice.blocks, material, settings, supports, whole.enteredS);
+    DeformableBody d = latticeInBlocks(part, whole.blocks, material, settings, supports, whole.enteredS);
     d.lastLoadedS = whole.lastLoadedS;
     const Lattice& from = whole.lattice;
     Lattice& to = d.lattice;
@@ -337,8 +337,8 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
     // corner voxel has more free faces): a support point the whole lacked, or where the whole
     // had a voxel, and its bond, start afresh.
     const auto counterpart = [&](size_t p) {
-        const int32_t q = from.particleAt(to.voxel[p]);
-        const bool sameKind = q >= 0 && (size_t(q) < from.voxelParticleCount) == (p < to.voxelParticleCount);
+        const int32_t q = from.particleAt(to.model().voxel[p]);
+        const bool sameKind = q >= 0 && (size_t(q) < from.model().voxelParticleCount) == (p < to.model().voxelParticleCount);
         return sameKind ? q : -1;
     };
     for (size_t p = 0; p < to.particleCount(); ++p) {
@@ -350,9 +350,9 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
         to.state.orientation[p] = from.state.orientation[size_t(q)];
     }
     for (size_t b = 0; b < to.bondCount(); ++b) {
-        const int32_t low = counterpart(to.bonds[b].low), high = counterpart(to.bonds[b].high);
+        const int32_t low = counterpart(to.model().bonds[b].low), high = counterpart(to.model().bonds[b].high);
         if (low < 0 || high < 0) continue;
-        const int32_t c = from.bondAcross(size_t(low), 2 * to.bonds[b].axis + 1);
+        const int32_t c = from.bondAcross(size_t(low), 2 * to.model().bonds[b].axis + 1);
         if (c >= 0) to.state.bondHistory[b] = from.state.bondHistory[size_t(c)];
     }
     // The forces of the part's own bonds; those of bonds to the pieces that left (broken, in
@@ -369,17 +369,17 @@ HandOff handOff(const Body& body, const Lattice& lattice)
     auto links = whole.grid->getAccessor();
     for (size_t b = 0; b < lattice.bondCount(); ++b) {
         if (lattice.bondDamage(b) < 1.0) continue;
-        const LatticeBond& bond = lattice.bonds[b];
-        if (std::max(bond.low, bond.high) >= lattice.voxelParticleCount) {
+        const LatticeBond& bond = lattice.model().bonds[b];
+        if (std::max(bond.low, bond.high) >= lattice.model().voxelParticleCount) {
             // An anchor: its voxels let go of their support.
-            forEachCellOfBlock(lattice.voxel[std::min(bond.low, bond.high)], lattice.blocks, -1, [&](const openvdb::Coord& v) {
+            forEachCellOfBlock(lattice.model().voxel[std::min(bond.low, bond.high)], lattice.model().blocks, -1, [&](const openvdb::Coord& v) {
                 if (links.isValueOn(v)) links.setValueOn(v, links.getValue(v) & ~kAnchorBit);
             });
             ++result.brokenAnchors;
             continue;
         }
         const int64_t linksBefore = result.brokenLinks;
-        forEachCellOfBlock(lattice.voxel[bond.low], lattice.blocks, 2 * bond.axis + 1, [&](const openvdb::Coord& v) {
+        forEachCellOfBlock(lattice.model().voxel[bond.low], lattice.model().blocks, 2 * bond.axis + 1, [&](const openvdb::Coord& v) {
             result.brokenLinks += links.isValueOn(v) && breakLink(links, v, 2 * bond.axis + 1) ? 1 : 0;
         });
         result.brokenBonds += result.brokenLinks > linksBefore ? 1 : 0;
@@ -405,7 +405,7 @@ HandOff handOff(const Body& body, const Lattice& lattice)
             for (auto it = part->grid->constTree().cbeginValueOn(); it; ++it) particles.push_back(particleOfVoxel(lattice, it.getCoord()));
         std::sort(particles.begin(), particles.end());
         particles.erase(std::unique(particles.begin(), particles.end()), particles.end());
-        setMotionsFromFit(parts, fitRigidMotion(lattice, particles), blockCentreOffsetM(body.voxelSizeM, lattice.blocks));
+        setMotionsFromFit(parts, fitRigidMotion(lattice, particles), blockCentreOffsetM(body.voxelSizeM, lattice.model().blocks));
     }
     return result;
 }

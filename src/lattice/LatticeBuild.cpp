@@ -1,6 +1,8 @@
 // Building a lattice from a body: the bonds' calibration against the material's elasticity,
 // particles and bonds from the body's voxels and links, and its anchors' support points.
-#include <spall/lattice/Lattice.h>
+#include "LatticeForEach.h"
+
+#include <spall/lattice/RandomField.h>
 
 #include <spall/core/Error.h>
 #include <spall/loads/Exposure.h>
@@ -87,40 +89,41 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
     return k;
 }
 
-Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const LatticeSupports& supports, const LatticeSettings& settings,
+Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const StaticWorld& supports, const LatticeSettings& settings,
                           const VoxelBlocks& blocks)
 {
     const Body coarse = blocks.voxels > 1 ? coarsenedBody(wholeBody, blocks) : Body();
     const Body& body = blocks.voxels > 1 ? coarse : wholeBody;
     Lattice lattice;
-    lattice.blocks = blocks;
-    lattice.bulkViscosity = settings.bulkViscosity;
-    lattice.damageLaw = settings.damageLaw;
-    lattice.dampingRatio = material.dampingRatio;
+    lattice.mModel.blocks = blocks;
+    lattice.mModel.bulkViscosity = settings.bulkViscosity;
+    lattice.mModel.damageLaw = settings.damageLaw;
+    lattice.mModel.dampingRatio = material.dampingRatio;
     const double h = body.voxelSizeM;
-    lattice.voxelSizeM = h;
-    lattice.particleMassKg = material.densityKgM3 * h * h * h;
-    lattice.particleInertiaKgM2 = lattice.particleMassKg * h * h / 6.0;
-    lattice.stiffness = calibrateLattice(material, h);
-    lattice.ground = supports.ground;
+    lattice.mModel.voxelSizeM = h;
+    lattice.mModel.particleMassKg = material.densityKgM3 * h * h * h;
+    lattice.mModel.particleInertiaKgM2 = lattice.mModel.particleMassKg * h * h / 6.0;
+    lattice.mModel.stiffness = calibrateLattice(material, h);
+    lattice.computeFailureTerms();
+    lattice.mModel.ground = supports.ground;
     lattice.keepOutOf(supports.boxes);
     lattice.addVoxelParticles(body);
     // A body may rest a little below the plane (anchored within a quarter voxel of it; blocks of
     // voxels reach lower than their voxels): the contact plane is then where its cubes rest, so
     // a particle whose ground bond breaks is not thrown up onto the plane.
-    if (lattice.ground.enabled)
+    if (lattice.mModel.ground.enabled)
         for (const Eigen::Vector3d& x : lattice.state.positionM)
-            lattice.ground.offsetM = std::min(lattice.ground.offsetM, lattice.ground.normal.dot(x) - 0.5 * h);
+            lattice.mModel.ground.offsetM = std::min(lattice.mModel.ground.offsetM, lattice.mModel.ground.normal.dot(x) - 0.5 * h);
     lattice.addLinkBonds(body);
     lattice.addSupportBonds(body, supports);
     if (hasUnits(material)) lattice.classifyUnitBonds(material);
     if (hasGrain(material)) lattice.classifyGrainBonds(material);
-    lattice.state.bondHistory.assign(lattice.bonds.size(), BondHistory());
+    lattice.state.bondHistory.assign(lattice.mModel.bonds.size(), BondHistory());
     if (material.strengthCoefficientOfVariation > 0.0) lattice.scatterStrengths(material, settings.seed);
-    const LatticeStiffness& k = lattice.stiffness;
+    const LatticeStiffness& k = lattice.mModel.stiffness;
     const double stiffestPa = *std::max_element(k.normalModulusPa.begin(), k.normalModulusPa.end());
     const double pWaveSpeed = std::sqrt((k.lameLambdaPa + stiffestPa) / material.densityKgM3);
-    lattice.mDashpotPerViscosity = material.densityKgM3 * pWaveSpeed * h * h;
+    lattice.mModel.dashpotPerViscosityNSPerM = material.densityKgM3 * pWaveSpeed * h * h;
     lattice.condenseVolumetricModulus();
     lattice.refreshForces();
     return lattice;
@@ -129,15 +132,15 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
 void Lattice::addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& placeM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
                           const Eigen::Quaterniond& q, bool isHeld)
 {
-    mParticleIndex->setValueOn(ijk, int32_t(voxel.size()));
-    voxel.push_back(ijk);
+    mModel.particleIndex->setValueOn(ijk, int32_t(mModel.voxel.size()));
+    mModel.voxel.push_back(ijk);
     state.positionM.push_back(placeM);
     state.velocityMS.push_back(isHeld ? Eigen::Vector3d::Zero() : velocity);
     state.angularVelocityRadS.push_back(isHeld ? Eigen::Vector3d::Zero() : spin);
     state.orientation.push_back(q);
-    held.push_back(isHeld ? 1 : 0);
+    mModel.held.push_back(isHeld ? 1 : 0);
     externalForceN.push_back(Eigen::Vector3d::Zero());
-    mBondAcross.push_back({-1, -1, -1, -1, -1, -1});
+    mModel.bondAcross.push_back({-1, -1, -1, -1, -1, -1});
 }
 
 void Lattice::addVoxelParticles(const Body& body)
@@ -147,27 +150,27 @@ void Lattice::addVoxelParticles(const Body& body)
         addParticle(it.getCoord(), body.motion.positionM + offset, body.motion.linearVelocityMS + body.motion.angularVelocityRadS.cross(offset),
                     body.motion.angularVelocityRadS, body.motion.orientation, (it.getValue() & kAnchorBit) != 0);
     }
-    voxelParticleCount = voxel.size();
+    mModel.voxelParticleCount = mModel.voxel.size();
 }
 
 void Lattice::addBond(uint32_t low, uint32_t high, int axis)
 {
-    mBondAcross[low][2 * axis + 1] = mBondAcross[high][2 * axis] = int32_t(bonds.size());
-    bonds.push_back({low, high, axis});
+    mModel.bondAcross[low][2 * axis + 1] = mModel.bondAcross[high][2 * axis] = int32_t(mModel.bonds.size());
+    mModel.bonds.push_back({low, high, axis});
 }
 
 void Lattice::addLinkBonds(const Body& body)
 {
     auto links = body.grid->getConstAccessor();
-    openvdb::tree::ValueAccessor<const LinkTree> indices(*mParticleIndex);
-    for (uint32_t p = 0; p < voxelParticleCount; ++p) {
-        const int32_t bits = links.getValue(voxel[p]);
+    openvdb::tree::ValueAccessor<const LinkTree> indices(*mModel.particleIndex);
+    for (uint32_t p = 0; p < mModel.voxelParticleCount; ++p) {
+        const int32_t bits = links.getValue(mModel.voxel[p]);
         for (const int face : {kPosX, kPosY, kPosZ})
-            if (bits & (1 << face)) addBond(p, uint32_t(indices.getValue(voxel[p] + faceOffset(face))), faceAxis(face));
+            if (bits & (1 << face)) addBond(p, uint32_t(indices.getValue(mModel.voxel[p] + faceOffset(face))), faceAxis(face));
     }
 }
 
-void Lattice::addSupportBonds(const Body& body, const LatticeSupports& supports)
+void Lattice::addSupportBonds(const Body& body, const StaticWorld& supports)
 {
     // The face of the body's voxels that looks most directly into the ground.
     int groundFace = -1;
@@ -177,9 +180,9 @@ void Lattice::addSupportBonds(const Body& body, const LatticeSupports& supports)
         down.cwiseAbs().maxCoeff(&axis);
         groundFace = 2 * axis + (down[axis] > 0.0 ? 1 : 0);
     }
-    mGroundBond.assign(voxelParticleCount, -1);
-    for (uint32_t p = 0; p < voxelParticleCount; ++p) {
-        if (!held[p]) continue;
+    mModel.groundBond.assign(mModel.voxelParticleCount, -1);
+    for (uint32_t p = 0; p < mModel.voxelParticleCount; ++p) {
+        if (!mModel.held[p]) continue;
         const FaceInBox hold = supportedFace(body, p, groundFace, supports.boxes);
         const int face = hold.face;
         if (face < 0) continue;
@@ -187,13 +190,13 @@ void Lattice::addSupportBonds(const Body& body, const LatticeSupports& supports)
         // material, joined by a bond of the material's own stiffness and strength.
         const int axis = faceAxis(face);
         const uint32_t supportPoint = uint32_t(particleCount());
-        addParticle(voxel[p] + faceOffset(face), state.positionM[p] + body.motion.orientation * (voxelSizeM * faceNormal(face)),
+        addParticle(mModel.voxel[p] + faceOffset(face), state.positionM[p] + body.motion.orientation * (mModel.voxelSizeM * faceNormal(face)),
                     Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), body.motion.orientation, true);
-        held[p] = 0;
+        mModel.held[p] = 0;
         if (face & 1) addBond(p, supportPoint, axis);
         else addBond(supportPoint, p, axis);
-        if (hold.box < 0) mGroundBond[p] = int32_t(bonds.size() - 1);
-        else if (size_t(hold.box) < supports.pinned.size()) bonds.back().pinned = supports.pinned[size_t(hold.box)];
+        if (hold.box < 0) mModel.groundBond[p] = int32_t(mModel.bonds.size() - 1);
+        else if (size_t(hold.box) < supports.pinned.size()) mModel.bonds.back().pinned = supports.pinned[size_t(hold.box)];
     }
 }
 
@@ -201,29 +204,29 @@ FaceInBox Lattice::supportedFace(const Body& body, uint32_t p, int groundFace, c
 {
     // Anchors were set within a quarter voxel of the ground (Simulation); half a voxel here only
     // tells the ground's anchors from the boxes'.
-    if (groundFace >= 0 && body.voxelHeightAbovePlaneM(voxel[p], ground.normal, ground.offsetM) <= 0.5 * voxelSizeM)
-        return body.grid->tree().isValueOn(voxel[p] + faceOffset(groundFace)) ? FaceInBox() : FaceInBox{groundFace, 0.0, -1};
-    return freeFaceDeepestInBoxes(body, voxel[p], boxes);
+    if (groundFace >= 0 && body.voxelHeightAbovePlaneM(mModel.voxel[p], mModel.ground.normal, mModel.ground.offsetM) <= 0.5 * mModel.voxelSizeM)
+        return body.grid->tree().isValueOn(mModel.voxel[p] + faceOffset(groundFace)) ? FaceInBox() : FaceInBox{groundFace, 0.0, -1};
+    return freeFaceDeepestInBoxes(body, mModel.voxel[p], boxes);
 }
 
 void Lattice::classifyUnitBonds(const Material& material)
 {
     // Voxels taller than a course do not resolve the units: every bond then spans a bed joint,
     // and the material stays what its own (the joints') values make it, homogenised.
-    if (voxelSizeM > material.unitHeightM + material.jointThicknessM) return;
+    if (mModel.voxelSizeM > material.unitHeightM + material.jointThicknessM) return;
     // A voxel's centre where the object was voxelised: its index times h (Voxelise.cpp's transform).
     const auto unitOf = [&](const openvdb::Coord& v) {
-        return masonryUnitOf(material, voxelSizeM * v.x(), voxelSizeM * v.y(), voxelSizeM * v.z());
+        return masonryUnitOf(material, mModel.voxelSizeM * v.x(), mModel.voxelSizeM * v.y(), mModel.voxelSizeM * v.z());
     };
-    for (LatticeBond& bond : bonds)
-        if (bond.low < voxelParticleCount && bond.high < voxelParticleCount && unitOf(voxel[bond.low]) == unitOf(voxel[bond.high]))
+    for (LatticeBond& bond : mModel.bonds)
+        if (bond.low < mModel.voxelParticleCount && bond.high < mModel.voxelParticleCount && unitOf(mModel.voxel[bond.low]) == unitOf(mModel.voxel[bond.high]))
             bond.strengthClass = 1;
 }
 
 void Lattice::classifyGrainBonds(const Material& material)
 {
     const int grainAxis = grainAxisIndex(material);
-    for (LatticeBond& bond : bonds)
+    for (LatticeBond& bond : mModel.bonds)
         if (bond.axis == grainAxis) bond.strengthClass = 1;
 }
 
@@ -232,20 +235,35 @@ void Lattice::condenseVolumetricModulus()
     // λ condensed over the axes a particle has no bond along (σ = 0 there):
     // λ / (1 + λ Σ_missing 1/d); isotropic, λ for three axes, 2μλ / (λ + 2μ) for two (plane
     // stress), λμ / (λ + μ) for one (a bar: E = 2μ + that).
-    const double lambda = stiffness.lameLambdaPa;
-    mLambdaPa.resize(particleCount());
-    mInverseBondCount.resize(particleCount());
+    const double lambda = mModel.stiffness.lameLambdaPa;
+    mModel.lambdaPa.resize(particleCount());
+    mModel.inverseBondCount.resize(particleCount());
     for (size_t p = 0; p < particleCount(); ++p) {
         double missingCompliance = 0.0;
         for (int axis = 0; axis < 3; ++axis) {
             // A pin carries nothing along its axis, so it is no bond there.
             int count = 0;
-            for (const int face : {2 * axis, 2 * axis + 1}) count += int(mBondAcross[p][face] >= 0 && !bonds[size_t(mBondAcross[p][face])].pinned);
-            mInverseBondCount[p][axis] = count > 0 ? 1.0 / count : 0.0;
-            if (count == 0) missingCompliance += 1.0 / stiffness.normalModulusPa[axis];
+            for (const int face : {2 * axis, 2 * axis + 1}) count += int(mModel.bondAcross[p][face] >= 0 && !mModel.bonds[size_t(mModel.bondAcross[p][face])].pinned);
+            mModel.inverseBondCount[p][axis] = count > 0 ? 1.0 / count : 0.0;
+            if (count == 0) missingCompliance += 1.0 / mModel.stiffness.normalModulusPa[axis];
         }
-        mLambdaPa[p] = lambda / (1.0 + lambda * missingCompliance);  // a particle with no bonds has no strain to weigh
+        mModel.lambdaPa[p] = lambda / (1.0 + lambda * missingCompliance);  // a particle with no bonds has no strain to weigh
     }
+}
+
+void Lattice::scatterStrengths(const Material& material, uint64_t seed)
+{
+    const double h = mModel.voxelSizeM, l = material.strengthCorrelationLengthM;
+    const GaussianRandomField field(seed, l);
+    // The face average's variance: the variance function along each of its two sides.
+    const double cov = material.strengthCoefficientOfVariation * varianceFunction(h, l);
+    const double sigma = std::sqrt(std::log(1.0 + cov * cov));
+    forEach(mModel.bonds.size(), [&](size_t b) {
+        const openvdb::Coord lo = mModel.voxel[mModel.bonds[b].low];
+        Eigen::Vector3d mid = Eigen::Vector3d(lo.x(), lo.y(), lo.z()) * h;
+        mid[mModel.bonds[b].axis] += 0.5 * h;
+        state.bondHistory[b].strengthScale = std::exp(sigma * field.at(mid) - 0.5 * sigma * sigma);
+    });
 }
 
 }  // namespace spall

@@ -36,15 +36,15 @@ uint64_t cellKey(int64_t x, int64_t y, int64_t z)
 bool Lattice::shareABond(uint32_t p, uint32_t q) const
 {
     for (int face = 0; face < 6; ++face) {
-        const int32_t b = mBondAcross[p][face];
-        if (b >= 0 && (bonds[size_t(b)].low == q || bonds[size_t(b)].high == q)) return true;
+        const int32_t b = mModel.bondAcross[p][face];
+        if (b >= 0 && (mModel.bonds[size_t(b)].low == q || mModel.bonds[size_t(b)].high == q)) return true;
     }
     return false;
 }
 
 void Lattice::listContactCandidates()
 {
-    const double cellM = (1.0 + kContactSkin) * voxelSizeM, reach2 = cellM * cellM;
+    const double cellM = (1.0 + kContactSkin) * mModel.voxelSizeM, reach2 = cellM * cellM;
     const size_t n = particleCount();
     std::vector<std::array<int64_t, 3>> cell(n);
     std::vector<std::pair<uint64_t, uint32_t>> byCell(n);
@@ -66,7 +66,7 @@ void Lattice::listContactCandidates()
                         auto it = std::lower_bound(byCell.begin(), byCell.end(), std::make_pair(key, p + 1));
                         for (; it != byCell.end() && it->first == key; ++it) {
                             const uint32_t q = it->second;
-                            if ((held[p] && held[q]) || (state.positionM[q] - state.positionM[p]).squaredNorm() >= reach2 || shareABond(p, q)) continue;
+                            if ((mModel.held[p] && mModel.held[q]) || (state.positionM[q] - state.positionM[p]).squaredNorm() >= reach2 || shareABond(p, q)) continue;
                             found.emplace_back(p, q);
                         }
                     }
@@ -79,7 +79,7 @@ void Lattice::listContactCandidates()
 
 void Lattice::updateContactCandidates()
 {
-    const double limit = 0.5 * kContactSkin * voxelSizeM, limit2 = limit * limit;
+    const double limit = 0.5 * kContactSkin * mModel.voxelSizeM, limit2 = limit * limit;
     bool moved = mListedAtM.size() != particleCount();
     for (size_t p = 0; p < particleCount() && !moved; ++p) moved = (state.positionM[p] - mListedAtM[p]).squaredNorm() > limit2;
     if (moved) listContactCandidates();
@@ -88,13 +88,13 @@ void Lattice::updateContactCandidates()
 void Lattice::addContactForces()
 {
     const double stiffnessNPerM =
-        kContactStiffnessFraction * *std::min_element(stiffness.normalNPerM.begin(), stiffness.normalNPerM.end());
+        kContactStiffnessFraction * *std::min_element(mModel.stiffness.normalNPerM.begin(), mModel.stiffness.normalNPerM.end());
     // In the sorted list's order, so the sums do not depend on when it was last made.
     for (const auto& [p, q] : mContactCandidates) {
         const Eigen::Vector3d apartM = state.positionM[q] - state.positionM[p];
         const double distanceM = apartM.norm();
-        if (distanceM >= voxelSizeM || distanceM <= 0.0) continue;
-        const Eigen::Vector3d onQ = (stiffnessNPerM * (voxelSizeM - distanceM) / distanceM) * apartM;
+        if (distanceM >= mModel.voxelSizeM || distanceM <= 0.0) continue;
+        const Eigen::Vector3d onQ = (stiffnessNPerM * (mModel.voxelSizeM - distanceM) / distanceM) * apartM;
         state.bondForceN[q] += onQ;
         state.bondForceN[p] -= onQ;
     }

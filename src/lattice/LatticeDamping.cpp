@@ -18,13 +18,13 @@ DisjointSets Lattice::intactPieces() const
 {
     DisjointSets sets(particleCount());
     for (size_t b = 0; b < bondCount(); ++b)
-        if (bondDamage(b) < 1.0) sets.join(bonds[b].low, bonds[b].high);
+        if (bondDamage(b) < 1.0) sets.join(mModel.bonds[b].low, mModel.bonds[b].high);
     return sets;
 }
 
 double Lattice::fundamentalFrequencyRadS(double thicknessM, double lengthM, bool isHeld) const
 {
-    const double barSpeedMS = std::sqrt(stiffness.strength[0].youngsModulusPa * voxelSizeM * voxelSizeM * voxelSizeM / particleMassKg);
+    const double barSpeedMS = std::sqrt(mModel.stiffness.strength[0].youngsModulusPa * mModel.voxelSizeM * mModel.voxelSizeM * mModel.voxelSizeM / mModel.particleMassKg);
     // (β L)² / √12 for a rectangular section's radius of gyration t / √12: β L = 4.730 free-free,
     // 1.875 clamped-free (Clough & Penzien §18-3).
     const double shapeFactor = isHeld ? 1.875 * 1.875 / std::sqrt(12.0) : 4.730 * 4.730 / std::sqrt(12.0);
@@ -37,16 +37,16 @@ std::vector<uint32_t> Lattice::bondsFromHeld() const
     constexpr uint32_t kUnreached = std::numeric_limits<uint32_t>::max();
     std::vector<uint32_t> hops(particleCount(), kUnreached), front;
     for (uint32_t p = 0; p < particleCount(); ++p)
-        if (held[p]) {
+        if (mModel.held[p]) {
             hops[p] = 0;
             front.push_back(p);
         }
     for (size_t next = 0; next < front.size(); ++next) {
         const uint32_t p = front[next];
         for (int face = 0; face < 6; ++face) {
-            const int32_t b = mBondAcross[p][face];
+            const int32_t b = mModel.bondAcross[p][face];
             if (b < 0 || bondDamage(size_t(b)) >= 1.0) continue;
-            const uint32_t q = bonds[size_t(b)].low == p ? bonds[size_t(b)].high : bonds[size_t(b)].low;
+            const uint32_t q = mModel.bonds[size_t(b)].low == p ? mModel.bonds[size_t(b)].high : mModel.bonds[size_t(b)].low;
             if (hops[q] != kUnreached) continue;
             hops[q] = hops[p] + 1;
             front.push_back(q);
@@ -71,14 +71,14 @@ void Lattice::findDampedPieces()
             members.emplace_back();
             pieceHeld.push_back(0);
             pieceReach.push_back(0);
-            low.push_back(voxel[p]);
-            high.push_back(voxel[p]);
+            low.push_back(mModel.voxel[p]);
+            high.push_back(mModel.voxel[p]);
         }
         members[size_t(piece)].push_back(p);
-        pieceHeld[size_t(piece)] |= held[p];
+        pieceHeld[size_t(piece)] |= mModel.held[p];
         pieceReach[size_t(piece)] = std::max(pieceReach[size_t(piece)], hops[p]);
-        low[size_t(piece)].minComponent(voxel[p]);
-        high[size_t(piece)].maxComponent(voxel[p]);
+        low[size_t(piece)].minComponent(mModel.voxel[p]);
+        high[size_t(piece)].maxComponent(mModel.voxel[p]);
     }
     // Runs of at most kDampingChunk of a piece's particles, in piece and particle order: summed
     // apart in parallel and joined in this order, so the sums do not depend on the threads.
@@ -89,10 +89,10 @@ void Lattice::findDampedPieces()
         DampedPiece& piece = mDampedPieces[k];
         piece.held = pieceHeld[k] != 0;
         std::array<double, 3> sides{};
-        for (int axis = 0; axis < 3; ++axis) sides[size_t(axis)] = double(high[k][axis] - low[k][axis] + 1) * voxelSizeM;
+        for (int axis = 0; axis < 3; ++axis) sides[size_t(axis)] = double(high[k][axis] - low[k][axis] + 1) * mModel.voxelSizeM;
         std::sort(sides.begin(), sides.end());
-        const double lengthM = piece.held ? (pieceReach[k] + 0.5) * voxelSizeM : sides[2];
-        piece.decayPerS = 2.0 * dampingRatio * fundamentalFrequencyRadS(sides[0], lengthM, piece.held);
+        const double lengthM = piece.held ? (pieceReach[k] + 0.5) * mModel.voxelSizeM : sides[2];
+        piece.decayPerS = 2.0 * mModel.dampingRatio * fundamentalFrequencyRadS(sides[0], lengthM, piece.held);
         piece.firstParticle = members[k].front();
         for (size_t begin = 0; begin < members[k].size(); begin += kDampingChunk) {
             const uint32_t start = uint32_t(mPieceParticles.size() + begin);
@@ -153,7 +153,7 @@ PieceMotion rigidMotionOf(const PieceSums& sums, double particleInertiaKgM2)
 
 void Lattice::dampVibration(double dtS)
 {
-    if (dampingRatio <= 0.0) return;
+    if (mModel.dampingRatio <= 0.0) return;
     if (mPiecesStale) findDampedPieces();
     // Each chunk of a free piece summed in parallel, the chunks joined per piece in order.
     std::vector<PieceSums> chunkSums(mDampingChunks.size());
@@ -167,12 +167,12 @@ void Lattice::dampVibration(double dtS)
             for (uint32_t i = chunk.begin; i < chunk.end; ++i) {
                 const uint32_t p = mPieceParticles[i];
                 const Eigen::Vector3d r = state.positionM[p] - state.positionM[piece.firstParticle];
-                s.massKg += particleMassKg;
+                s.massKg += mModel.particleMassKg;
                 s.particles += 1.0;
-                s.momentumKgMS += particleMassKg * state.velocityMS[p];
-                s.firstMomentKgM += particleMassKg * r;
-                s.secondMomentKgM2 += particleMassKg * r * r.transpose();
-                s.angularMomentumKgM2S += r.cross(particleMassKg * state.velocityMS[p]) + particleInertiaKgM2 * state.angularVelocityRadS[p];
+                s.momentumKgMS += mModel.particleMassKg * state.velocityMS[p];
+                s.firstMomentKgM += mModel.particleMassKg * r;
+                s.secondMomentKgM2 += mModel.particleMassKg * r * r.transpose();
+                s.angularMomentumKgM2S += r.cross(mModel.particleMassKg * state.velocityMS[p]) + mModel.particleInertiaKgM2 * state.angularVelocityRadS[p];
             }
         },
         kChunksPerTask);
@@ -181,7 +181,7 @@ void Lattice::dampVibration(double dtS)
     // A held piece's rigid motion is rest.
     std::vector<PieceMotion> motion(mDampedPieces.size());
     for (size_t k = 0; k < mDampedPieces.size(); ++k)
-        if (!mDampedPieces[k].held) motion[k] = rigidMotionOf(sums[k], particleInertiaKgM2);
+        if (!mDampedPieces[k].held) motion[k] = rigidMotionOf(sums[k], mModel.particleInertiaKgM2);
     forEachIndex(
         mDampingChunks.size(),
         [&](size_t c) {
@@ -192,7 +192,7 @@ void Lattice::dampVibration(double dtS)
             const Eigen::Vector3d originM = state.positionM[piece.firstParticle];
             for (uint32_t i = chunk.begin; i < chunk.end; ++i) {
                 const uint32_t p = mPieceParticles[i];
-                if (held[p]) continue;
+                if (mModel.held[p]) continue;
                 const Eigen::Vector3d rigidVelocity = m.velocityMS + m.spinRadS.cross(state.positionM[p] - originM - m.centreM);
                 state.velocityMS[p] = rigidVelocity + keep * (state.velocityMS[p] - rigidVelocity);
                 state.angularVelocityRadS[p] = m.spinRadS + keep * (state.angularVelocityRadS[p] - m.spinRadS);

@@ -10,8 +10,8 @@ namespace spall {
 
 double Lattice::elasticEnergyJ(size_t b, const BondStrain& s, double intact) const
 {
-    const LatticeStiffness& k = stiffness;
-    const int a = bonds[b].axis;
+    const LatticeStiffness& k = mModel.stiffness;
+    const int a = mModel.bonds[b].axis;
     const double normal = s.displacementM[a], twist = s.rotationRad[a];
     return 0.5 * intact *
            (k.normalNPerM[a] * normal * normal + k.shearNPerM[a] * (s.displacementM.squaredNorm() - normal * normal) +
@@ -30,18 +30,18 @@ void Lattice::releaseSnapEnergies()
     // particle's volumetric energy with them counted (tr ε now plus their shares) less without.
     std::unordered_map<uint32_t, double> removedTrace;
     const auto traceShare = [&](uint32_t b, uint32_t p) {
-        const double stretchM = mBondTerms[b].armM.norm() - voxelSizeM;
-        return stretchM > 0.0 ? stretchM / voxelSizeM * mInverseBondCount[p][bonds[b].axis] : 0.0;
+        const double stretchM = mBondTerms[b].armM.norm() - mModel.voxelSizeM;
+        return stretchM > 0.0 ? stretchM / mModel.voxelSizeM * mModel.inverseBondCount[p][mModel.bonds[b].axis] : 0.0;
     };
     for (const uint32_t b : snapped)
-        for (const uint32_t p : {bonds[b].low, bonds[b].high}) removedTrace[p] += traceShare(b, p);
-    const double h3 = voxelSizeM * voxelSizeM * voxelSizeM;
+        for (const uint32_t p : {mModel.bonds[b].low, mModel.bonds[b].high}) removedTrace[p] += traceShare(b, p);
+    const double h3 = mModel.voxelSizeM * mModel.voxelSizeM * mModel.voxelSizeM;
     for (const uint32_t b : snapped) {
         double volumetricJ = 0.0;
-        for (const uint32_t p : {bonds[b].low, bonds[b].high}) {
+        for (const uint32_t p : {mModel.bonds[b].low, mModel.bonds[b].high}) {
             const double removed = removedTrace[p], trace = mVolumetricStrain[p];
             if (removed <= 0.0) continue;
-            const double particleJ = 0.5 * mLambdaPa[p] * h3 * ((trace + removed) * (trace + removed) - trace * trace);
+            const double particleJ = 0.5 * mModel.lambdaPa[p] * h3 * ((trace + removed) * (trace + removed) - trace * trace);
             volumetricJ += particleJ * traceShare(b, p) / removed;
         }
         releaseSnapEnergy(b, volumetricJ);
@@ -50,58 +50,58 @@ void Lattice::releaseSnapEnergies()
 
 void Lattice::releaseSnapEnergy(size_t b, double volumetricJ)
 {
-    const LatticeBond& bond = bonds[b];
+    const LatticeBond& bond = mModel.bonds[b];
     const int a = bond.axis;
-    const int freeEnds = int(!held[bond.low]) + int(!held[bond.high]);
+    const int freeEnds = int(!mModel.held[bond.low]) + int(!mModel.held[bond.high]);
     if (freeEnds == 0) return;
     const BondStrain strain = strainOf(bond);
     const double lengthM = mBondTerms[b].armM.norm();
     double lostJ = elasticEnergyJ(b, strain, 1.0) + volumetricJ;
     // Closed, it still carries its compression as contact: its normal spring's energy stays.
-    if (lengthM < voxelSizeM) lostJ -= 0.5 * stiffness.normalNPerM[size_t(a)] * strain.displacementM[a] * strain.displacementM[a];
+    if (lengthM < mModel.voxelSizeM) lostJ -= 0.5 * mModel.stiffness.normalNPerM[size_t(a)] * strain.displacementM[a] * strain.displacementM[a];
     // A step carries a bond past its strength by up to a third of its peak stretch, and the
     // energy of that overshoot was never paid for by the particles (their next kick would have
     // paid it): what it held on its failure surface is the energy, quadratic in a strain the
     // failure index is linear in, over the index squared (rate-free strength).
-    const LatticeStiffness::Strength& strength = stiffness.strength[bond.strengthClass];
+    const LatticeStiffness::Strength& strength = mModel.stiffness.strength[bond.strengthClass];
     const double index = equivalentStretchM(b, strain, lengthM, 0.0) / (state.bondHistory[b].strengthScale * strength.peakStretchM);
-    const double releasedJ = lostJ / std::max(1.0, index * index) - strength.fractureEnergyJPerM2 * voxelSizeM * voxelSizeM;
+    const double releasedJ = lostJ / std::max(1.0, index * index) - strength.fractureEnergyJPerM2 * mModel.voxelSizeM * mModel.voxelSizeM;
     if (!(releasedJ > 0.0)) return;
     // Kinetic energy added by dv apart, shared between the free ends (a held end takes none):
     // E = m (dv w + dv² / 2) for one free end and m (dv w / 2 + dv² / 4) for two (each moving
     // dv / 2), w the free ends' opening rate: dv = -w + sqrt(w² + 2 n E / m), n free ends.
     const Eigen::Vector3d along = mBondTerms[b].armM / lengthM;
-    const auto freeVelocity = [&](uint32_t p) { return held[p] ? Eigen::Vector3d::Zero() : state.velocityMS[p]; };
+    const auto freeVelocity = [&](uint32_t p) { return mModel.held[p] ? Eigen::Vector3d::Zero() : state.velocityMS[p]; };
     const double w = (freeVelocity(bond.high) - freeVelocity(bond.low)).dot(along);
-    const double dv = -w + std::sqrt(w * w + 2.0 * freeEnds * releasedJ / particleMassKg);
-    if (!held[bond.high]) state.velocityMS[bond.high] += (dv / freeEnds) * along;
-    if (!held[bond.low]) state.velocityMS[bond.low] -= (dv / freeEnds) * along;
+    const double dv = -w + std::sqrt(w * w + 2.0 * freeEnds * releasedJ / mModel.particleMassKg);
+    if (!mModel.held[bond.high]) state.velocityMS[bond.high] += (dv / freeEnds) * along;
+    if (!mModel.held[bond.low]) state.velocityMS[bond.low] -= (dv / freeEnds) * along;
 }
 
 double Lattice::kineticEnergyJ() const
 {
     double sum = 0.0;
     for (size_t p = 0; p < particleCount(); ++p)
-        sum += 0.5 * particleMassKg * state.velocityMS[p].squaredNorm() + 0.5 * particleInertiaKgM2 * state.angularVelocityRadS[p].squaredNorm();
+        sum += 0.5 * mModel.particleMassKg * state.velocityMS[p].squaredNorm() + 0.5 * mModel.particleInertiaKgM2 * state.angularVelocityRadS[p].squaredNorm();
     return sum;
 }
 
 double Lattice::bondStrainEnergyJ(size_t b) const
 {
     const double intact = 1.0 - bondDamage(b);
-    const double overlapM = bonds[b].pinned ? 0.0 : std::max(0.0, voxelSizeM - (state.positionM[bonds[b].high] - state.positionM[bonds[b].low]).norm());
-    return elasticEnergyJ(b, strainOf(bonds[b]), intact) + 0.5 * (1.0 - intact) * stiffness.normalNPerM[size_t(bonds[b].axis)] * overlapM * overlapM;
+    const double overlapM = mModel.bonds[b].pinned ? 0.0 : std::max(0.0, mModel.voxelSizeM - (state.positionM[mModel.bonds[b].high] - state.positionM[mModel.bonds[b].low]).norm());
+    return elasticEnergyJ(b, strainOf(mModel.bonds[b]), intact) + 0.5 * (1.0 - intact) * mModel.stiffness.normalNPerM[size_t(mModel.bonds[b].axis)] * overlapM * overlapM;
 }
 
 double Lattice::volumetricEnergyJ(size_t p) const
 {
-    return 0.5 * mLambdaPa[p] * voxelSizeM * voxelSizeM * voxelSizeM * mVolumetricStrain[p] * mVolumetricStrain[p];
+    return 0.5 * mModel.lambdaPa[p] * mModel.voxelSizeM * mModel.voxelSizeM * mModel.voxelSizeM * mVolumetricStrain[p] * mVolumetricStrain[p];
 }
 
 double Lattice::strainEnergyJ() const
 {
     double sum = 0.0;
-    for (size_t b = 0; b < bonds.size(); ++b) sum += bondStrainEnergyJ(b);
+    for (size_t b = 0; b < mModel.bonds.size(); ++b) sum += bondStrainEnergyJ(b);
     for (size_t p = 0; p < particleCount(); ++p) sum += volumetricEnergyJ(p);
     return sum;
 }
@@ -109,7 +109,7 @@ double Lattice::strainEnergyJ() const
 Eigen::Vector3d Lattice::linearMomentum() const
 {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (const Eigen::Vector3d& v : state.velocityMS) sum += particleMassKg * v;
+    for (const Eigen::Vector3d& v : state.velocityMS) sum += mModel.particleMassKg * v;
     return sum;
 }
 
@@ -117,7 +117,7 @@ Eigen::Vector3d Lattice::angularMomentumAboutOrigin() const
 {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (size_t p = 0; p < particleCount(); ++p)
-        sum += state.positionM[p].cross(particleMassKg * state.velocityMS[p]) + particleInertiaKgM2 * state.angularVelocityRadS[p];
+        sum += state.positionM[p].cross(mModel.particleMassKg * state.velocityMS[p]) + mModel.particleInertiaKgM2 * state.angularVelocityRadS[p];
     return sum;
 }
 

@@ -87,7 +87,7 @@ std::vector<const ObstacleBox*> heldBy(const std::vector<const Body*>& group, co
 }
 
 Silhouette silhouetteOf(const std::vector<const Body*>& group, const std::vector<const ObstacleBox*>& holders, const Eigen::Vector3d& chargeM,
-                        double shockSpeedMS, const LoadGround& ground)
+                        double shockSpeedMS, const GroundPlane& ground)
 {
     // The corners of every member's oriented index box, and of the boxes that hold them, in the world.
     std::vector<Eigen::Vector3d> corners;
@@ -119,29 +119,29 @@ Silhouette silhouetteOf(const std::vector<const Body*>& group, const std::vector
     }
     out.halfWidthM = 0.5 * (uHi - uLo);
     out.halfHeightM = 0.5 * (vHi - vLo);
-    out.onGround = ground.enabled && lowestM <= ground.heightM + 0.5 * group.front()->voxelSizeM;
+    out.onGround = ground.enabled && lowestM <= ground.offsetM + 0.5 * group.front()->voxelSizeM;
     return out;
 }
 
 BlastLoads::BlastLoads(const BlastField& field, const std::vector<OpenWindow>& windows, const LoadSettings& settings,
-                       const LoadGeometry& geometry)
+                       const StaticWorld& geometry)
     : mField(field), mWindows(windows), mSettings(settings), mGeometry(geometry), mFromGround(windows.size(), 0)
 {
-    const LoadGround& ground = mGeometry.ground;
+    const GroundPlane& ground = mGeometry.ground;
     for (size_t w = 0; w < windows.size(); ++w)
-        mFromGround[w] = ground.enabled && field.charges()[windows[w].charge].positionM.dot(ground.normal) < ground.heightM;
+        mFromGround[w] = ground.enabled && field.charges()[windows[w].charge].positionM.dot(ground.normal) < ground.offsetM;
 }
 
 bool BlastLoads::onGround(const Eigen::Vector3d& faceCentreM, const Eigen::Vector3d& normal, double voxelSizeM) const
 {
-    const LoadGround& ground = mGeometry.ground;
-    return ground.enabled && normal.dot(ground.normal) < -0.5 && faceCentreM.dot(ground.normal) - ground.heightM <= 0.5 * voxelSizeM;
+    const GroundPlane& ground = mGeometry.ground;
+    return ground.enabled && normal.dot(ground.normal) < -0.5 && faceCentreM.dot(ground.normal) - ground.offsetM <= 0.5 * voxelSizeM;
 }
 
 const ObstacleBox* BlastLoads::shadowCaster(const Eigen::Vector3d& xM, const Eigen::Vector3d& chargeM, const Exposure* exposure,
                                              size_t excludeGroup) const
 {
-    for (const ObstacleBox& box : mGeometry.obstacles)
+    for (const ObstacleBox& box : mGeometry.boxes)
         if (segmentMeetsBox(xM, chargeM, box)) return &box;
     if (!exposure) return nullptr;
     const int64_t body = exposure->firstBlocker(xM, chargeM, excludeGroup);
@@ -173,7 +173,7 @@ std::vector<Silhouette> BlastLoads::silhouettes(const std::vector<const Body*>& 
 {
     std::vector<Silhouette> outlines(mWindows.size());
     if (mSettings.model != LoadModel::BlastEngineering) return outlines;
-    const std::vector<const ObstacleBox*> holders = heldBy(group, mGeometry.obstacles);
+    const std::vector<const ObstacleBox*> holders = heldBy(group, mGeometry.boxes);
     for (size_t w = 0; w < mWindows.size(); ++w) {
         const Eigen::Vector3d& charge = mField.charges()[mWindows[w].charge].positionM;
         const double speed = mField.pulseAt(mWindows[w].charge, (group.front()->motion.positionM - charge).squaredNorm()).shockSpeedMS;

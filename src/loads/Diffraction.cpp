@@ -27,7 +27,7 @@ EdgePath pathOverSegment(const Eigen::Vector3d& e0, const Eigen::Vector3d& e1, c
 }  // namespace
 
 EdgePath shortestPathAround(const ObstacleBox& box, const Eigen::Vector3d& sourceM, const Eigen::Vector3d& pointM,
-                            const LoadGeometry& geometry, double groundToleranceM)
+                            const StaticWorld& geometry, double groundToleranceM)
 {
     const Eigen::Matrix3d rot = box.orientation.toRotationMatrix();
     const Eigen::Vector3d sight = pointM - sourceM;
@@ -43,7 +43,7 @@ EdgePath shortestPathAround(const ObstacleBox& box, const Eigen::Vector3d& sourc
     EdgePath best;
     best.lengthM = 1e300;
     const auto underground = [&](const Eigen::Vector3d& x) {
-        return geometry.ground.enabled && x.dot(geometry.ground.normal) <= geometry.ground.heightM + groundToleranceM;
+        return geometry.ground.enabled && x.dot(geometry.ground.normal) <= geometry.ground.offsetM + groundToleranceM;
     };
     for (int edge = 0; edge < 4; ++edge) {
         const Eigen::Vector3d &e0 = corners[edge], &e1 = corners[(edge + 1) % 4];

@@ -120,9 +120,9 @@ void transferDeformable(Archive& a, D& d)
     a.pod(d.bodyId, "deformable body");
     a.pod(d.enteredS, "deformable since");
     a.pod(d.lastLoadedS, "deformable last loaded");
+    a.pod(d.blocks.voxels, "particle voxels");
+    for (int axis = 0; axis < 3; ++axis) a.pod(d.blocks.origin[axis], "particle blocks' origin");
     auto& lattice = d.lattice;
-    a.pod(lattice.blocks.voxels, "particle voxels");
-    for (int axis = 0; axis < 3; ++axis) a.pod(lattice.blocks.origin[axis], "particle blocks' origin");
     a.sequence(lattice.state.positionM, "particle positions", [&](auto& v) { a.vec(v, "particle position"); });
     a.sequence(lattice.state.velocityMS, "particle velocities", [&](auto& v) { a.vec(v, "particle velocity"); });
     a.sequence(lattice.state.angularVelocityRadS, "particle spins", [&](auto& v) { a.vec(v, "particle spin"); });
@@ -201,7 +201,7 @@ void transferFields(Archive& a, C& c, std::vector<uint8_t>& hasDamage)
         a.vec(d.linearMomentum, "dust momentum");
         a.vec(d.angularMomentumAboutOrigin, "dust angular momentum");
     });
-    a.sequence(s.deformable, "deformable bodies", [&](auto& d) { transferDeformable(a, d); });
+    a.sequence(s.deformable.lattices, "deformable bodies", [&](auto& d) { transferDeformable(a, d); });
     a.sequence(s.handOffs, "hand-offs", [&](auto& h) { transferHandOff(a, h); });
     a.sequence(s.contactCache.points, "contact points", [&](auto& p) {
         a.pod(p.key.first, "contact key");

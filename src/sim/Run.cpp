@@ -20,6 +20,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 namespace spall {
 
@@ -118,11 +119,43 @@ private:
     std::vector<double> mTimes;
 };
 
+/// What a run writes for each frame: the .vdb frame (when the scene asks for them), the history's
+/// rows and the preview's pick, in that order.
+class FrameOutputs {
+public:
+    FrameOutputs(const Simulation& sim, const RunOptions& options, int frameCount, std::unique_ptr<HistoryWriter> historyWriter)
+        : mDirectory(options.outputDirectory), mHistory(std::move(historyWriter), sim),
+          mPreview(options, frameCount, sim.scene())
+    {
+        if (sim.scene().output.vdb) mFrames = std::make_unique<FrameWriter>(mDirectory, sim.scene().output);
+    }
+
+    void write(const Simulation& sim, int frame, double timeS, const StepStats& stats)
+    {
+        if (mFrames) mFrames->write({frame, timeS}, sim.bodies());
+        mHistory.record(sim, timeS, stats);
+        mPreview.record(frame, timeS, sim.bodies());
+    }
+
+    /// After the last frame written: the preview, and the history marked whole when `complete`.
+    void finish(bool complete, bool resumed)
+    {
+        mPreview.write(complete && resumed, mFrames != nullptr, mDirectory);
+        if (complete) mHistory.finish();
+    }
+
+private:
+    std::string mDirectory;
+    std::unique_ptr<FrameWriter> mFrames;
+    HistoryRecorder mHistory;
+    PreviewRecorder mPreview;
+};
+
 /// The particles of the simulation's lattices in the deformable phase.
 size_t latticeParticles(const Simulation& sim)
 {
     size_t particles = 0;
-    for (const DeformableBody& d : sim.state().deformable) particles += d.lattice.particleCount();
+    for (const DeformableBody& d : sim.state().deformable.lattices) particles += d.lattice.particleCount();
     return particles;
 }
 
@@ -146,10 +179,7 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
     const std::filesystem::path dir = options.outputDirectory;
     const std::filesystem::path checkpointPath = dir / kCheckpointFileName;
     const std::string checkpointScene = sceneToJson(scene).dump();
-    std::unique_ptr<FrameWriter> frames;
-    if (scene.output.vdb) frames = std::make_unique<FrameWriter>(dir.string(), scene.output);
-    HistoryRecorder history(std::move(historyWriter), sim);
-    PreviewRecorder preview(options, frameCount, scene);
+    FrameOutputs outputs(sim, options, frameCount, std::move(historyWriter));
     RunReport report;
     report.totalSteps = stepsSoFar;
     const auto saveCheckpoint = [&](int framesDone) {
@@ -174,9 +204,7 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
         }
         const StepStats stats = sim.takeStepStats();
         report.totalSteps += stats.steps;
-        if (frames) frames->write({f, t}, sim.bodies());
-        history.record(sim, t, stats);
-        preview.record(f, t, sim.bodies());
+        outputs.write(sim, f, t, stats);
         report.framesWritten = f + 1;
         const auto now = std::chrono::steady_clock::now();
         lastReport = now;
@@ -190,9 +218,8 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
         if (stop) break;
     }
     report.complete = report.framesWritten == frameCount;
-    preview.write(report.complete && firstFrame > 0, frames != nullptr, dir.string());
+    outputs.finish(report.complete, firstFrame > 0);
     if (report.complete) {
-        history.finish();
         std::error_code ec;
         std::filesystem::remove(checkpointPath, ec);  // the run is whole; nothing to resume
     }

@@ -14,7 +14,6 @@
 namespace spall {
 namespace {
 
-ObstacleBox obstacleOf(const StaticBox& box) { return {box.centreM, box.halfExtentM, box.orientation}; }
 
 /// Sets the anchor bit of voxels whose lowest point lies within a quarter voxel of the ground.
 void anchorToGround(Body& body, const GroundPlane& ground)
@@ -25,10 +24,8 @@ void anchorToGround(Body& body, const GroundPlane& ground)
 
 /// Sets the anchor bit of voxels with a free face within a quarter voxel of a collider: the
 /// centre of the cell beyond the face lies at least a quarter voxel inside the box.
-void anchorToColliders(Body& body, const std::vector<StaticBox>& colliders)
+void anchorToColliders(Body& body, const std::vector<ObstacleBox>& boxes)
 {
-    std::vector<ObstacleBox> boxes;
-    for (const StaticBox& box : colliders) boxes.push_back(obstacleOf(box));
     for (auto it = body.grid->beginValueOn(); it; ++it)
         if (freeFaceDeepestInBoxes(body, it.getCoord(), boxes).depthM >= 0.25 * body.voxelSizeM) it.setValue(*it | kAnchorBit);
 }
@@ -89,7 +86,7 @@ Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(sc
 {
     initialiseOpenVdb();
     mField = makeField(scene);
-    buildStaticWorldViews();
+    mStaticWorld = buildStaticWorld(scene.world.ground, scene.world.colliders);
     const std::vector<TriangleMesh> meshes = loadMeshes();
     checkSceneFits(scene, meshes);
     for (size_t i = 0; i < scene.objects.size(); ++i) {
@@ -141,7 +138,7 @@ Body Simulation::placeObject(size_t index, const VoxeliseResult& vox)
     body.motion.positionM = spec.positionM + body.motion.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
     if (spec.anchor != AnchorMode::None) {
         if (spec.anchor == AnchorMode::Ground || mScene.world.ground.enabled) anchorToGround(body, mScene.world.ground);
-        if (spec.anchor == AnchorMode::Supports) anchorToColliders(body, mScene.world.colliders);
+        if (spec.anchor == AnchorMode::Supports) anchorToColliders(body, mStaticWorld.boxes);
         refreshDerivedData(body);
         body.motion.positionM = spec.positionM + body.motion.orientation * (body.mass.centreOfMassLocalM + vox.localOffsetM);
         if (!body.anchored)
@@ -170,24 +167,12 @@ Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene
     requireVoxelSize(mState.bodies, scene.voxelSizeM);
     initialiseOpenVdb();
     mField = makeField(scene);
-    buildStaticWorldViews();
+    mStaticWorld = buildStaticWorld(scene.world.ground, scene.world.colliders);
     // A saved lattice holds its state; its bonds and stiffness follow from its body again.
-    for (DeformableBody& d : mState.deformable) {
-        const auto body = std::find_if(mState.bodies.begin(), mState.bodies.end(), [&](const Body& b) { return b.id == d.bodyId; });
-        if (body == mState.bodies.end()) throw InputError("saved state: deformable body " + std::to_string(d.bodyId) + " is not among the bodies");
-        restoreDeformable(d, *body, mScene.materials[body->materialIndex], mScene.lattice, mLatticeSupports);
-    }
-}
-
-void Simulation::buildStaticWorldViews()
-{
-    const GroundPlane& g = mScene.world.ground;
-    mLoadGeometry.ground = {g.enabled, g.normal.normalized(), g.offsetM};
-    mLatticeSupports.ground = {g.enabled, g.normal.normalized(), g.offsetM};
-    for (const StaticBox& box : mScene.world.colliders) {
-        mLoadGeometry.obstacles.push_back(obstacleOf(box));
-        mLatticeSupports.boxes.push_back(obstacleOf(box));
-        mLatticeSupports.pinned.push_back(box.holds == SupportHold::Pinned ? 1 : 0);
+    mState.deformable.reindex(mState.bodies);
+    for (size_t k = 0; k < mState.deformable.lattices.size(); ++k) {
+        const Body& body = mState.bodies[mState.deformable.bodyIndex(k, mState.bodies)];
+        restoreDeformable(mState.deformable.lattices[k], body, mScene.materials[body.materialIndex], mScene.lattice, mStaticWorld);
     }
 }
 

@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
-#include <unordered_map>
 
 namespace spall {
 
@@ -49,7 +48,7 @@ void Simulation::step(double targetS)
     handOffQuietBodies(dt);
     enterDeformablePhase(windows);
 
-    const BlastLoads blast(*mField, windows, mScene.loads, mLoadGeometry);
+    const BlastLoads blast(*mField, windows, mScene.loads, mStaticWorld);
     const std::vector<char> loaded = blast.loadedBodies(mState.bodies);
     wakeLoadedBodies(mState.bodies, loaded);
     FaceForces faces;
@@ -162,119 +161,52 @@ void Simulation::replaceWithParts(std::vector<std::vector<Body>>& parts)
         mState.events.push_back(std::move(event));
     }
     mState.bodies = std::move(next);
+    mState.deformable.reindex(mState.bodies);
 }
 
 void Simulation::enterDeformablePhase(const std::vector<OpenWindow>& windows)
 {
     if (mScene.fracture.algorithm != FractureAlgorithm::Lattice || windows.empty()) return;
-    for (Body& body : mState.bodies) {
-        if (body.motion.deformable || (body.linkCount == 0 && !body.anchored) || !bodyInWindows(body, *mField, windows)) continue;
-        mState.deformable.push_back(
-            spall::enterDeformablePhase(body, mScene.materials[body.materialIndex], mScene.lattice, mLatticeSupports, mState.timeS));
-        body.motion.deformable = true;
-        body.motion.asleep = false;
-        body.motion.restTimeS = 0.0;
-    }
+    const auto reached = [&](const Body& body) { return bodyInWindows(body, *mField, windows); };
+    mState.deformable.enter(mState.bodies, reached, mScene.materials, mScene.lattice, mStaticWorld, mState.timeS);
 }
 
 void Simulation::deformBodies(const FaceForces& faces, const std::vector<OpenWindow>& windows, double dtS)
 {
     if (mState.deformable.empty()) return;
-    const std::unordered_map<int64_t, size_t> indexOf = bodyIndexById();
-    for (DeformableBody& d : mState.deformable) {
-        const size_t i = indexOf.at(d.bodyId);
-        Body& body = mState.bodies[i];
-        setExternalForces(d, body, faces.forceN[i], mScene.world.gravityMS2);
-        mState.stepStats.latticeParticleSteps += advanceDeformable(d, dtS);
-        followLattice(body, d.lattice);
-        if (bodyInWindows(body, *mField, windows)) d.lastLoadedS = mState.timeS + dtS;
-    }
-}
-
-std::unordered_map<int64_t, size_t> Simulation::bodyIndexById() const
-{
-    std::unordered_map<int64_t, size_t> indexOf;
-    for (size_t i = 0; i < mState.bodies.size(); ++i) indexOf[mState.bodies[i].id] = i;
-    return indexOf;
+    const auto reached = [&](const Body& body) { return bodyInWindows(body, *mField, windows); };
+    mState.stepStats.latticeParticleSteps +=
+        mState.deformable.deform(mState.bodies, faces.forceN, mScene.world.gravityMS2, reached, mState.timeS, dtS);
 }
 
 void Simulation::solveContactsWithLattices(const ContactSet& contacts, double dtS)
 {
-    std::vector<size_t> latticeBody;
+    DeformablePhase& phase = mState.deformable;
     std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> before;
-    if (!mState.deformable.empty()) {
-        const std::unordered_map<int64_t, size_t> indexOf = bodyIndexById();
-        for (const DeformableBody& d : mState.deformable) {
-            latticeBody.push_back(indexOf.at(d.bodyId));
-            const Body& body = mState.bodies[latticeBody.back()];
-            before.emplace_back(linearMomentum(body), angularMomentumAboutOrigin(body));
-        }
+    for (size_t k = 0; k < phase.lattices.size(); ++k) {
+        const Body& body = mState.bodies[phase.bodyIndex(k, mState.bodies)];
+        before.emplace_back(linearMomentum(body), angularMomentumAboutOrigin(body));
     }
     solveContacts(mState.bodies, contacts, mScene.world, mScene.collisions, dtS, mState.contactCache);
-    for (size_t k = 0; k < latticeBody.size(); ++k) {
-        Body& body = mState.bodies[latticeBody[k]];
+    for (size_t k = 0; k < phase.lattices.size(); ++k) {
+        Body& body = mState.bodies[phase.bodyIndex(k, mState.bodies)];
         if (!takesContactImpulses(body)) continue;
         const Eigen::Vector3d linear = linearMomentum(body) - before[k].first, angular = angularMomentumAboutOrigin(body) - before[k].second;
         if (linear.isZero(0.0) && angular.isZero(0.0)) continue;  // no contact moved it
-        DeformableBody& d = mState.deformable[k];
-        addRigidMomentum(d.lattice, linear, angular);
-        followLattice(body, d.lattice);
+        addRigidMomentum(phase.lattices[k].lattice, linear, angular);
+        followLattice(body, phase.lattices[k].lattice);
     }
 }
 
 void Simulation::handOffQuietBodies(double dtS)
 {
     if (mState.deformable.empty()) return;
-    // Once in each check interval: in the step that reaches one of its multiples.
-    const double interval = mScene.lattice.handoffCheckIntervalS;
-    const bool checkDue = std::floor((mState.timeS + dtS) / interval) > std::floor(mState.timeS / interval);
-    const std::unordered_map<int64_t, size_t> indexOf = bodyIndexById();
-    std::vector<std::vector<Body>> parts(mState.bodies.size());
-    std::vector<DeformableBody> staying, leaving;
-    for (DeformableBody& d : mState.deformable) {
-        const size_t i = indexOf.at(d.bodyId);
-        const double sinceBlastS = mState.timeS - d.lastLoadedS;
-        const double toleranceJ =
-            mScene.lattice.handoffEnergyFraction * elasticCapacityPerVoxelJ(mScene.materials[mState.bodies[i].materialIndex], d.lattice.voxelSizeM);
-        const bool timeUp = sinceBlastS >= mScene.lattice.maxVibrationS;
-        Departure out;
-        if (sinceBlastS > 0.0 && (checkDue || timeUp)) {
-            mState.stepStats.latticeParticleSteps += catchUpDeformable(d);
-            followLattice(mState.bodies[i], d.lattice);
-            out = leaveQuietPieces(mState.bodies[i], d.lattice, toleranceJ, timeUp);
-        }
-        std::vector<Body>& leftParts = out.handOff.parts;
-        if (leftParts.empty() || (leftParts.size() == 1 && leftParts.front().motion.deformable)) {
-            staying.push_back(std::move(d));  // nothing leaves yet
-            continue;
-        }
-        mState.handOffs.push_back({mState.timeS, d.bodyId, int64_t(d.lattice.voxelParticleCount), out.handOff.brokenBonds,
-                                   out.handOff.brokenAnchors, mState.timeS - d.enteredS, out.discardedEnergyJ, out.timedOut});
-        mState.stepStats.brokenLinks += out.handOff.brokenLinks;
-        if (leftParts.size() == 1) {
-            leftParts.front().id = mState.bodies[i].id;
-            leftParts.front().parentId = mState.bodies[i].parentId;
-            mState.bodies[i] = std::move(leftParts.front());
-            continue;
-        }
-        parts[i] = std::move(leftParts);
-        leaving.push_back(std::move(d));
-    }
-    mState.deformable = std::move(staying);
-    replaceWithParts(parts);
-    continueVibratingParts(leaving);
-}
-
-void Simulation::continueVibratingParts(const std::vector<DeformableBody>& leaving)
-{
-    std::unordered_map<int64_t, const DeformableBody*> leftBy;
-    for (const DeformableBody& d : leaving) leftBy[d.bodyId] = &d;
-    for (const Body& body : mState.bodies) {
-        if (!body.motion.deformable || !leftBy.count(body.parentId)) continue;
-        mState.deformable.push_back(continueDeformable(body, *leftBy.at(body.parentId), mScene.materials[body.materialIndex], mScene.lattice,
-                                                       mLatticeSupports));
-        mState.deformable.back().bodyId = body.id;
-    }
+    PhaseDepartures out = mState.deformable.leaveQuietPieces(mState.bodies, mScene.materials, mScene.lattice, mState.timeS, dtS, mState.handOffs);
+    mState.stepStats.latticeParticleSteps += out.particleSteps;
+    mState.stepStats.brokenLinks += out.brokenLinks;
+    if (out.leaving.empty()) return;  // no body left in parts: the bodies are where they were
+    replaceWithParts(out.parts);
+    mState.deformable.continueVibratingParts(mState.bodies, out.leaving, mScene.materials, mScene.lattice, mStaticWorld);
 }
 
 }  // namespace spall

@@ -2,9 +2,9 @@
 // gravity and drag, and the body quantities the other phases read (speed, energy, momentum).
 #pragma once
 
+#include <spall/core/Wrench.h>
 #include <spall/dynamics/AirDrag.h>
 #include <spall/dynamics/Settings.h>
-#include <spall/loads/BlastLoads.h>
 #include <spall/voxel/Body.h>
 
 #include <Eigen/Core>

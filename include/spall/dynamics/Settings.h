@@ -4,6 +4,7 @@
 
 #include <spall/core/EnumNames.h>
 #include <spall/core/Fields.h>
+#include <spall/world/StaticWorld.h>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -24,34 +25,6 @@ enum class AirDrag { None, HaiderLevenspiel };
 template <>
 struct EnumNames<AirDrag> {
     static constexpr std::pair<AirDrag, const char*> kNames[] = {{AirDrag::None, "none"}, {AirDrag::HaiderLevenspiel, "haider-levenspiel"}};
-};
-
-/// How a collider holds the voxels of an object anchored to it (`"anchor": "supports"`):
-/// clamped, by a bond of the material's own (a wall under a floor), or pinned, by one that
-/// carries force but no moment (a pane in glazing beads: simply supported).
-enum class SupportHold { Clamped, Pinned };
-template <>
-struct EnumNames<SupportHold> {
-    static constexpr std::pair<SupportHold, const char*> kNames[] = {{SupportHold::Clamped, "clamped"}, {SupportHold::Pinned, "pinned"}};
-};
-
-struct GroundPlane {
-    bool enabled = true;
-    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< pointing out of the ground (unit: 1, normalised)
-    double offsetM = 0.0;       ///< plane: normal . x = offset (unit: m)
-    double restitution = 0.2;   ///< (unit: fraction)
-    double friction = 0.6;      ///< Coulomb coefficient (unit: 1)
-};
-
-/// A static, unbreakable oriented box that bodies rest on and bounce off.
-struct StaticBox {
-    Eigen::Vector3d centreM = Eigen::Vector3d::Zero();                 ///< (unit: m)
-    Eigen::Vector3d halfExtentM = Eigen::Vector3d::Constant(0.5);      ///< (unit: m)
-    Eigen::Vector3d rotationDeg = Eigen::Vector3d::Zero();             ///< about x, then y, then z, world axes (unit: degrees)
-    Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();   ///< from rotationDeg
-    double restitution = 0.2;  ///< (unit: fraction)
-    double friction = 0.6;     ///< Coulomb coefficient (unit: 1)
-    SupportHold holds = SupportHold::Clamped;
 };
 
 struct WorldSettings {
@@ -102,10 +75,6 @@ struct CollisionSettings {
 };
 
 // Keys and ranges (src/dynamics/Settings.cpp).
-template <>
-const std::vector<Field<GroundPlane>>& fieldTable<GroundPlane>();
-template <>
-const std::vector<Field<StaticBox>>& fieldTable<StaticBox>();
 template <>
 const std::vector<Field<WorldSettings>>& fieldTable<WorldSettings>();
 template <>

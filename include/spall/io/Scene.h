@@ -9,9 +9,9 @@
 #include <spall/fracture/Settings.h>
 #include <spall/lattice/Settings.h>
 #include <spall/loads/Settings.h>
-#include <spall/voxel/Voxelise.h>
+#include <spall/voxel/Settings.h>
 
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include <optional>
 #include <string>

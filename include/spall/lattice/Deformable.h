@@ -15,6 +15,9 @@ namespace spall {
 /// A body in the deformable phase.
 struct DeformableBody {
     int64_t bodyId = 0;
+    /// How its body is cut into particles (ParticleBlocks.h): what its lattice was built with,
+    /// saved with a checkpoint so the lattice can be built again (restoreDeformable).
+    VoxelBlocks blocks;
     Lattice lattice;
     double enteredS = 0.0;     ///< (unit: s)
     double lastLoadedS = 0.0;  ///< the end of the last step it spent inside an open blast window (unit: s)
@@ -32,12 +35,12 @@ struct DeformableBody {
 /// The lattice of a body entering the phase, moving with the body: a particle per voxel, or per
 /// block of settings.particleVoxels³ voxels (ParticleBlocks.h) with the body's momenta.
 DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
-                                    const LatticeSupports& supports, double timeS);
+                                    const StaticWorld& supports, double timeS);
 
 /// Rebuilds a saved lattice (a checkpoint holds only its particles' state, the bond forces velocity
 /// Verlet carries, and its bonds' stretch and strength) from its body; throws InputError when the saved arrays do not fit the body.
 void restoreDeformable(DeformableBody& saved, const Body& body, const Material& material, const LatticeSettings& settings,
-                       const LatticeSupports& supports);
+                       const StaticWorld& supports);
 
 /// Each particle's external force for the next step: the mean force on each of the body's exposed
 /// faces (body.exposedFaces order, from the loads phase; empty when nothing loads it) on the
@@ -104,7 +107,7 @@ double elasticCapacityPerVoxelJ(const Material& material, double voxelSizeM);
 /// A part of a body that left the phase (handOff) carrying on in it: a lattice of the part whose
 /// particles and bonds take their state from the body's lattice.
 DeformableBody continueDeformable(const Body& part, const DeformableBody& whole, const Material& material, const LatticeSettings& settings,
-                                  const LatticeSupports& supports);
+                                  const StaticWorld& supports);
 
 /// The body back as rigid bodies: each bond that broke breaks the links across its face (the
 /// frames' fracture surface), each support bond that broke clears its voxels' anchor bits, and

@@ -15,7 +15,7 @@
 #include <spall/lattice/ParticleBlocks.h>
 #include <spall/lattice/Settings.h>
 #include <spall/loads/Exposure.h>
-#include <spall/loads/LoadGeometry.h>
+#include <spall/world/StaticWorld.h>
 #include <spall/voxel/Body.h>
 
 #include <Eigen/Core>
@@ -99,7 +99,7 @@ struct LatticeBond {
     /// Which of LatticeStiffness::strength it fails at: 1 inside a masonry unit or along wood's
     /// grain, else 0.
     uint8_t strengthClass = 0;
-    /// A support bond of a box that holds by a pin (LatticeSupports::pinned): only its shear
+    /// A support bond of a box that holds by a pin (StaticWorld::pinned): only its shear
     /// spring, at its voxel's centre, so the voxel turns freely on it and slides along its axis
     /// (a pane's edge in its glazing's clearance); it fails in shear. However many voxels thick
     /// the body, its edge is then a hinge.
@@ -111,25 +111,6 @@ struct BondStrain {
     Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();  ///< bond frame to world
     Eigen::Vector3d displacementM = Eigen::Vector3d::Zero();  ///< of high relative to low, less the rest length
     Eigen::Vector3d rotationRad = Eigen::Vector3d::Zero();    ///< of high relative to low
-};
-
-/// A ground plane n·x = offset the particles' cubes may not sink into: a particle that would is
-/// put back on it and loses its velocity into it (a perfectly plastic contact, as a rigid body's
-/// resting contact; no friction). Off unless set.
-struct LatticeGround {
-    bool enabled = false;
-    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
-    double offsetM = 0.0;
-};
-
-/// What a body's anchored voxels are bonded to: the ground, and static boxes (the scene's
-/// colliders: a window's frame, the floor over a wall).
-struct LatticeSupports {
-    LatticeGround ground;
-    std::vector<ObstacleBox> boxes;
-    /// Per box, 1 when it holds by a pin (a pane in glazing beads, simply supported), else 0
-    /// (clamped, as if the box were more of the material); empty: every box clamps.
-    std::vector<uint8_t> pinned;
 };
 
 /// What a lattice carries from one step to the next, and all that a checkpoint saves of it:
@@ -144,6 +125,80 @@ struct LatticeState {
     /// (the dashpots), so a checkpoint saves them.
     std::vector<Eigen::Vector3d> bondForceN, bondMomentNm;
     std::vector<BondHistory> bondHistory;
+};
+
+/// What a lattice is built with and keeps unchanged (Lattice::fromBody): its particles, its bonds
+/// with their stiffness and strength, its settings, and what holds it and what it may not pass
+/// through. Copies of a lattice share its particle index.
+struct LatticeModel {
+    // Particles.
+    /// Particles [0, voxelParticleCount) are the body's voxels, in its leaf order; those after
+    /// them are its anchors' support points (held).
+    size_t voxelParticleCount = 0;
+    std::vector<openvdb::Coord> voxel;  ///< the body's index of each particle (a support point: the cell beyond its voxel)
+    std::vector<uint8_t> held;          ///< 1: fixed to the world (an anchored voxel)
+    /// The particles' edge (unit: m): the body's voxel's, or its blocks' (`blocks`).
+    double voxelSizeM = 0.0;
+    /// How the body's voxels make the particles (a particle per voxel by default): `voxel`
+    /// holds the blocks' cells.
+    VoxelBlocks blocks;
+    double particleMassKg = 0.0;
+    double particleInertiaKgM2 = 0.0;  ///< a cube's, m h² / 6, the same about every axis
+
+    // Bonds.
+    std::vector<LatticeBond> bonds;
+    /// Particle numbers by voxel, in a tree of the body's own shape (and its ground points).
+    std::shared_ptr<LinkTree> particleIndex = std::make_shared<LinkTree>(-1);
+    /// Per particle, the bond across each face (LinkBits.h's Face order) or -1.
+    std::vector<std::array<int32_t, 6>> bondAcross;
+    /// Per voxel particle, its bond to a ground point, or -1.
+    std::vector<int32_t> groundBond;
+
+    // The material's response.
+    LatticeStiffness stiffness;
+    /// Per particle, λ for the axes it has bonds along (stress-free missing axes condensed out).
+    std::vector<double> lambdaPa;
+    /// Per particle and axis, 1 / (its bonds along the axis), or 0 without any.
+    std::vector<Eigen::Vector3d> inverseBondCount;
+    double dashpotPerViscosityNSPerM = 0.0;  ///< ρ c h² (unit: N s/m)
+    /// The failure index's factors for a strength class and axis, found once when the lattice
+    /// is built, not once a bond.
+    struct FailureTerms {
+        double peakStretchM = 0.0;        ///< u0
+        double tensionIndexPerM = 0.0;    ///< 1 / u0
+        double shearIndexPerM = 0.0;      ///< k_s / (h² c): shear displacement to index
+        double normalIndexPerM = 0.0;     ///< k_n / (h² c): normal displacement to traction over c
+        double indexPerPa = 0.0;          ///< 1 / c
+        double frictionCoefficient = 0.0;
+    };
+    std::array<std::array<FailureTerms, 3>, 2> failureTerms{};
+    /// Linear bulk viscosity: a dashpot along each bond of ζ ρ c h² (c the P-wave speed), as
+    /// explicit codes damp the ringing of a discretised shock front (von Neumann & Richtmyer 1950;
+    /// LS-DYNA's linear term Q2, 0.06 by default there), softening with the bond as it opens (a
+    /// crack carries no viscous stress). Without it a sharp front rings and a
+    /// free face's reflection puts spurious tension a few voxels deep (docs/accuracy.md). 0 turns
+    /// it off (LatticeSettings::bulkViscosity).
+    double bulkViscosity = 0.0;
+    /// The material's damping ratio (Material::dampingRatio): after each step every piece's
+    /// velocities about its rigid motion decay as mass-proportional damping of that ratio at the
+    /// piece's fundamental frequency would make them (dampVibration). 0 turns it off.
+    double dampingRatio = 0.0;
+    LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;  ///< LatticeSettings::damageLaw
+
+    // What holds it and what it may not pass through.
+    /// The ground plane n·x = offset its particles' cubes may not sink into: a particle that
+    /// would is put back on it and loses its velocity into it (a perfectly plastic contact, as a
+    /// rigid body's resting contact; no friction); its offset lowered to where the lattice's
+    /// lowest cubes rest.
+    GroundPlane ground = GroundPlane{false};
+    /// The boxes of keepOutOf, each in its own frame grown by the allowed depth, with the
+    /// world-axis bounds of that grown box: a particle outside them costs six comparisons.
+    struct KeptOut {
+        Eigen::Matrix3d toBox;
+        Eigen::Vector3d centreM, reachM;
+        Eigen::AlignedBox3d boundsM;
+    };
+    std::vector<KeptOut> keptOut;
 };
 
 /// Particles (one per voxel, in the grid's leaf order) and bonds (one per intact link) as flat
@@ -162,15 +217,15 @@ public:
     /// draws the strength scatter (Material::strengthCoefficientOfVariation) from `settings`, the
     /// damping ratio from the material; with `blocks` of more than one voxel, a particle per block
     /// (ParticleBlocks.h).
-    static Lattice fromBody(const Body& body, const Material& material, const LatticeSupports& supports = LatticeSupports(),
+    static Lattice fromBody(const Body& body, const Material& material, const StaticWorld& supports = StaticWorld(),
                             const LatticeSettings& settings = LatticeSettings(), const VoxelBlocks& blocks = VoxelBlocks());
 
     size_t particleCount() const { return state.positionM.size(); }
     /// The particle at a voxel (a support point at the cell beyond its voxel), or -1.
-    int32_t particleAt(const openvdb::Coord& ijk) const { return mParticleIndex->getValue(ijk); }
+    int32_t particleAt(const openvdb::Coord& ijk) const { return mModel.particleIndex->getValue(ijk); }
     /// The bond across a face of particle p (LinkBits.h's Face order), or -1.
-    int32_t bondAcross(size_t p, int face) const { return mBondAcross[p][face]; }
-    size_t bondCount() const { return bonds.size(); }
+    int32_t bondAcross(size_t p, int face) const { return mModel.bondAcross[p][face]; }
+    size_t bondCount() const { return mModel.bonds.size(); }
 
     /// Largest stable step (unit: s): 0.9 × 2/ω with ω bounding the lattice's highest frequency,
     /// the rotational optical mode of the stiffest shear bonds (ω² = 12 k_s / m; 24 μ h / m
@@ -178,12 +233,6 @@ public:
     /// stiffest normal bonds; (8μ + 12λ) h / m isotropic) added.
     double stableTimeStepS() const;
     void step(double dtS);
-    /// Static boxes the particles may not pass through (the scene's colliders: a window's frame).
-    /// A particle whose cube sinks into one by more than a quarter of its edge is put back at that
-    /// depth and loses its velocity into the box, as on the ground. The quarter leaves a support
-    /// bond's elastic give alone and matches the rigid phase's tolerance
-    /// (collisions.penetration_tolerance_voxels' default). Set by fromBody from its supports.
-    void keepOutOf(const std::vector<ObstacleBox>& boxes);
     /// The bonds' forces from the state, leaving their damage as it is (after the state arrays
     /// were written from outside, as a checkpoint does).
     void refreshForces();
@@ -197,15 +246,9 @@ public:
     Eigen::Vector3d linearMomentum() const;
     Eigen::Vector3d angularMomentumAboutOrigin() const;
 
-    /// Particles [0, voxelParticleCount) are the body's voxels, in its leaf order; those after
-    /// them are its anchors' support points (held).
-    size_t voxelParticleCount = 0;
-    std::vector<openvdb::Coord> voxel;  ///< the body's index of each particle (a support point: the cell beyond its voxel)
     /// What acts on each particle through the next step besides its bonds (the caller's; unit: N).
     std::vector<Eigen::Vector3d> externalForceN;
     LatticeState state;
-    std::vector<uint8_t> held;  ///< 1: fixed to the world (an anchored voxel)
-    std::vector<LatticeBond> bonds;
     /// How close a bond is to failing, as a stretch: the normal stretch that would load it as
     /// much in pure tension, u0 × f with f its failure index (1 on the failure surface).
     /// Tension: f² = (stretch/u0)² + (τ/c)² (the tension cut-off joined to pure shear by an
@@ -225,53 +268,16 @@ public:
     /// space; a held piece's L is its farthest reach from what holds it (findDampedPieces).
     double fundamentalFrequencyRadS(double thicknessM, double lengthM, bool held) const;
 
-    /// Linear bulk viscosity: a dashpot along each bond of ζ ρ c h² (c the P-wave speed), as
-    /// explicit codes damp the ringing of a discretised shock front (von Neumann & Richtmyer 1950;
-    /// LS-DYNA's linear term Q2, 0.06 by default there), softening with the bond as it opens (a
-    /// crack carries no viscous stress). Without it a sharp front rings and a
-    /// free face's reflection puts spurious tension a few voxels deep (docs/accuracy.md). 0 turns
-    /// it off. Set by fromBody (LatticeSettings::bulkViscosity).
-    double bulkViscosity = 0.0;
-    /// The material's damping ratio (Material::dampingRatio): after each step every piece's
-    /// velocities about its rigid motion decay as mass-proportional damping of that ratio at the
-    /// piece's fundamental frequency would make them (dampVibration). 0 turns it off. Set by fromBody.
-    double dampingRatio = 0.0;
-    LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;  ///< set by fromBody (LatticeSettings::damageLaw)
-    LatticeGround ground;
-
-    /// The particles' edge (unit: m): the body's voxel's, or its blocks' (`blocks`).
-    double voxelSizeM = 0.0;
-    /// How the body's voxels make the particles (set by the deformable phase; a particle per
-    /// voxel by default): `voxel` above holds the blocks' cells.
-    VoxelBlocks blocks;
-    double particleMassKg = 0.0;
-    double particleInertiaKgM2 = 0.0;  ///< a cube's, m h² / 6, the same about every axis
-    LatticeStiffness stiffness;
+    /// What it was built with (fromBody), unchanged since.
+    const LatticeModel& model() const { return mModel; }
 
 private:
-    /// Particle numbers by voxel, in a tree of the body's own shape (and its ground points).
-    /// Written only while building, so copies of a lattice share it.
-    std::shared_ptr<LinkTree> mParticleIndex = std::make_shared<LinkTree>(-1);
-    /// Per particle, the bond across each face (LinkBits.h's Face order) or -1.
-    std::vector<std::array<int32_t, 6>> mBondAcross;
-    /// Per voxel particle, its bond to a ground point, or -1.
-    std::vector<int32_t> mGroundBond;
-    /// The boxes of keepOutOf, each in its own frame grown by the allowed depth, with the
-    /// world-axis bounds of that grown box: a particle outside them costs six comparisons.
-    struct KeptOut {
-        Eigen::Matrix3d toBox;
-        Eigen::Vector3d centreM, reachM;
-        Eigen::AlignedBox3d boundsM;
-    };
-    std::vector<KeptOut> mKeptOut;
-    /// Per particle, λ for the axes it has bonds along (stress-free missing axes condensed out).
-    std::vector<double> mLambdaPa;
-    /// Per particle and axis, 1 / (its bonds along the axis), or 0 without any.
-    std::vector<Eigen::Vector3d> mInverseBondCount;
+    LatticeModel mModel;
+
+    // A step's scratch, found again from the model and the state (never saved).
     // Per particle: tr ε and λ tr ε / (bonds along each axis).
     std::vector<double> mVolumetricStrain;
     std::vector<Eigen::Vector3d> mVolumetricStressShare;
-    double mDashpotPerViscosity = 0.0;  ///< ρ c h² (unit: N s/m)
     /// What the force pass takes from each bond, measured once per substep (measureBond).
     struct BondForceTerms {
         Eigen::Vector3d armM;             ///< high − low (unit: m)
@@ -346,20 +352,8 @@ private:
     /// spring's, which stays as contact) and `volumetricJ`, its share of what its stretch held
     /// in its particles' volumetric terms, at its failure surface, less Gf h².
     void releaseSnapEnergy(size_t b, double volumetricJ);
-    /// The failure index's factors for a strength class and axis: its divisions done once a
-    /// step, not once a bond.
-    struct FailureTerms {
-        double peakStretchM = 0.0;        ///< u0
-        double tensionIndexPerM = 0.0;    ///< 1 / u0
-        double shearIndexPerM = 0.0;      ///< k_s / (h² c): shear displacement to index
-        double normalIndexPerM = 0.0;     ///< k_n / (h² c): normal displacement to traction over c
-        double indexPerPa = 0.0;          ///< 1 / c
-        double frictionCoefficient = 0.0;
-    };
-    std::array<std::array<FailureTerms, 3>, 2> mFailureTerms{};
-    FailureTerms failureTerms(int strengthClass, int axis) const;
-    /// From the stiffness (a public member), at the start of every step and force refresh.
-    void updateFailureTerms();
+    /// The failure index's factors (LatticeModel::failureTerms), from the stiffness.
+    void computeFailureTerms();
     /// The failure index as a stretch (equivalentStretchM) from a measured strain and the
     /// bond's damage.
     double equivalentStretchM(size_t b, const BondStrain& strain, double lengthM, double damage) const;
@@ -377,6 +371,12 @@ private:
     /// A particle's bond force and moment: the sum over its faces, in face order.
     void gatherBondForces(size_t p);
     // Building (fromBody).
+    /// Static boxes the particles may not pass through (the scene's colliders: a window's frame).
+    /// A particle whose cube sinks into one by more than a quarter of its edge is put back at that
+    /// depth and loses its velocity into the box, as on the ground. The quarter leaves a support
+    /// bond's elastic give alone and matches the rigid phase's tolerance
+    /// (collisions.penetration_tolerance_voxels' default).
+    void keepOutOf(const std::vector<ObstacleBox>& boxes);
     void addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& placeM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
                      const Eigen::Quaterniond& q, bool isHeld);
     void addVoxelParticles(const Body& body);
@@ -384,7 +384,7 @@ private:
     void addBond(uint32_t low, uint32_t high, int axis);
     void addLinkBonds(const Body& body);
     /// Bonds each anchored voxel to a held point beyond it (fromBody).
-    void addSupportBonds(const Body& body, const LatticeSupports& supports);
+    void addSupportBonds(const Body& body, const StaticWorld& supports);
     /// The face of an anchored voxel that a support holds (face -1: none) and the box holding it
     /// (-1: the ground): the ground's face when the voxel lies within half a voxel of it, else
     /// the free face whose neighbouring cell's centre lies deepest inside a box
@@ -406,7 +406,7 @@ private:
     void forEach(size_t count, const F& f) const;
     /// Puts a particle that sank into a collider back to the allowed depth (keepOutOf).
     void keepOutOfColliders(size_t p);
-    /// Puts a particle that sank into the ground back on it (LatticeGround).
+    /// Puts a particle that sank into the ground back on it (GroundPlane).
     void keepAboveGround(size_t p);
     /// Whether a particle is still bonded to its ground point: it then bears on the ground
     /// through that bond, and the plane (a plastic contact at its rest height) would hold the

@@ -3,6 +3,7 @@
 // (LoadModel): blast engineering's procedure, or the paper's (section 4.1) as a baseline.
 #pragma once
 
+#include <spall/core/Wrench.h>
 #include <spall/blast/Blast.h>
 #include <spall/loads/Diffraction.h>
 #include <spall/loads/Exposure.h>
@@ -16,12 +17,6 @@
 #include <vector>
 
 namespace spall {
-
-/// Force and torque about the centre of mass, world frame.
-struct Wrench {
-    Eigen::Vector3d forceN = Eigen::Vector3d::Zero();    ///< (unit: N)
-    Eigen::Vector3d torqueNm = Eigen::Vector3d::Zero();  ///< (unit: N m)
-};
 
 /// True when the body's distances from a charge meet that charge's open window: only then can
 /// the blast load it. A rigid body's distances are those of its voxels' oriented bounding box
@@ -48,7 +43,7 @@ struct Silhouette {
 /// The outline of a group of bodies (one body, or bodies pressed together) seen from a charge,
 /// with the static boxes that hold it (heldBy).
 Silhouette silhouetteOf(const std::vector<const Body*>& group, const std::vector<const ObstacleBox*>& holders, const Eigen::Vector3d& chargeM,
-                        double shockSpeedMS, const LoadGround& ground);
+                        double shockSpeedMS, const GroundPlane& ground);
 
 /// The obstacles that hold a group: those within half a voxel of an anchored member's bounds,
 /// and every obstacle joined to them through others that meet (a frame, the wall round it).
@@ -77,7 +72,7 @@ struct FaceWave {
 /// The blast's loads during one step: the field and the windows open at the step's start.
 class BlastLoads {
 public:
-    BlastLoads(const BlastField& field, const std::vector<OpenWindow>& windows, const LoadSettings& settings, const LoadGeometry& geometry);
+    BlastLoads(const BlastField& field, const std::vector<OpenWindow>& windows, const LoadSettings& settings, const StaticWorld& geometry);
 
     /// Per body: whether the blast can load it this step (anchored bodies: 0, they do not move).
     std::vector<char> loadedBodies(const std::vector<Body>& bodies) const;
@@ -132,7 +127,7 @@ private:
     const BlastField& mField;
     const std::vector<OpenWindow>& mWindows;
     LoadSettings mSettings;
-    LoadGeometry mGeometry;
+    StaticWorld mGeometry;
     /// Per window: its charge is under the ground, a free-air charge's image, the wave the
     /// ground reflects (blast/Settings.h, withGroundImages).
     std::vector<char> mFromGround;

@@ -7,7 +7,7 @@
 #pragma once
 
 #include <spall/blast/Blast.h>
-#include <spall/loads/LoadGeometry.h>
+#include <spall/world/StaticWorld.h>
 
 namespace spall {
 
@@ -28,7 +28,7 @@ struct EdgePath {
 /// the ground (both ends within `groundToleranceM` of it) is no way round; the foot of a
 /// vertical edge is.
 EdgePath shortestPathAround(const ObstacleBox& box, const Eigen::Vector3d& sourceM, const Eigen::Vector3d& pointM,
-                            const LoadGeometry& geometry, double groundToleranceM);
+                            const StaticWorld& geometry, double groundToleranceM);
 
 /// The diffracted wave at a point in shadow, as a fraction of the direct wave's strength there.
 struct DiffractedWave {

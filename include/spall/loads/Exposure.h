@@ -4,7 +4,7 @@
 // has broken into pieces that still touch.
 #pragma once
 
-#include <spall/loads/LoadGeometry.h>
+#include <spall/world/StaticWorld.h>
 #include <spall/voxel/Body.h>
 
 #include <Eigen/Core>

@@ -7,15 +7,15 @@
 #include <spall/fracture/Events.h>
 #include <spall/fracture/Fracture.h>
 #include <spall/io/Scene.h>
-#include <spall/lattice/Deformable.h>
+#include <spall/lattice/DeformablePhase.h>
 #include <spall/loads/BlastLoads.h>
 #include <spall/voxel/Body.h>
+#include <spall/voxel/Voxelise.h>
 
 #include <functional>
 #include <limits>
 #include <memory>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 namespace spall {
@@ -28,25 +28,13 @@ struct StepStats {
     int64_t latticeParticleSteps = 0;  ///< the deformable phase's work: lattice steps times particles, over its bodies
 };
 
-/// A body leaving the deformable phase (fracture.algorithm "lattice").
-struct HandOffRecord {
-    double timeS = 0;  ///< (unit: s)
-    int64_t bodyId = 0;
-    int64_t particles = 0;
-    int64_t brokenBonds = 0;
-    int64_t brokenAnchors = 0;
-    double deformableS = 0;       ///< how long it was deformable (unit: s)
-    double discardedEnergyJ = 0;  ///< its vibration then, which the rigid parts do not carry (unit: J)
-    bool timedOut = false;        ///< left at lattice.max_vibration_s, not because it was quiet
-};
-
 /// Everything a simulation carries from one step to the next besides its scene: what a
 /// checkpoint stores so that a resumed run continues bit for bit.
 struct SimulationState {
     std::vector<Body> bodies;
     std::vector<FractureEvent> events;
     std::vector<DustRecord> dust;
-    std::vector<DeformableBody> deformable;  ///< bodies in the deformable phase, in the order they entered
+    DeformablePhase deformable;  ///< the bodies that are lattices, in the order they entered
     std::vector<HandOffRecord> handOffs;
     double timeS = 0;
     int64_t nextId = 0;
@@ -129,20 +117,12 @@ private:
     /// looked for once per lattice.handoff_check_interval_s, in the step of length dtS that
     /// reaches a multiple of it.
     void handOffQuietBodies(double dtS);
-    /// Parts of bodies in `leaving` that are marked deformable (still vibrating) get lattices
-    /// that carry on from their parent's.
-    void continueVibratingParts(const std::vector<DeformableBody>& leaving);
     /// Each deformable body's lattice through the step under its face loads and gravity.
     void deformBodies(const FaceForces& faces, const std::vector<OpenWindow>& windows, double dtS);
     /// The solve phase: the contact solver moves a free lattice's body as a rigid body, its
     /// lattice takes the change of the body's linear and angular momentum (addRigidMomentum),
     /// and the body follows its lattice again.
     void solveContactsWithLattices(const ContactSet& contacts, double dtS);
-    /// Each body's index in mState.bodies, by id.
-    std::unordered_map<int64_t, size_t> bodyIndexById() const;
-    /// The static world (the ground and the colliders) as the loads stage casts shadows with it
-    /// and as the lattices' anchors are bonded to it, built once from the scene (SceneSetup.cpp).
-    void buildStaticWorldViews();
     /// Throws SimulationError naming the first body whose pose or velocity is not finite: an
     /// unstable integration must stop the run, not reach the output as a broken transform.
     void refuseNonFiniteMotion() const;
@@ -159,8 +139,9 @@ private:
 
     Scene mScene;
     std::unique_ptr<BlastField> mField;
-    LoadGeometry mLoadGeometry;
-    LatticeSupports mLatticeSupports;
+    /// The ground and the colliders, built once from the scene (SceneSetup.cpp): the loads cast
+    /// shadows with it, the lattices bond their anchors to it.
+    StaticWorld mStaticWorld;
     SimulationState mState;  ///< everything carried from step to step (what a checkpoint saves)
     std::function<void(const Simulation&, const StepRecord&)> mObserver;
     StepRecord mRecord;  ///< filled while a step runs, for the observer

@@ -4,6 +4,7 @@
 #include <spall/core/EnumNames.h>
 #include <spall/core/Error.h>
 #include <spall/voxel/Body.h>
+#include <spall/voxel/Settings.h>
 
 #include <Eigen/Geometry>
 
@@ -15,36 +16,6 @@ namespace spall {
 
 /// How a mesh's inside is found. Auto takes the level set for watertight meshes (exact and
 /// fastest) and the winding number for meshes with holes.
-enum class InsideTest { Auto, LevelSet, WindingNumber };
-template <>
-struct EnumNames<InsideTest> {
-    static constexpr std::pair<InsideTest, const char*> kNames[] = {
-        {InsideTest::Auto, "auto"}, {InsideTest::LevelSet, "level-set"}, {InsideTest::WindingNumber, "winding-number"}};
-};
-
-struct VoxeliseSettings {
-    double voxelSizeM = 0.05;          ///< edge of a voxel (unit: m)
-    int64_t maxVoxels = 200'000'000;   ///< refuse larger results (unit: voxels)
-    InsideTest insideTest = InsideTest::Auto;
-    /// Above 0: instead of its inside, the voxels whose centres lie within half this of the
-    /// surface, for surfaces with no inside (a sheet, a terrain patch) (unit: m).
-    double shellThicknessM = 0.0;
-};
-
-enum class PrimitiveShape { Box, Sphere, Cylinder };
-template <>
-struct EnumNames<PrimitiveShape> {
-    static constexpr std::pair<PrimitiveShape, const char*> kNames[] = {
-        {PrimitiveShape::Box, "box"}, {PrimitiveShape::Sphere, "sphere"}, {PrimitiveShape::Cylinder, "cylinder"}};
-};
-
-/// A primitive centred on the object's origin: a box of full extents sizeM, a sphere of radius
-/// sizeM.x(), or a cylinder along z of radius sizeM.x() and height sizeM.z().
-struct Primitive {
-    PrimitiveShape shape = PrimitiveShape::Box;
-    Eigen::Vector3d sizeM = Eigen::Vector3d::Ones();
-};
-
 struct VoxeliseResult {
     LinkGrid::Ptr grid;  ///< solid voxels, all links intact, index space at voxel size
     int64_t voxelCount = 0;

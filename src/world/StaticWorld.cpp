@@ -1,4 +1,4 @@
-#include <spall/loads/LoadGeometry.h>
+#include <spall/world/StaticWorld.h>
 
 #include <algorithm>
 #include <cmath>
@@ -62,6 +62,18 @@ bool boxesMeet(const ObstacleBox& a, const ObstacleBox& b, double gapM)
         for (int j = 0; j < 3; ++j)
             if (separates(ra.col(i).cross(rb.col(j)))) return false;
     return true;
+}
+
+StaticWorld buildStaticWorld(const GroundPlane& ground, const std::vector<StaticBox>& colliders)
+{
+    StaticWorld world;
+    world.ground = ground;
+    world.ground.normal = ground.normal.normalized();
+    for (const StaticBox& box : colliders) {
+        world.boxes.push_back({box.centreM, box.halfExtentM, box.orientation});
+        world.pinned.push_back(box.holds == SupportHold::Pinned ? 1 : 0);
+    }
+    return world;
 }
 
 }  // namespace spall

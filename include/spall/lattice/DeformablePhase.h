@@ -1,0 +1,78 @@
+// The deformable phase as a stage (issue 17): the bodies that are lattices now, each with its
+// body's place among the simulation's bodies, and the parts of a step that concern them — enter,
+// deform, leave — which Simulation::step calls in order. What it holds is what a checkpoint saves.
+#pragma once
+
+#include <spall/fracture/Material.h>
+#include <spall/lattice/Deformable.h>
+#include <spall/lattice/Settings.h>
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace spall {
+
+/// A body leaving the deformable phase (fracture.algorithm "lattice").
+struct HandOffRecord {
+    double timeS = 0;  ///< (unit: s)
+    int64_t bodyId = 0;
+    int64_t particles = 0;
+    int64_t brokenBonds = 0;
+    int64_t brokenAnchors = 0;
+    double deformableS = 0;       ///< how long it was deformable (unit: s)
+    double discardedEnergyJ = 0;  ///< its vibration then, which the rigid parts do not carry (unit: J)
+    bool timedOut = false;        ///< left at lattice.max_vibration_s, not because it was quiet
+};
+
+/// What a look for quiet pieces leaves to the caller (DeformablePhase::leaveQuietPieces).
+struct PhaseDepartures {
+    /// Per body (its index before the look), the parts that replace it; empty: it stays whole.
+    std::vector<std::vector<Body>> parts;
+    /// The lattices of bodies that left in several parts: parts still vibrating carry on from
+    /// them (DeformablePhase::continueVibratingParts).
+    std::vector<DeformableBody> leaving;
+    int64_t brokenLinks = 0;
+    int64_t particleSteps = 0;  ///< the lattice steps taken to catch up before looking
+};
+
+/// Whether the blast reaches a body during the step (an open window meets it).
+using ReachedByBlast = std::function<bool(const Body&)>;
+
+class DeformablePhase {
+public:
+    /// The bodies in the phase, in the order they entered.
+    std::vector<DeformableBody> lattices;
+
+    bool empty() const { return lattices.empty(); }
+    /// Lattice k's body among `bodies`, checked against its id.
+    size_t bodyIndex(size_t k, const std::vector<Body>& bodies) const;
+    /// Finds each lattice's body again after the bodies were replaced or restored: between
+    /// those, a lattice knows its body's place without a lookup.
+    void reindex(const std::vector<Body>& bodies);
+
+    /// Bodies with links or anchors that the blast reaches become lattices.
+    void enter(std::vector<Body>& bodies, const ReachedByBlast& reached, const std::vector<Material>& materials,
+               const LatticeSettings& settings, const StaticWorld& supports, double timeS);
+    /// Each lattice through a step of dtS under its faces' forces (per body, FaceForces::forceN)
+    /// and gravity; its body follows it. Returns the particle-steps taken.
+    int64_t deform(std::vector<Body>& bodies, const std::vector<std::vector<Eigen::Vector3d>>& faceForcesN, const Eigen::Vector3d& gravityMS2,
+                   const ReachedByBlast& reached, double timeS, double dtS);
+    /// Bodies the blast has passed, looked at once per lattice.handoff_check_interval_s (in the
+    /// step of length dtS that reaches a multiple of it) or when their time is up: their quiet
+    /// pieces leave as rigid bodies (leaveQuietPieces, Deformable.h). A body that leaves whole is
+    /// replaced in `bodies` at once, in its place; one that leaves in parts is left to the
+    /// caller, which replaces it with `parts`, reindexes, then calls continueVibratingParts.
+    PhaseDepartures leaveQuietPieces(std::vector<Body>& bodies, const std::vector<Material>& materials, const LatticeSettings& settings,
+                                     double timeS, double dtS, std::vector<HandOffRecord>& records);
+    /// Parts marked deformable of bodies that left (`leaving`) carry on in the phase, with
+    /// lattices that take their state from their whole's.
+    void continueVibratingParts(const std::vector<Body>& bodies, const std::vector<DeformableBody>& leaving,
+                                const std::vector<Material>& materials, const LatticeSettings& settings, const StaticWorld& supports);
+
+private:
+    /// Per lattice, its body's index (reindex).
+    std::vector<size_t> mBodyIndex;
+};
+
+}  // namespace spall

@@ -1,0 +1,122 @@
+#include <spall/lattice/DeformablePhase.h>
+
+#include <spall/core/Error.h>
+
+#include <cmath>
+#include <unordered_map>
+
+namespace spall {
+
+size_t DeformablePhase::bodyIndex(size_t k, const std::vector<Body>& bodies) const
+{
+    SPALL_CHECK(k < mBodyIndex.size() && mBodyIndex[k] < bodies.size() && bodies[mBodyIndex[k]].id == lattices[k].bodyId);
+    return mBodyIndex[k];
+}
+
+void DeformablePhase::reindex(const std::vector<Body>& bodies)
+{
+    mBodyIndex.clear();
+    if (lattices.empty()) return;
+    std::unordered_map<int64_t, size_t> indexOf;
+    for (size_t i = 0; i < bodies.size(); ++i) indexOf[bodies[i].id] = i;
+    for (const DeformableBody& d : lattices) {
+        const auto found = indexOf.find(d.bodyId);
+        if (found == indexOf.end()) throw InputError("saved state: deformable body " + std::to_string(d.bodyId) + " is not among the bodies");
+        mBodyIndex.push_back(found->second);
+    }
+}
+
+void DeformablePhase::enter(std::vector<Body>& bodies, const ReachedByBlast& reached, const std::vector<Material>& materials,
+                            const LatticeSettings& settings, const StaticWorld& supports, double timeS)
+{
+    for (size_t i = 0; i < bodies.size(); ++i) {
+        Body& body = bodies[i];
+        if (body.motion.deformable || (body.linkCount == 0 && !body.anchored) || !reached(body)) continue;
+        lattices.push_back(enterDeformablePhase(body, materials[body.materialIndex], settings, supports, timeS));
+        mBodyIndex.push_back(i);
+        body.motion.deformable = true;
+        body.motion.asleep = false;
+        body.motion.restTimeS = 0.0;
+    }
+}
+
+int64_t DeformablePhase::deform(std::vector<Body>& bodies, const std::vector<std::vector<Eigen::Vector3d>>& faceForcesN,
+                                const Eigen::Vector3d& gravityMS2, const ReachedByBlast& reached, double timeS, double dtS)
+{
+    int64_t particleSteps = 0;
+    for (size_t k = 0; k < lattices.size(); ++k) {
+        DeformableBody& d = lattices[k];
+        const size_t i = bodyIndex(k, bodies);
+        Body& body = bodies[i];
+        setExternalForces(d, body, faceForcesN[i], gravityMS2);
+        particleSteps += advanceDeformable(d, dtS);
+        followLattice(body, d.lattice);
+        if (reached(body)) d.lastLoadedS = timeS + dtS;
+    }
+    return particleSteps;
+}
+
+PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, const std::vector<Material>& materials,
+                                                  const LatticeSettings& settings, double timeS, double dtS, std::vector<HandOffRecord>& records)
+{
+    PhaseDepartures out;
+    if (lattices.empty()) return out;
+    // Once in each check interval: in the step that reaches one of its multiples.
+    const double interval = settings.handoffCheckIntervalS;
+    const bool checkDue = std::floor((timeS + dtS) / interval) > std::floor(timeS / interval);
+    out.parts.resize(bodies.size());
+    std::vector<DeformableBody> staying;
+    std::vector<size_t> stayingBodyIndex;
+    for (size_t k = 0; k < lattices.size(); ++k) {
+        DeformableBody& d = lattices[k];
+        const size_t i = bodyIndex(k, bodies);
+        Body& body = bodies[i];
+        const double sinceBlastS = timeS - d.lastLoadedS;
+        const double toleranceJ = settings.handoffEnergyFraction * elasticCapacityPerVoxelJ(materials[body.materialIndex], d.lattice.model().voxelSizeM);
+        const bool timeUp = sinceBlastS >= settings.maxVibrationS;
+        Departure departure;
+        if (sinceBlastS > 0.0 && (checkDue || timeUp)) {
+            out.particleSteps += catchUpDeformable(d);
+            followLattice(body, d.lattice);
+            departure = spall::leaveQuietPieces(body, d.lattice, toleranceJ, timeUp);
+        }
+        std::vector<Body>& leftParts = departure.handOff.parts;
+        if (leftParts.empty() || (leftParts.size() == 1 && leftParts.front().motion.deformable)) {
+            staying.push_back(std::move(d));  // nothing leaves yet
+            stayingBodyIndex.push_back(i);
+            continue;
+        }
+        records.push_back({timeS, d.bodyId, int64_t(d.lattice.model().voxelParticleCount), departure.handOff.brokenBonds, departure.handOff.brokenAnchors,
+                           timeS - d.enteredS, departure.discardedEnergyJ, departure.timedOut});
+        out.brokenLinks += departure.handOff.brokenLinks;
+        if (leftParts.size() == 1) {
+            leftParts.front().id = body.id;
+            leftParts.front().parentId = body.parentId;
+            body = std::move(leftParts.front());
+            continue;
+        }
+        out.parts[i] = std::move(leftParts);
+        out.leaving.push_back(std::move(d));
+    }
+    // A body that left whole was replaced in place: the bodies' places are as they were.
+    lattices = std::move(staying);
+    mBodyIndex = std::move(stayingBodyIndex);
+    return out;
+}
+
+void DeformablePhase::continueVibratingParts(const std::vector<Body>& bodies, const std::vector<DeformableBody>& leaving,
+                                             const std::vector<Material>& materials, const LatticeSettings& settings,
+                                             const StaticWorld& supports)
+{
+    std::unordered_map<int64_t, const DeformableBody*> leftBy;
+    for (const DeformableBody& d : leaving) leftBy[d.bodyId] = &d;
+    for (size_t i = 0; i < bodies.size(); ++i) {
+        const Body& body = bodies[i];
+        if (!body.motion.deformable || !leftBy.count(body.parentId)) continue;
+        lattices.push_back(continueDeformable(body, *leftBy.at(body.parentId), materials[body.materialIndex], settings, supports));
+        lattices.back().bodyId = body.id;
+        mBodyIndex.push_back(i);
+    }
+}
+
+}  // namespace spall

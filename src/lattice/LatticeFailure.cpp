@@ -1,0 +1,126 @@
+// How a lattice's bonds fail: the failure index as an equivalent stretch (tension cut-off joined
+// to shear, Mohr–Coulomb in compression), the damage it drives on the softening line (crack band)
+// or at a rate (Davison–Stevens), and the strain-rate law's effect on the driver.
+#include <spall/lattice/Lattice.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace spall {
+
+double Lattice::bondDamage(size_t b) const
+{
+    return mModel.damageLaw == LatticeDamageLaw::DavisonStevens ? state.bondHistory[b].rateDamage : softeningDamage(b);
+}
+
+double Lattice::softeningDamage(size_t b) const
+{
+    const double scale = state.bondHistory[b].strengthScale;
+    const LatticeStiffness::Strength& strength = mModel.stiffness.strength[mModel.bonds[b].strengthClass];
+    const double u0 = scale * strength.peakStretchM, uf = strength.zeroTractionStretchM / scale;
+    const double kappa = state.bondHistory[b].damageDriverM;
+    if (kappa <= u0) return 0.0;
+    // A bond too large to soften breaks at its peak, whatever its strength scale.
+    if (kappa >= uf || snapsAtPeak(b)) return 1.0;
+    // Secant stiffness on the softening line: (1 - D) κ / u0 = (uf - κ) / (uf - u0).
+    return 1.0 - (u0 / kappa) * (uf - kappa) / (uf - u0);
+}
+
+bool Lattice::snapsAtPeak(size_t b) const
+{
+    const LatticeStiffness::Strength& strength = mModel.stiffness.strength[mModel.bonds[b].strengthClass];
+    return strength.zeroTractionStretchM <= strength.peakStretchM;
+}
+
+double Lattice::equivalentStretchM(size_t b) const
+{
+    const LatticeBond& bond = mModel.bonds[b];
+    return equivalentStretchM(b, strainOf(bond), (state.positionM[bond.high] - state.positionM[bond.low]).norm(), bondDamage(b));
+}
+
+void Lattice::computeFailureTerms()
+{
+    const LatticeStiffness& k = mModel.stiffness;
+    const double faceAreaM2 = mModel.voxelSizeM * mModel.voxelSizeM;
+    for (size_t strengthClass = 0; strengthClass < 2; ++strengthClass)
+        for (size_t axis = 0; axis < 3; ++axis) {
+            const LatticeStiffness::Strength& strength = k.strength[strengthClass];
+            LatticeModel::FailureTerms& terms = mModel.failureTerms[strengthClass][axis];
+            terms.peakStretchM = strength.peakStretchM;
+            terms.tensionIndexPerM = 1.0 / strength.peakStretchM;
+            terms.shearIndexPerM = k.shearNPerM[axis] / (faceAreaM2 * strength.shearStrengthPa);
+            terms.normalIndexPerM = k.normalNPerM[axis] / (faceAreaM2 * strength.shearStrengthPa);
+            terms.indexPerPa = 1.0 / strength.shearStrengthPa;
+            terms.frictionCoefficient = strength.frictionCoefficient;
+        }
+}
+
+double Lattice::equivalentStretchM(size_t b, const BondStrain& strain, double lengthM, double damage) const
+{
+    const LatticeBond& bond = mModel.bonds[b];
+    const int a = bond.axis;
+    const LatticeModel::FailureTerms& terms = mModel.failureTerms[bond.strengthClass][size_t(a)];
+    // The shear displacement: across the bond's axis in its half-way frame.
+    const double normalM = strain.displacementM[a];
+    const double shearIndex = terms.shearIndexPerM * std::sqrt(std::max(0.0, strain.displacementM.squaredNorm() - normalM * normalM));
+    // The stretch at the face's most stretched corner: the moment the bond carries, (1 − D) of
+    // its bending stiffness times θ, opens one edge by (1 − D) θ h/2 per axis across it, so the
+    // outermost bonds of a bent member see the strain of its surface, E κ t/2, as a continuum
+    // would (the parallel bond's σ = F/A + |M| R/I, Potyondy & Cundall 2004), not that of their
+    // centres, t/2 − h/2 from the neutral axis. As the bond softens its moment goes, and its
+    // opening alone carries it to the end of the softening line, so it still dissipates Gf.
+    const Eigen::Vector3d& rotation = strain.rotationRad;
+    const double bendingStretchM = 0.5 * mModel.voxelSizeM * (1.0 - damage) * (std::abs(rotation[(a + 1) % 3]) + std::abs(rotation[(a + 2) % 3]));
+    const double stretchM = bond.pinned ? 0.0 : lengthM - mModel.voxelSizeM + bendingStretchM;  // a pin fails in shear
+    double index = 0.0;
+    if (stretchM >= 0.0) {
+        const double tensionIndex = stretchM * terms.tensionIndexPerM;
+        index = std::sqrt(tensionIndex * tensionIndex + shearIndex * shearIndex);
+    } else {
+        // The compression across the bond, over the shear strength: its spring's and its
+        // particles' volumetric share, as the last force pass left them (a substep behind; a
+        // function of the saved state).
+        const double normalIndex =
+            terms.normalIndexPerM * normalM + terms.indexPerPa * (mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a]);
+        index = std::max(0.0, shearIndex - terms.frictionCoefficient * std::max(0.0, -normalIndex));
+    }
+    return index * terms.peakStretchM;
+}
+
+bool Lattice::growBondDamage(size_t b, double equivalentStretchNowM, double strainRatePerS, double dtS)
+{
+    BondHistory& history = state.bondHistory[b];
+    const double increaseM = equivalentStretchNowM - history.maxEquivalentStretchM;
+    if (increaseM > 0.0) {
+        history.maxEquivalentStretchM += increaseM;
+        history.damageDriverM +=
+            mModel.stiffness.strengthRateLaw != StrengthRateLaw::None ? increaseM / dynamicIncreaseFactor(mModel.stiffness.strengthRateLaw, strainRatePerS) : increaseM;
+    }
+    if (mModel.damageLaw == LatticeDamageLaw::DavisonStevens) {
+        history.rateDamage = rateDamageAfter(b, equivalentStretchNowM, dtS);
+        return true;
+    }
+    return increaseM > 0.0;
+}
+
+double Lattice::rateDamageAfter(size_t b, double equivalentStretchNowM, double dtS) const
+{
+    const BondHistory& history = state.bondHistory[b];
+    const double onLine = softeningDamage(b);
+    // Past the softening line's end the crack is open: broken, as in the crack band.
+    if (onLine >= 1.0) return 1.0;
+    const LatticeStiffness& k = mModel.stiffness;
+    // Stresses in tension's terms: the bond's (its equivalent stretch on its damaged spring) and
+    // what the softening line allows at its damage driver.
+    const LatticeStiffness::Strength& strength = k.strength[mModel.bonds[b].strengthClass];
+    const double toStressPa = strength.youngsModulusPa / mModel.voxelSizeM, peakM = history.strengthScale * strength.peakStretchM;
+    const double stressPa = (1.0 - history.rateDamage) * toStressPa * equivalentStretchNowM;
+    const double allowedPa = toStressPa * (history.damageDriverM <= peakM ? peakM : (1.0 - onLine) * history.damageDriverM);
+    const double excessPa = stressPa - allowedPa;
+    if (excessPa <= 0.0) return history.rateDamage;
+    // exp(C σx) − 1 by expm1; past exp(50) the step breaks the bond anyway.
+    const double rate = k.damageRatePerS * std::expm1(std::min(k.damageStressScalePerPa * excessPa, 50.0));
+    return std::min(1.0, history.rateDamage + rate * dtS);
+}
+
+}  // namespace spall
