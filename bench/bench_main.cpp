@@ -7,7 +7,7 @@
 #include <spall/dynamics/NarrowPhase.h>
 #include <spall/dynamics/StaticContacts.h>
 #include <spall/fracture/Fracture.h>
-#include <spall/io/VdbIo.h>
+#include <spall/voxel/VdbIo.h>
 #include <spall/lattice/Lattice.h>
 #include <spall/core/Parallel.h>
 #include <spall/loads/BlastLoads.h>

@@ -1,7 +1,7 @@
 // libFuzzer target: the scene parser. Any input must either parse or throw InputError naming the
 // problem; a crash, a sanitizer report or any other exception is a bug (docs/testing.md).
 #include <spall/core/Error.h>
-#include <spall/io/Scene.h>
+#include <spall/scene/Scene.h>
 
 #include <cstddef>
 #include <cstdint>

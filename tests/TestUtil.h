@@ -1,7 +1,7 @@
 #pragma once
 
 #include <spall/fracture/Fracture.h>
-#include <spall/io/VdbIo.h>
+#include <spall/voxel/VdbIo.h>
 #include <spall/voxel/Body.h>
 
 #include <openvdb/openvdb.h>

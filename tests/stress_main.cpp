@@ -3,7 +3,7 @@
 // checked after every step. `spall_stress` runs the reduced suite (CI); `spall_stress --full`
 // the whole one (docs/testing.md). Exit status 1 when any invariant fails.
 #include <spall/dynamics/Integrate.h>
-#include <spall/io/Scene.h>
+#include <spall/scene/Scene.h>
 #include <spall/sim/Simulation.h>
 
 #include <CLI/CLI.hpp>

@@ -5,7 +5,7 @@
 
 #include <spall/blast/Blast.h>
 #include <spall/dynamics/Integrate.h>
-#include <spall/io/Scene.h>
+#include <spall/scene/Scene.h>
 #include <spall/lattice/Deformable.h>
 #include <spall/sim/Simulation.h>
 

@@ -1,7 +1,7 @@
 #include "TestUtil.h"
 
 #include <spall/fracture/Fracture.h>
-#include <spall/io/Scene.h>
+#include <spall/scene/Scene.h>
 #include <spall/sim/Simulation.h>
 
 #include <gtest/gtest.h>

@@ -3,11 +3,11 @@
 #include "TestUtil.h"
 
 #include <spall/fracture/Fracture.h>
-#include <spall/io/FrameWriter.h>
-#include <spall/io/GltfExport.h>
-#include <spall/io/History.h>
-#include <spall/io/Scene.h>
-#include <spall/sim/Run.h>
+#include <spall/output/FrameWriter.h>
+#include <spall/output/GltfExport.h>
+#include <spall/output/History.h>
+#include <spall/scene/Scene.h>
+#include <spall/run/Run.h>
 
 #include <gtest/gtest.h>
 #include <tiny_gltf.h>

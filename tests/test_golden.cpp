@@ -1,7 +1,7 @@
 // Golden values: the hash of the whole state (stateHash) at the last frame of shipped scenes, run
 // as `spall run` runs them (landing on every frame's time). A refactor leaves them as they are; a
 // deliberate change of the physics or of a scene updates them in the same commit and says why.
-#include <spall/io/Scene.h>
+#include <spall/scene/Scene.h>
 #include <spall/sim/Simulation.h>
 
 #include <gtest/gtest.h>

@@ -4,12 +4,12 @@
 #include "TestUtil.h"
 
 #include <spall/core/Error.h>
-#include <spall/io/History.h>
-#include <spall/io/Png.h>
+#include <spall/output/History.h>
+#include <spall/output/Png.h>
 #include <spall/fracture/Fracture.h>
-#include <spall/io/FragmentSurface.h>
-#include <spall/io/FrameWriter.h>
-#include <spall/io/VdbIo.h>
+#include <spall/output/FragmentSurface.h>
+#include <spall/output/FrameWriter.h>
+#include <spall/voxel/VdbIo.h>
 #include <spall/render/Render.h>
 
 #include <gtest/gtest.h>

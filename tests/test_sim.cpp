@@ -1,9 +1,9 @@
 #include "TestUtil.h"
 
-#include <spall/io/Scene.h>
+#include <spall/scene/Scene.h>
 #include <spall/sim/Checkpoint.h>
 #include <spall/sim/MemoryBudget.h>
-#include <spall/sim/Run.h>
+#include <spall/run/Run.h>
 #include <spall/sim/Simulation.h>
 
 #include <gtest/gtest.h>

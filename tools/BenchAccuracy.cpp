@@ -4,8 +4,8 @@
 #include <spall/dynamics/Integrate.h>
 #include <spall/loads/BlastLoads.h>
 #include <spall/fracture/Fracture.h>
-#include <spall/io/Png.h>
-#include <spall/io/Scene.h>
+#include <spall/output/Png.h>
+#include <spall/scene/Scene.h>
 #include <spall/sim/Simulation.h>
 #include <spall/voxel/Voxelise.h>
 

@@ -2,7 +2,7 @@
 
 #include <spall/sim/Simulation.h>
 #include <spall/dynamics/DebrisScenes.h>
-#include <spall/io/VdbIo.h>
+#include <spall/voxel/VdbIo.h>
 
 #ifdef SPALL_WITH_BULLET
 #include <btBulletDynamicsCommon.h>

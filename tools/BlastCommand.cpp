@@ -5,7 +5,7 @@
 
 #include <spall/blast/Blast.h>
 #include <spall/core/Error.h>
-#include <spall/io/Png.h>
+#include <spall/output/Png.h>
 
 #include <nlohmann/json.hpp>
 

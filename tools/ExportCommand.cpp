@@ -1,7 +1,7 @@
 // `spall export gltf OUTDIR`: a run's debris as meshes with transforms (debris.glb).
 #include "Commands.h"
 
-#include <spall/io/GltfExport.h>
+#include <spall/output/GltfExport.h>
 
 #include <cstdio>
 #include <filesystem>

@@ -4,7 +4,7 @@
 #include <memory>
 
 #include <spall/core/Error.h>
-#include <spall/io/History.h>
+#include <spall/output/History.h>
 
 #include <nlohmann/json.hpp>
 

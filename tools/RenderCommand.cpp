@@ -4,9 +4,9 @@
 #include <memory>
 
 #include <spall/core/Error.h>
-#include <spall/io/Png.h>
-#include <spall/io/FrameWriter.h>
-#include <spall/io/VdbIo.h>
+#include <spall/output/Png.h>
+#include <spall/output/FrameWriter.h>
+#include <spall/voxel/VdbIo.h>
 #include <spall/render/Render.h>
 
 #include <cstdio>

@@ -2,9 +2,9 @@
 #include "Commands.h"
 
 #include <spall/core/Error.h>
-#include <spall/io/Scene.h>
+#include <spall/scene/Scene.h>
 #include <spall/sim/Checkpoint.h>
-#include <spall/sim/Run.h>
+#include <spall/run/Run.h>
 #include <spall/voxel/Voxelise.h>
 
 #include <tbb/global_control.h>

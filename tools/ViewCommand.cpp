@@ -1,8 +1,8 @@
 // `spall view OUTDIR`: the run's debris as a web page (view.html) that opens from disk.
 #include "Commands.h"
 
-#include <spall/io/FrameWriter.h>
-#include <spall/io/ViewerPage.h>
+#include <spall/output/FrameWriter.h>
+#include <spall/output/ViewerPage.h>
 
 #include <cstdio>
 #include <filesystem>

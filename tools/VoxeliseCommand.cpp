@@ -4,7 +4,7 @@
 #include <memory>
 
 #include <spall/core/Error.h>
-#include <spall/io/VdbIo.h>
+#include <spall/voxel/VdbIo.h>
 #include <spall/voxel/Voxelise.h>
 
 #include <chrono>

@@ -3,8 +3,8 @@
 
 #include <spall/core/AtomicFile.h>
 #include <spall/core/Error.h>
-#include <spall/io/H5Out.h>
-#include <spall/io/Png.h>
+#include <spall/output/H5Out.h>
+#include <spall/output/Png.h>
 
 #include <cstdio>
 

@@ -1,8 +1,8 @@
 #include <spall/render/Render.h>
 
 #include <spall/core/Error.h>
-#include <spall/io/FragmentSurface.h>
-#include <spall/io/VdbIo.h>
+#include <spall/output/FragmentSurface.h>
+#include <spall/voxel/VdbIo.h>
 
 #include <openvdb/io/File.h>
 

@@ -1,7 +1,7 @@
 #include <spall/sim/Checkpoint.h>
 
 #include <spall/core/AtomicFile.h>
-#include <spall/io/VdbIo.h>
+#include <spall/voxel/VdbIo.h>
 
 #include <openvdb/io/Stream.h>
 

@@ -4,7 +4,7 @@
 #include <spall/sim/Simulation.h>
 
 #include <spall/core/Error.h>
-#include <spall/io/VdbIo.h>
+#include <spall/voxel/VdbIo.h>
 #include <spall/sim/MemoryBudget.h>
 
 #include <algorithm>

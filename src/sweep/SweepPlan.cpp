@@ -2,8 +2,8 @@
 
 #include <spall/core/AtomicFile.h>
 #include <spall/core/EnumNames.h>
-#include <spall/io/Scene.h>
-#include <spall/sim/Run.h>
+#include <spall/scene/Scene.h>
+#include <spall/run/Run.h>
 #include <spall/voxel/Voxelise.h>
 
 #include <cstdio>

@@ -1,8 +1,8 @@
 #include <spall/sweep/Sweep.h>
 
 #include <spall/core/AtomicFile.h>
-#include <spall/io/H5Out.h>
-#include <spall/io/Png.h>
+#include <spall/output/H5Out.h>
+#include <spall/output/Png.h>
 
 #include <algorithm>
 #include <cmath>

@@ -5,7 +5,7 @@
 // docs/debris.md.
 #pragma once
 
-#include <spall/io/History.h>
+#include <spall/output/History.h>
 
 #include <Eigen/Core>
 

@@ -2,8 +2,8 @@
 // one colour per fragment, over a chequered ground, from a camera that frames the scene.
 #pragma once
 
-#include <spall/io/FrameWriter.h>
-#include <spall/io/Png.h>
+#include <spall/output/FrameWriter.h>
+#include <spall/output/Png.h>
 #include <spall/voxel/Body.h>
 
 #include <openvdb/openvdb.h>

@@ -6,7 +6,7 @@
 #include <spall/dynamics/ContactSolver.h>
 #include <spall/fracture/Events.h>
 #include <spall/fracture/Fracture.h>
-#include <spall/io/Scene.h>
+#include <spall/scene/Scene.h>
 #include <spall/lattice/DeformablePhase.h>
 #include <spall/loads/BlastLoads.h>
 #include <spall/voxel/Body.h>

@@ -1,4 +1,4 @@
-#include <spall/io/VdbIo.h>
+#include <spall/voxel/VdbIo.h>
 
 #include <spall/core/AtomicFile.h>
 

@@ -1,7 +1,7 @@
 // OUTDIR/fragments.NNNN.vdb: one frame of a run, every fragment where it is (docs/file-formats.md).
 #pragma once
 
-#include <spall/io/Scene.h>
+#include <spall/scene/Scene.h>
 #include <spall/voxel/Body.h>
 
 #include <openvdb/openvdb.h>

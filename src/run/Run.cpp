@@ -1,11 +1,11 @@
-#include <spall/sim/Run.h>
+#include <spall/run/Run.h>
 
 #include <spall/core/AtomicFile.h>
 
 #include <spall/dynamics/Integrate.h>
-#include <spall/io/History.h>
-#include <spall/io/FrameWriter.h>
-#include <spall/io/VdbIo.h>
+#include <spall/output/History.h>
+#include <spall/output/FrameWriter.h>
+#include <spall/voxel/VdbIo.h>
 #include <spall/render/Render.h>
 #include <spall/sim/Checkpoint.h>
 #include <spall/sim/Simulation.h>

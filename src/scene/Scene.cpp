@@ -1,4 +1,4 @@
-#include <spall/io/Scene.h>
+#include <spall/scene/Scene.h>
 
 #include "FieldIo.h"
 

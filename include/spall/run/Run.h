@@ -2,7 +2,7 @@
 #pragma once
 
 #include <spall/core/Error.h>
-#include <spall/io/Scene.h>
+#include <spall/scene/Scene.h>
 
 #include <functional>
 #include <string>

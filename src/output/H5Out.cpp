@@ -1,4 +1,4 @@
-#include <spall/io/H5Out.h>
+#include <spall/output/H5Out.h>
 
 #include <spall/core/Error.h>
 

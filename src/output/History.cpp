@@ -1,8 +1,8 @@
-#include <spall/io/History.h>
+#include <spall/output/History.h>
 
 #include "HistorySeries.h"
 
-#include <spall/io/H5Out.h>
+#include <spall/output/H5Out.h>
 
 #include <spall/core/Error.h>
 

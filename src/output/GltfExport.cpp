@@ -1,11 +1,11 @@
-#include <spall/io/GltfExport.h>
+#include <spall/output/GltfExport.h>
 
 #include <spall/core/AtomicFile.h>
 #include <spall/core/Error.h>
 #include <spall/core/Parallel.h>
-#include <spall/io/FragmentSurface.h>
-#include <spall/io/FrameWriter.h>
-#include <spall/io/VdbIo.h>
+#include <spall/output/FragmentSurface.h>
+#include <spall/output/FrameWriter.h>
+#include <spall/voxel/VdbIo.h>
 #include <spall/voxel/LinkBits.h>
 
 #include <openvdb/io/File.h>

@@ -1,4 +1,4 @@
-#include <spall/io/FragmentSurface.h>
+#include <spall/output/FragmentSurface.h>
 
 #include <spall/voxel/LinkBits.h>
 

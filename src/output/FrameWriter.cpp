@@ -1,7 +1,7 @@
-#include <spall/io/FrameWriter.h>
+#include <spall/output/FrameWriter.h>
 
-#include <spall/io/FragmentSurface.h>
-#include <spall/io/VdbIo.h>
+#include <spall/output/FragmentSurface.h>
+#include <spall/voxel/VdbIo.h>
 
 #include <spall/core/Error.h>
 #include <spall/core/Hash.h>

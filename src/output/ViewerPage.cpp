@@ -1,4 +1,4 @@
-#include <spall/io/ViewerPage.h>
+#include <spall/output/ViewerPage.h>
 
 #include "ViewerAssets.h"
 

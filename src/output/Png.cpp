@@ -1,4 +1,4 @@
-#include <spall/io/Png.h>
+#include <spall/output/Png.h>
 
 #include <spall/core/AtomicFile.h>
 
