@@ -2,6 +2,7 @@
 
 #include <spall/voxel/LinkBits.h>
 
+#include <spall/core/Error.h>
 #include <spall/core/Hash.h>
 
 #include <openvdb/tools/LevelSetFilter.h>
@@ -17,7 +18,6 @@
 #include <cmath>
 #include <functional>
 #include <optional>
-#include <stdexcept>
 
 namespace spall {
 
@@ -193,7 +193,7 @@ openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces
     faceQuads(faces, voxelSizeM, [](const VoxelFace&) { return true; }, points, quads);
     const auto shapeSpace = levelSetTransform(*openvdb::math::Transform::createLinearTransform(voxelSizeM), style.subdivisions);
     const std::vector<openvdb::Vec3I> noTriangles;
-    if (style.halfWidthSamples > kSampleIndexOffset) throw std::invalid_argument("voxelSurfaceLevelSet: band wider than the index offset");
+    SPALL_CHECK(style.halfWidthSamples <= kSampleIndexOffset);  // the band fits the index offset
     auto levelSet = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*shapeSpace, points, noTriangles, quads, style.halfWidthSamples);
     if (style.smoothingSteps > 0) {
         openvdb::tools::LevelSetFilter<openvdb::FloatGrid> filter(*levelSet);

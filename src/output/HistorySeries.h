@@ -1,5 +1,5 @@
-// The growing datasets of history.h5 (io/History.cpp): a chunked, extensible dataset that a frame
-// appends rows to, and the checks and attributes around it. Private to io.
+// The growing datasets of history.h5 (output/History.cpp): a chunked, extensible dataset that a
+// frame appends rows to, and the checks and attributes around it. Private to output.
 #pragma once
 
 #include <spall/core/Error.h>

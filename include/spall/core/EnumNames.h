@@ -18,7 +18,7 @@ std::string enumName(E value)
 {
     for (const auto& [v, name] : EnumNames<E>::kNames)
         if (v == value) return name;
-    throw std::logic_error("an enum value without a name");
+    failCheck("every enum value has a name (EnumNames)", __FILE__, __LINE__);
 }
 
 /// Throws InputError "'name' is unknown (expected a, b or c)".

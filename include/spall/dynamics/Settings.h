@@ -1,5 +1,6 @@
 // Settings of the rigid-body stage: the world bodies move in, the time step, collisions, sleep.
-// Plain structs with defaults and a unit on every field; io/SceneFields.cpp holds their table.
+// Plain structs with defaults and a unit on every field; src/dynamics/Settings.cpp holds their
+// tables (the ground's and the colliders', src/world/Settings.cpp).
 #pragma once
 
 #include <spall/core/EnumNames.h>

@@ -1,6 +1,6 @@
 // A small HDF5 file written in one go (analysis reports, sweep summaries): groups, whole
 // datasets and scalar attributes, written under a temporary name and renamed, so the file is
-// whole or absent. history.h5, which grows frame by frame, has its own writer (io/History.h).
+// whole or absent. history.h5, which grows frame by frame, has its own writer (output/History.h).
 #pragma once
 
 #include <cstdint>

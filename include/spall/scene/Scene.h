@@ -104,7 +104,7 @@ struct Scene {
     const Material& material(const std::string& name) const;
 };
 
-// Keys and ranges (src/io/Scene.cpp). A scene's own table holds its top-level numbers; its
+// Keys and ranges (src/scene/Scene.cpp). A scene's own table holds its top-level numbers; its
 // settings structs, lists and materials have tables of their own.
 template <>
 const std::vector<Field<ObjectSpec>>& fieldTable<ObjectSpec>();

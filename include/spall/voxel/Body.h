@@ -22,7 +22,7 @@ namespace spall {
 /// Active voxel = solid; value = link bits. Bodies use a shallow tree (8^3 leaves under two 8^3
 /// internal levels): a one-voxel fragment then costs about 10 KB instead of the ~300 KB of
 /// OpenVDB's standard 5-4-3 tree, which matters when a blast makes thousands of fragments.
-/// Files hold standard FloatGrids (io/VdbIo.h), which every reader knows.
+/// Files hold standard FloatGrids (voxel/VdbIo.h), which every reader knows.
 using LinkTree = openvdb::tree::Tree4<int32_t, 3, 3, 3>::Type;
 using LinkGrid = openvdb::Grid<LinkTree>;
 using LinkLeaf = LinkTree::LeafNodeType;
