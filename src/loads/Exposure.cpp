@@ -210,7 +210,7 @@ int64_t Exposure::firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector
         const int64_t index[3] = {i, j, k};
         for (int a = 0; a < 3; ++a) {
             if (dir[a] == 0) continue;
-            const int64_t lo = (index[a] >> kBlockShift) << kBlockShift;
+            const int64_t lo = index[a] & ~int64_t((1 << kBlockShift) - 1);  // down to the block's first cell (no shift of a negative: UB before C++20)
             const double face = dir[a] > 0 ? lo + (1 << kBlockShift) - 0.5 : lo - 0.5;  // in cell units
             exit = std::min(exit, (face - u[a]) * h / dir[a]);
         }
