@@ -197,10 +197,10 @@ void BM_Loading_Links256(benchmark::State& state)
     FractureSettings fs;
     fs.weakening = false;
     fs.orientation = false;
-    const LoadResult first = loadLinks(body, m, pressure, 1e-6, fs);
+    const LoadResult first = loadLinks(body, m, pressure, 1e-6, fs, 1);
     if (first.skippedLeaves != 0) state.SkipWithError("leaves were skipped");
     for (auto _ : state) {
-        const LoadResult again = loadLinks(body, m, pressure, 1e-6, fs);
+        const LoadResult again = loadLinks(body, m, pressure, 1e-6, fs, 1);
         if (again.brokenLinks != 0 || again.skippedLeaves != 0) state.SkipWithError("the timed passes must repeat the same work");
     }
     state.counters["links_per_s"] = benchmark::Counter(double(countLinks(*g)), benchmark::Counter::kIsIterationInvariantRate);

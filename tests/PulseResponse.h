@@ -56,7 +56,7 @@ inline void stepUnderTriangularPulse(Lattice& lattice, const std::vector<size_t>
         const double s = std::min(t, durationS);
         return s - s * s / (2.0 * durationS);
     };
-    const double dt = lattice.stableTimeStepS(), faceAreaM2 = lattice.model().voxelSizeM * lattice.model().voxelSizeM;
+    const double dt = lattice.stableTimeStepS(), faceAreaM2 = lattice.model().spacingM * lattice.model().spacingM;
     for (double t = 0.0; t < runS; t += dt) {
         const double meanPa = peakPa * (impulsePerPa(t + dt) - impulsePerPa(t)) / dt;
         for (const size_t p : loaded) lattice.externalForceN[p] = meanPa * faceAreaM2 * direction;

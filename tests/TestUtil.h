@@ -54,4 +54,14 @@ inline std::vector<Body> barBrokenInTwo(Body bar, int64_t firstId)
     return halves;
 }
 
+/// A small scene run through in a second: a 2 m brick wall at 10 cm voxels, anchored, 3 kg of
+/// TNT on the ground 2 m before it, and a turned collider behind it.
+inline constexpr const char* kSmallScene = R"({
+  "voxel_size_m": 0.1, "duration_s": 0.5, "frame_rate_hz": 24, "seed": 3,
+  "objects": [{"name": "wall", "primitive": {"shape": "box", "size_m": [2.0, 0.3, 1.5]},
+               "position_m": [0, 0, 0.75], "material": "brick-masonry", "anchor": "ground"}],
+  "charges": [{"position_m": [0.2, -2.0, 0.0], "tnt_kg": 3.0, "burst": "surface"}],
+  "colliders": [{"position_m": [0, 3, 0.5], "size_m": [4, 0.5, 1], "rotation_deg": [0, 0, 10]}]
+})";
+
 }  // namespace spall::test

@@ -211,6 +211,10 @@ PY
 if "$spall" export gltf "$dir/fog" 2> "$dir/err.txt"; then fail "export of fog frames accepted"; fi
 grep -q "fragments.0000.vdb: fragments are not level sets" "$dir/err.txt" || fail "fog export error unclear: $(cat "$dir/err.txt")"
 [[ ! -e "$dir/fog/debris.glb" ]] || fail "a refused export left a file"
+# a run asked for a .glb it could not mesh is refused before it starts
+if "$spall" run "$dir/fog.json" -o "$dir/fog-gltf" --gltf --quiet 2> "$dir/err.txt"; then fail "run --gltf of fog frames accepted"; fi
+grep -q "a .glb is meshed from level-set frames" "$dir/err.txt" || fail "run --gltf refusal unclear: $(cat "$dir/err.txt")"
+[[ ! -e "$dir/fog-gltf/fragments.0000.vdb" ]] || fail "a refused run --gltf wrote frames"
 if "$spall" view "$dir/fog" 2> "$dir/err.txt"; then fail "view of fog frames accepted"; fi
 grep -q "fragments are not level sets" "$dir/err.txt" || fail "fog view error unclear: $(cat "$dir/err.txt")"
 [[ ! -e "$dir/fog/view.html" ]] || fail "a refused view left a page"

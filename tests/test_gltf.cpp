@@ -104,8 +104,11 @@ TEST(Gltf, EachFragmentIsANodeThatFollowsTheHistoryWithAMeshOfItsVolume)
       "charges": [{"position_m": [0.2, -2.0, 0.0], "tnt_kg": 3.0, "burst": "surface"}]})", "gltf-scene", ".");
     RunOptions options;
     options.outputDirectory = dir;
-    ASSERT_TRUE(runScene(scene, options, {}).complete);
-    const GltfExportReport report = exportGltf(dir, dir + "/debris.glb");
+    options.gltfPath = dir + "/debris.glb";  // the run's glTF sink exports once the run completes
+    const RunReport run = runScene(scene, options, {});
+    ASSERT_TRUE(run.complete);
+    ASSERT_TRUE(run.gltf.has_value());
+    const GltfExportReport report = *run.gltf;
     EXPECT_FALSE(std::filesystem::exists(dir + "/debris.glb.partial." + std::to_string(getpid())));
 
     tinygltf::Model model;

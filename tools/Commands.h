@@ -5,6 +5,7 @@
 
 #include <spall/core/EnumNames.h>
 #include <spall/core/Error.h>
+#include <spall/output/GltfExport.h>
 
 #include <CLI/CLI.hpp>
 
@@ -46,3 +47,8 @@ void addSweepCommands(CLI::App& app, CommandAction& action);
 
 /// `spall export gltf`: writes GLBPATH (default OUTDIR/debris.glb) from OUTDIR's frames.
 int exportGltfCommand(const std::string& outDir, std::string glbPath, bool quiet);
+/// OUTDIR/debris.glb, where `spall export gltf OUTDIR` and `spall run --gltf` write it.
+std::string defaultGlbPath(const std::string& outDir);
+/// The export's progress on stderr (nothing when quiet), and its one-line report.
+std::function<void(int, int)> gltfProgress(bool quiet);
+void printGltfReport(const std::string& glbPath, const spall::GltfExportReport& report);

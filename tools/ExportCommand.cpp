@@ -7,18 +7,30 @@
 #include <filesystem>
 #include <memory>
 
-int exportGltfCommand(const std::string& outDir, std::string glbPath, bool quiet)
+std::string defaultGlbPath(const std::string& outDir)
 {
-    if (glbPath.empty()) glbPath = (std::filesystem::path(outDir) / "debris.glb").string();
-    const auto progress = [quiet](int done, int total) {
-        if (quiet) return;
-        std::fprintf(stderr, "\rspall export: meshing and sampling frame %d/%d ", done, total);
+    return (std::filesystem::path(outDir) / "debris.glb").string();
+}
+
+std::function<void(int, int)> gltfProgress(bool quiet)
+{
+    if (quiet) return {};
+    return [](int done, int total) {
+        std::fprintf(stderr, "\rspall export: meshing and sampling frame %d/%d %s", done, total, done == total ? "\n" : "");
         std::fflush(stderr);
     };
-    const spall::GltfExportReport r = spall::exportGltf(outDir, glbPath, progress);
-    if (!quiet) std::fprintf(stderr, "\n");
+}
+
+void printGltfReport(const std::string& glbPath, const spall::GltfExportReport& r)
+{
     std::printf("%s: %d fragments over %d frames, %d distinct meshes (%lld triangles), %lld pose samples, %.1f MB\n", glbPath.c_str(),
                 r.nodes, r.frames, r.meshes, static_cast<long long>(r.triangles), static_cast<long long>(r.keyframes), r.bytes / 1e6);
+}
+
+int exportGltfCommand(const std::string& outDir, std::string glbPath, bool quiet)
+{
+    if (glbPath.empty()) glbPath = defaultGlbPath(outDir);
+    printGltfReport(glbPath, spall::exportGltf(outDir, glbPath, gltfProgress(quiet)));
     return 0;
 }
 

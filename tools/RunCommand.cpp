@@ -104,6 +104,7 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
     options.onNote = [](const std::string& note) { std::fprintf(stderr, "spall run: note: %s\n", note.c_str()); };
     options.maxFrames = frames;
     if (preview) options.previewPath = (std::filesystem::path(outDir) / "preview.png").string();
+    if (gltf) options.gltfPath = defaultGlbPath(outDir), options.onGltfFrame = gltfProgress(quiet);
     const auto onFrame = progressBar(quiet);
     spall::RunReport report;
     if (resume) {
@@ -113,7 +114,7 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
         spall::Scene scene = scenePath.empty() ? spall::parseScene(spall::defaultSceneJson(), "<built-in default scene>", ".")
                                                : spall::loadScene(scenePath);
         if (seed >= 0) {
-            scene.setSeed(static_cast<uint64_t>(seed));
+            scene.seed = static_cast<uint64_t>(seed);
         }
         if (!quiet) std::fprintf(stderr, "spall run: %s -> %s\n", scene.sourceName.c_str(), outDir.c_str());
         try {
@@ -129,7 +130,8 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
     printRunSummary(report, outDir);
     if (!report.complete) return 130;
     if (preview) std::printf("preview: %s\n", options.previewPath.c_str());
-    return gltf ? exportGltfCommand(outDir, "", quiet) : 0;
+    if (report.gltf) printGltfReport(options.gltfPath, *report.gltf);
+    return 0;
 }
 
 }  // namespace

@@ -50,8 +50,9 @@ Eigen::Vector3d waveDirection(const PressureSnapshot& pressure, const PressureSa
 /// generator per rule. Pure: generating changes nothing.
 class LinkRules {
 public:
-    LinkRules(const Body& body, const Material& material, const PressureSnapshot& pressure, const FractureSettings& settings, double dtS)
-        : mBody(body), mMaterial(material), mPressure(pressure), mSettings(settings), mDtS(dtS),
+    LinkRules(const Body& body, const Material& material, const PressureSnapshot& pressure, const FractureSettings& settings, uint64_t seed,
+              double dtS)
+        : mBody(body), mMaterial(material), mPressure(pressure), mSettings(settings), mSeed(seed), mDtS(dtS),
           mRotation(body.motion.orientation.toRotationMatrix()), mIndexStepM(mRotation * body.voxelSizeM),
           mLeafRadiusM(0.5 * std::sqrt(3.0) * LinkLeaf::DIM * body.voxelSizeM),
           mOrientationFactor(settings.orientation ? material.orientationFactor : 0.0),
@@ -108,7 +109,7 @@ private:
     /// An anchor breaks like a link, at its own hashed limit.
     void anchorEvents(const openvdb::Coord& ijk, const Eigen::Vector3d& x, std::vector<LinkEvent>& out) const
     {
-        if (mPressure.sample(x).overpressurePa >= baseYieldLimit(mMaterial, mSettings.seed, ijk, 3))
+        if (mPressure.sample(x).overpressurePa >= baseYieldLimit(mMaterial, mSeed, ijk, 3))
             out.push_back({ijk, EventKind::BreakAnchor});
     }
 
@@ -123,7 +124,7 @@ private:
             const PressureSample load = mPressure.sample(midpoint);
             // Below the least limit any link can have, nothing can happen: skip the hash.
             if (load.overpressurePa < mLeastEffectivePa || load.overpressurePa <= 0.0) continue;
-            double limit = baseYieldLimit(mMaterial, mSettings.seed, ijk, axis);
+            double limit = baseYieldLimit(mMaterial, mSeed, ijk, axis);
             if (mOrientationFactor > 0)
                 limit *= 1.0 - mOrientationFactor * std::abs(mRotation.col(axis).dot(waveDirection(mPressure, load, midpoint)));
             const int weakenedBy = weakenedByCharge(bits, axis);
@@ -164,6 +165,7 @@ private:
     const Material& mMaterial;
     const PressureSnapshot& mPressure;
     const FractureSettings& mSettings;
+    uint64_t mSeed;
     double mDtS;
     Eigen::Matrix3d mRotation;
     Eigen::Matrix3d mIndexStepM;  ///< world displacement per index step
@@ -199,10 +201,10 @@ LoadResult applyLinkEvents(Body& body, const std::vector<std::vector<LinkEvent>>
 }  // namespace
 
 LoadResult loadLinks(Body& body, const Material& material, const PressureSnapshot& pressure, double dtS,
-                     const FractureSettings& settings)
+                     const FractureSettings& settings, uint64_t seed)
 {
     if (settings.algorithm == FractureAlgorithm::None || pressure.empty()) return {};
-    const LinkRules rules(body, material, pressure, settings, dtS);
+    const LinkRules rules(body, material, pressure, settings, seed, dtS);
     openvdb::tree::LeafManager<const LinkTree> leaves(body.grid->constTree());
     std::vector<std::vector<LinkEvent>> events(leaves.leafCount());
     std::vector<char> skipped(leaves.leafCount(), 0);

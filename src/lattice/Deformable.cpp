@@ -82,7 +82,7 @@ void forEachCellOfBlock(const openvdb::Coord& block, const VoxelBlocks& blocks, 
 Eigen::Vector3d restPlaceM(const Lattice& lattice, uint32_t p)
 {
     const openvdb::Coord& v = lattice.model().voxel[p];
-    return lattice.model().voxelSizeM * Eigen::Vector3d(v.x(), v.y(), v.z());
+    return lattice.model().spacingM * Eigen::Vector3d(v.x(), v.y(), v.z());
 }
 
 /// The rigid kinetic energy of a fit, with its own inertia (points plus each particle's cube).
@@ -103,9 +103,9 @@ double rigidKineticEnergyJ(const Lattice& lattice, const std::vector<uint32_t>& 
 
 /// A body's lattice in the given blocks, moving with the body.
 DeformableBody latticeInBlocks(const Body& body, const VoxelBlocks& blocks, const Material& material, const LatticeSettings& settings,
-                               const StaticWorld& supports, double timeS)
+                               const StaticWorld& supports, uint64_t seed, double timeS)
 {
-    DeformableBody d{body.id, blocks, Lattice::fromBody(body, material, supports, settings, blocks), timeS, timeS, {}, 0.0, {}};
+    DeformableBody d{body.id, blocks, Lattice::fromBody(body, material, supports, settings, blocks, seed), timeS, timeS, {}, 0.0, {}};
     // Faces come in leaf order, a voxel's together: a particle is looked up once per voxel.
     d.particleOfFace.reserve(body.exposedFaces.size());
     for (size_t f = 0; f < body.exposedFaces.size(); ++f)
@@ -125,18 +125,18 @@ void applyGatheredForces(DeformableBody& deformable)
 }  // namespace
 
 DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
-                                    const StaticWorld& supports, double timeS)
+                                    const StaticWorld& supports, uint64_t seed, double timeS)
 {
-    return latticeInBlocks(body, blocksFor(body, settings.particleVoxels), material, settings, supports, timeS);
+    return latticeInBlocks(body, blocksFor(body, settings.particleVoxels), material, settings, supports, seed, timeS);
 }
 
 void restoreDeformable(DeformableBody& saved, const Body& body, const Material& material, const LatticeSettings& settings,
-                       const StaticWorld& supports)
+                       const StaticWorld& supports, uint64_t seed)
 {
     if (saved.blocks.voxels < 1 || saved.blocks.voxels > 8)
         throw InputError("saved state: the lattice of body " + std::to_string(body.id) + " has particles of " +
                          std::to_string(saved.blocks.voxels) + " voxels (1 to 8)");
-    DeformableBody fresh = latticeInBlocks(body, saved.blocks, material, settings, supports, saved.enteredS);
+    DeformableBody fresh = latticeInBlocks(body, saved.blocks, material, settings, supports, seed, saved.enteredS);
     fresh.lastLoadedS = saved.lastLoadedS;
     Lattice& to = fresh.lattice;
     Lattice& from = saved.lattice;
@@ -217,7 +217,7 @@ RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& par
 {
     RigidFit fit;
     const double m = lattice.model().particleMassKg, n = double(particles.size());
-    const double cubeMoment = lattice.model().voxelSizeM * lattice.model().voxelSizeM / 12.0;
+    const double cubeMoment = lattice.model().spacingM * lattice.model().spacingM / 12.0;
     Eigen::Vector3d restCentre = Eigen::Vector3d::Zero();
     for (const uint32_t p : particles) {
         fit.centreM += lattice.state.positionM[p];
@@ -327,9 +327,9 @@ double elasticCapacityPerVoxelJ(const Material& material, double voxelSizeM)
 }
 
 DeformableBody continueDeformable(const Body& part, const DeformableBody& whole, const Material& material, const LatticeSettings& settings,
-                                  const StaticWorld& supports)
+                                  const StaticWorld& supports, uint64_t seed)
 {
-    DeformableBody d = latticeInBlocks(part, whole.blocks, material, settings, supports, whole.enteredS);
+    DeformableBody d = latticeInBlocks(part, whole.blocks, material, settings, supports, seed, whole.enteredS);
     d.lastLoadedS = whole.lastLoadedS;
     const Lattice& from = whole.lattice;
     Lattice& to = d.lattice;

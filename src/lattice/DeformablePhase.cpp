@@ -27,12 +27,12 @@ void DeformablePhase::reindex(const std::vector<Body>& bodies)
 }
 
 void DeformablePhase::enter(std::vector<Body>& bodies, const ReachedByBlast& reached, const std::vector<Material>& materials,
-                            const LatticeSettings& settings, const StaticWorld& supports, double timeS)
+                            const LatticeSettings& settings, const StaticWorld& supports, uint64_t seed, double timeS)
 {
     for (size_t i = 0; i < bodies.size(); ++i) {
         Body& body = bodies[i];
         if (body.motion.deformable || (body.linkCount == 0 && !body.anchored) || !reached(body)) continue;
-        lattices.push_back(enterDeformablePhase(body, materials[body.materialIndex], settings, supports, timeS));
+        lattices.push_back(enterDeformablePhase(body, materials[body.materialIndex], settings, supports, seed, timeS));
         mBodyIndex.push_back(i);
         body.motion.deformable = true;
         body.motion.asleep = false;
@@ -72,7 +72,7 @@ PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, con
         const size_t i = bodyIndex(k, bodies);
         Body& body = bodies[i];
         const double sinceBlastS = timeS - d.lastLoadedS;
-        const double toleranceJ = settings.handoffEnergyFraction * elasticCapacityPerVoxelJ(materials[body.materialIndex], d.lattice.model().voxelSizeM);
+        const double toleranceJ = settings.handoffEnergyFraction * elasticCapacityPerVoxelJ(materials[body.materialIndex], d.lattice.model().spacingM);
         const bool timeUp = sinceBlastS >= settings.maxVibrationS;
         Departure departure;
         if (sinceBlastS > 0.0 && (checkDue || timeUp)) {
@@ -106,14 +106,14 @@ PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, con
 
 void DeformablePhase::continueVibratingParts(const std::vector<Body>& bodies, const std::vector<DeformableBody>& leaving,
                                              const std::vector<Material>& materials, const LatticeSettings& settings,
-                                             const StaticWorld& supports)
+                                             const StaticWorld& supports, uint64_t seed)
 {
     std::unordered_map<int64_t, const DeformableBody*> leftBy;
     for (const DeformableBody& d : leaving) leftBy[d.bodyId] = &d;
     for (size_t i = 0; i < bodies.size(); ++i) {
         const Body& body = bodies[i];
         if (!body.motion.deformable || !leftBy.count(body.parentId)) continue;
-        lattices.push_back(continueDeformable(body, *leftBy.at(body.parentId), materials[body.materialIndex], settings, supports));
+        lattices.push_back(continueDeformable(body, *leftBy.at(body.parentId), materials[body.materialIndex], settings, supports, seed));
         lattices.back().bodyId = body.id;
         mBodyIndex.push_back(i);
     }

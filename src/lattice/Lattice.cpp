@@ -32,7 +32,7 @@ double Lattice::stableTimeStepS() const
     const LatticeStiffness& k = mModel.stiffness;
     const double shear = *std::max_element(k.shearNPerM.begin(), k.shearNPerM.end());
     const double normal = *std::max_element(k.normalNPerM.begin(), k.normalNPerM.end());
-    const double omegaSquared = (12.0 * shear + 4.0 * normal + 12.0 * k.lameLambdaPa * mModel.voxelSizeM) / mModel.particleMassKg;
+    const double omegaSquared = (12.0 * shear + 4.0 * normal + 12.0 * k.lameLambdaPa * mModel.spacingM) / mModel.particleMassKg;
     return 0.9 * 2.0 / std::sqrt(omegaSquared);
 }
 

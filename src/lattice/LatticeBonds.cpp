@@ -60,7 +60,7 @@ BondStrain Lattice::strainOf(const LatticeBond& bond) const
     half.coeffs() = qa.coeffs() + sameHemisphere * qb.coeffs();
     s.frame = rotationMatrixOf(half);
     s.displacementM = s.frame.transpose() * (state.positionM[bond.high] - state.positionM[bond.low]);
-    s.displacementM[bond.axis] -= mModel.voxelSizeM;
+    s.displacementM[bond.axis] -= mModel.spacingM;
     s.rotationRad = s.frame.transpose() * rotationVector(qb * qa.conjugate());
     return s;
 }
@@ -69,7 +69,7 @@ void Lattice::computeVolumetricStrain()
 {
     mVolumetricStrain.resize(particleCount());
     mVolumetricStressShare.resize(particleCount());
-    const double inverseH = 1.0 / mModel.voxelSizeM;
+    const double inverseH = 1.0 / mModel.spacingM;
     forEach(
         particleCount(),
         [&](size_t p) {
@@ -101,14 +101,14 @@ uint8_t Lattice::measureBond(size_t b, double dtS, bool growDamage)
     const double openingRateMS = (state.velocityMS[bond.high] - state.velocityMS[bond.low]).dot(along);
     const double damageBefore = bondDamage(b);
     double damage = damageBefore;
-    if (growDamage && growBondDamage(b, equivalentStretchM(b, s, lengthM, damage), std::abs(openingRateMS) / mModel.voxelSizeM, dtS))
+    if (growDamage && growBondDamage(b, equivalentStretchM(b, s, lengthM, damage), std::abs(openingRateMS) / mModel.spacingM, dtS))
         damage = bondDamage(b);
     const bool broke = damage >= 1.0 && damageBefore < 1.0;
     // What a pin held is lost where it fails (the glazing's own dissipation).
     const bool snapped = broke && mModel.damageLaw == LatticeDamageLaw::Softening && snapsAtPeak(b) && !bond.pinned;
     if (snapped) mSnapped[b] = 1;
     const double intact = 1.0 - damage, sqrtIntact = std::sqrt(intact);
-    const bool opening = lengthM > mModel.voxelSizeM;
+    const bool opening = lengthM > mModel.spacingM;
     Eigen::Vector3d local = -intact * k.shearNPerM[a] * s.displacementM;
     local[a] = -intact * k.normalNPerM[a] * s.displacementM[a];
     terms.forceOnHighN = s.frame * local;
@@ -121,15 +121,15 @@ uint8_t Lattice::measureBond(size_t b, double dtS, bool growDamage)
     // What damage took still carries compression, as contact: along the line of centres, and
     // only while the two cubes overlap. (In the bond's frame it would push apart particles that
     // have slid past each other or turned over, which feeds energy into a shattered lattice.)
-    const double overlapM = mModel.voxelSizeM - lengthM;
+    const double overlapM = mModel.spacingM - lengthM;
     if (intact < 1.0 && overlapM > 0.0) terms.forceOnHighN += (1.0 - intact) * k.normalNPerM[a] * overlapM * along;
     // A crack opening carries no viscous stress either: the dashpot softens with the spring.
     if (mModel.bulkViscosity > 0.0) terms.forceOnHighN -= (opening ? intact : 1.0) * mModel.bulkViscosity * mModel.dashpotPerViscosityNSPerM * openingRateMS * along;
     Eigen::Vector3d bending = -intact * k.bendingNmPerRad[a] * s.rotationRad;
     bending[a] = -intact * k.twistingNmPerRad[a] * s.rotationRad[a];
     terms.bendingMomentNm = s.frame * bending;
-    terms.effectiveStretchM = opening ? sqrtIntact * (lengthM - mModel.voxelSizeM) : lengthM - mModel.voxelSizeM;
-    terms.volumetricAreaPerArmM = (opening ? sqrtIntact : 1.0) * mModel.voxelSizeM * mModel.voxelSizeM / lengthM;
+    terms.effectiveStretchM = opening ? sqrtIntact * (lengthM - mModel.spacingM) : lengthM - mModel.spacingM;
+    terms.volumetricAreaPerArmM = (opening ? sqrtIntact : 1.0) * mModel.spacingM * mModel.spacingM / lengthM;
     return uint8_t((snapped ? kSnapped : 0) | (broke ? kBroke : 0));
 }
 

@@ -90,7 +90,7 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
 }
 
 Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const StaticWorld& supports, const LatticeSettings& settings,
-                          const VoxelBlocks& blocks)
+                          const VoxelBlocks& blocks, uint64_t seed)
 {
     const Body coarse = blocks.voxels > 1 ? coarsenedBody(wholeBody, blocks) : Body();
     const Body& body = blocks.voxels > 1 ? coarse : wholeBody;
@@ -100,7 +100,7 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
     lattice.mModel.damageLaw = settings.damageLaw;
     lattice.mModel.dampingRatio = material.dampingRatio;
     const double h = body.voxelSizeM;
-    lattice.mModel.voxelSizeM = h;
+    lattice.mModel.spacingM = h;
     lattice.mModel.particleMassKg = material.densityKgM3 * h * h * h;
     lattice.mModel.particleInertiaKgM2 = lattice.mModel.particleMassKg * h * h / 6.0;
     lattice.mModel.stiffness = calibrateLattice(material, h);
@@ -119,7 +119,7 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
     if (hasUnits(material)) lattice.classifyUnitBonds(material);
     if (hasGrain(material)) lattice.classifyGrainBonds(material);
     lattice.state.bondHistory.assign(lattice.mModel.bonds.size(), BondHistory());
-    if (material.strengthCoefficientOfVariation > 0.0) lattice.scatterStrengths(material, settings.seed);
+    if (material.strengthCoefficientOfVariation > 0.0) lattice.scatterStrengths(material, seed);
     const LatticeStiffness& k = lattice.mModel.stiffness;
     const double stiffestPa = *std::max_element(k.normalModulusPa.begin(), k.normalModulusPa.end());
     const double pWaveSpeed = std::sqrt((k.lameLambdaPa + stiffestPa) / material.densityKgM3);
@@ -190,7 +190,7 @@ void Lattice::addSupportBonds(const Body& body, const StaticWorld& supports)
         // material, joined by a bond of the material's own stiffness and strength.
         const int axis = faceAxis(face);
         const uint32_t supportPoint = uint32_t(particleCount());
-        addParticle(mModel.voxel[p] + faceOffset(face), state.positionM[p] + body.motion.orientation * (mModel.voxelSizeM * faceNormal(face)),
+        addParticle(mModel.voxel[p] + faceOffset(face), state.positionM[p] + body.motion.orientation * (mModel.spacingM * faceNormal(face)),
                     Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), body.motion.orientation, true);
         mModel.held[p] = 0;
         if (face & 1) addBond(p, supportPoint, axis);
@@ -204,7 +204,7 @@ FaceInBox Lattice::supportedFace(const Body& body, uint32_t p, int groundFace, c
 {
     // Anchors were set within a quarter voxel of the ground (Simulation); half a voxel here only
     // tells the ground's anchors from the boxes'.
-    if (groundFace >= 0 && body.voxelHeightAbovePlaneM(mModel.voxel[p], mModel.ground.normal, mModel.ground.offsetM) <= 0.5 * mModel.voxelSizeM)
+    if (groundFace >= 0 && body.voxelHeightAbovePlaneM(mModel.voxel[p], mModel.ground.normal, mModel.ground.offsetM) <= 0.5 * mModel.spacingM)
         return body.grid->tree().isValueOn(mModel.voxel[p] + faceOffset(groundFace)) ? FaceInBox() : FaceInBox{groundFace, 0.0, -1};
     return freeFaceDeepestInBoxes(body, mModel.voxel[p], boxes);
 }
@@ -213,10 +213,10 @@ void Lattice::classifyUnitBonds(const Material& material)
 {
     // Voxels taller than a course do not resolve the units: every bond then spans a bed joint,
     // and the material stays what its own (the joints') values make it, homogenised.
-    if (mModel.voxelSizeM > material.unitHeightM + material.jointThicknessM) return;
+    if (mModel.spacingM > material.unitHeightM + material.jointThicknessM) return;
     // A voxel's centre where the object was voxelised: its index times h (Voxelise.cpp's transform).
     const auto unitOf = [&](const openvdb::Coord& v) {
-        return masonryUnitOf(material, mModel.voxelSizeM * v.x(), mModel.voxelSizeM * v.y(), mModel.voxelSizeM * v.z());
+        return masonryUnitOf(material, mModel.spacingM * v.x(), mModel.spacingM * v.y(), mModel.spacingM * v.z());
     };
     for (LatticeBond& bond : mModel.bonds)
         if (bond.low < mModel.voxelParticleCount && bond.high < mModel.voxelParticleCount && unitOf(mModel.voxel[bond.low]) == unitOf(mModel.voxel[bond.high]))
@@ -253,7 +253,7 @@ void Lattice::condenseVolumetricModulus()
 
 void Lattice::scatterStrengths(const Material& material, uint64_t seed)
 {
-    const double h = mModel.voxelSizeM, l = material.strengthCorrelationLengthM;
+    const double h = mModel.spacingM, l = material.strengthCorrelationLengthM;
     const GaussianRandomField field(seed, l);
     // The face average's variance: the variance function along each of its two sides.
     const double cov = material.strengthCoefficientOfVariation * varianceFunction(h, l);

@@ -44,7 +44,7 @@ bool Lattice::shareABond(uint32_t p, uint32_t q) const
 
 void Lattice::listContactCandidates()
 {
-    const double cellM = (1.0 + kContactSkin) * mModel.voxelSizeM, reach2 = cellM * cellM;
+    const double cellM = (1.0 + kContactSkin) * mModel.spacingM, reach2 = cellM * cellM;
     const size_t n = particleCount();
     std::vector<std::array<int64_t, 3>> cell(n);
     std::vector<std::pair<uint64_t, uint32_t>> byCell(n);
@@ -79,7 +79,7 @@ void Lattice::listContactCandidates()
 
 void Lattice::updateContactCandidates()
 {
-    const double limit = 0.5 * kContactSkin * mModel.voxelSizeM, limit2 = limit * limit;
+    const double limit = 0.5 * kContactSkin * mModel.spacingM, limit2 = limit * limit;
     bool moved = mListedAtM.size() != particleCount();
     for (size_t p = 0; p < particleCount() && !moved; ++p) moved = (state.positionM[p] - mListedAtM[p]).squaredNorm() > limit2;
     if (moved) listContactCandidates();
@@ -93,8 +93,8 @@ void Lattice::addContactForces()
     for (const auto& [p, q] : mContactCandidates) {
         const Eigen::Vector3d apartM = state.positionM[q] - state.positionM[p];
         const double distanceM = apartM.norm();
-        if (distanceM >= mModel.voxelSizeM || distanceM <= 0.0) continue;
-        const Eigen::Vector3d onQ = (stiffnessNPerM * (mModel.voxelSizeM - distanceM) / distanceM) * apartM;
+        if (distanceM >= mModel.spacingM || distanceM <= 0.0) continue;
+        const Eigen::Vector3d onQ = (stiffnessNPerM * (mModel.spacingM - distanceM) / distanceM) * apartM;
         state.bondForceN[q] += onQ;
         state.bondForceN[p] -= onQ;
     }

@@ -24,7 +24,7 @@ DisjointSets Lattice::intactPieces() const
 
 double Lattice::fundamentalFrequencyRadS(double thicknessM, double lengthM, bool isHeld) const
 {
-    const double barSpeedMS = std::sqrt(mModel.stiffness.strength[0].youngsModulusPa * mModel.voxelSizeM * mModel.voxelSizeM * mModel.voxelSizeM / mModel.particleMassKg);
+    const double barSpeedMS = std::sqrt(mModel.stiffness.strength[0].youngsModulusPa * mModel.spacingM * mModel.spacingM * mModel.spacingM / mModel.particleMassKg);
     // (β L)² / √12 for a rectangular section's radius of gyration t / √12: β L = 4.730 free-free,
     // 1.875 clamped-free (Clough & Penzien §18-3).
     const double shapeFactor = isHeld ? 1.875 * 1.875 / std::sqrt(12.0) : 4.730 * 4.730 / std::sqrt(12.0);
@@ -89,9 +89,9 @@ void Lattice::findDampedPieces()
         DampedPiece& piece = mDampedPieces[k];
         piece.held = pieceHeld[k] != 0;
         std::array<double, 3> sides{};
-        for (int axis = 0; axis < 3; ++axis) sides[size_t(axis)] = double(high[k][axis] - low[k][axis] + 1) * mModel.voxelSizeM;
+        for (int axis = 0; axis < 3; ++axis) sides[size_t(axis)] = double(high[k][axis] - low[k][axis] + 1) * mModel.spacingM;
         std::sort(sides.begin(), sides.end());
-        const double lengthM = piece.held ? (pieceReach[k] + 0.5) * mModel.voxelSizeM : sides[2];
+        const double lengthM = piece.held ? (pieceReach[k] + 0.5) * mModel.spacingM : sides[2];
         piece.decayPerS = 2.0 * mModel.dampingRatio * fundamentalFrequencyRadS(sides[0], lengthM, piece.held);
         piece.firstParticle = members[k].front();
         for (size_t begin = 0; begin < members[k].size(); begin += kDampingChunk) {

@@ -30,12 +30,12 @@ void Lattice::releaseSnapEnergies()
     // particle's volumetric energy with them counted (tr ε now plus their shares) less without.
     std::unordered_map<uint32_t, double> removedTrace;
     const auto traceShare = [&](uint32_t b, uint32_t p) {
-        const double stretchM = mBondTerms[b].armM.norm() - mModel.voxelSizeM;
-        return stretchM > 0.0 ? stretchM / mModel.voxelSizeM * mModel.inverseBondCount[p][mModel.bonds[b].axis] : 0.0;
+        const double stretchM = mBondTerms[b].armM.norm() - mModel.spacingM;
+        return stretchM > 0.0 ? stretchM / mModel.spacingM * mModel.inverseBondCount[p][mModel.bonds[b].axis] : 0.0;
     };
     for (const uint32_t b : snapped)
         for (const uint32_t p : {mModel.bonds[b].low, mModel.bonds[b].high}) removedTrace[p] += traceShare(b, p);
-    const double h3 = mModel.voxelSizeM * mModel.voxelSizeM * mModel.voxelSizeM;
+    const double h3 = mModel.spacingM * mModel.spacingM * mModel.spacingM;
     for (const uint32_t b : snapped) {
         double volumetricJ = 0.0;
         for (const uint32_t p : {mModel.bonds[b].low, mModel.bonds[b].high}) {
@@ -58,14 +58,14 @@ void Lattice::releaseSnapEnergy(size_t b, double volumetricJ)
     const double lengthM = mBondTerms[b].armM.norm();
     double lostJ = elasticEnergyJ(b, strain, 1.0) + volumetricJ;
     // Closed, it still carries its compression as contact: its normal spring's energy stays.
-    if (lengthM < mModel.voxelSizeM) lostJ -= 0.5 * mModel.stiffness.normalNPerM[size_t(a)] * strain.displacementM[a] * strain.displacementM[a];
+    if (lengthM < mModel.spacingM) lostJ -= 0.5 * mModel.stiffness.normalNPerM[size_t(a)] * strain.displacementM[a] * strain.displacementM[a];
     // A step carries a bond past its strength by up to a third of its peak stretch, and the
     // energy of that overshoot was never paid for by the particles (their next kick would have
     // paid it): what it held on its failure surface is the energy, quadratic in a strain the
     // failure index is linear in, over the index squared (rate-free strength).
     const LatticeStiffness::Strength& strength = mModel.stiffness.strength[bond.strengthClass];
     const double index = equivalentStretchM(b, strain, lengthM, 0.0) / (state.bondHistory[b].strengthScale * strength.peakStretchM);
-    const double releasedJ = lostJ / std::max(1.0, index * index) - strength.fractureEnergyJPerM2 * mModel.voxelSizeM * mModel.voxelSizeM;
+    const double releasedJ = lostJ / std::max(1.0, index * index) - strength.fractureEnergyJPerM2 * mModel.spacingM * mModel.spacingM;
     if (!(releasedJ > 0.0)) return;
     // Kinetic energy added by dv apart, shared between the free ends (a held end takes none):
     // E = m (dv w + dv² / 2) for one free end and m (dv w / 2 + dv² / 4) for two (each moving
@@ -89,13 +89,13 @@ double Lattice::kineticEnergyJ() const
 double Lattice::bondStrainEnergyJ(size_t b) const
 {
     const double intact = 1.0 - bondDamage(b);
-    const double overlapM = mModel.bonds[b].pinned ? 0.0 : std::max(0.0, mModel.voxelSizeM - (state.positionM[mModel.bonds[b].high] - state.positionM[mModel.bonds[b].low]).norm());
+    const double overlapM = mModel.bonds[b].pinned ? 0.0 : std::max(0.0, mModel.spacingM - (state.positionM[mModel.bonds[b].high] - state.positionM[mModel.bonds[b].low]).norm());
     return elasticEnergyJ(b, strainOf(mModel.bonds[b]), intact) + 0.5 * (1.0 - intact) * mModel.stiffness.normalNPerM[size_t(mModel.bonds[b].axis)] * overlapM * overlapM;
 }
 
 double Lattice::volumetricEnergyJ(size_t p) const
 {
-    return 0.5 * mModel.lambdaPa[p] * mModel.voxelSizeM * mModel.voxelSizeM * mModel.voxelSizeM * mVolumetricStrain[p] * mVolumetricStrain[p];
+    return 0.5 * mModel.lambdaPa[p] * mModel.spacingM * mModel.spacingM * mModel.spacingM * mVolumetricStrain[p] * mVolumetricStrain[p];
 }
 
 double Lattice::strainEnergyJ() const

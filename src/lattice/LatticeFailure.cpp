@@ -41,7 +41,7 @@ double Lattice::equivalentStretchM(size_t b) const
 void Lattice::computeFailureTerms()
 {
     const LatticeStiffness& k = mModel.stiffness;
-    const double faceAreaM2 = mModel.voxelSizeM * mModel.voxelSizeM;
+    const double faceAreaM2 = mModel.spacingM * mModel.spacingM;
     for (size_t strengthClass = 0; strengthClass < 2; ++strengthClass)
         for (size_t axis = 0; axis < 3; ++axis) {
             const LatticeStiffness::Strength& strength = k.strength[strengthClass];
@@ -70,8 +70,8 @@ double Lattice::equivalentStretchM(size_t b, const BondStrain& strain, double le
     // centres, t/2 − h/2 from the neutral axis. As the bond softens its moment goes, and its
     // opening alone carries it to the end of the softening line, so it still dissipates Gf.
     const Eigen::Vector3d& rotation = strain.rotationRad;
-    const double bendingStretchM = 0.5 * mModel.voxelSizeM * (1.0 - damage) * (std::abs(rotation[(a + 1) % 3]) + std::abs(rotation[(a + 2) % 3]));
-    const double stretchM = bond.pinned ? 0.0 : lengthM - mModel.voxelSizeM + bendingStretchM;  // a pin fails in shear
+    const double bendingStretchM = 0.5 * mModel.spacingM * (1.0 - damage) * (std::abs(rotation[(a + 1) % 3]) + std::abs(rotation[(a + 2) % 3]));
+    const double stretchM = bond.pinned ? 0.0 : lengthM - mModel.spacingM + bendingStretchM;  // a pin fails in shear
     double index = 0.0;
     if (stretchM >= 0.0) {
         const double tensionIndex = stretchM * terms.tensionIndexPerM;
@@ -113,7 +113,7 @@ double Lattice::rateDamageAfter(size_t b, double equivalentStretchNowM, double d
     // Stresses in tension's terms: the bond's (its equivalent stretch on its damaged spring) and
     // what the softening line allows at its damage driver.
     const LatticeStiffness::Strength& strength = k.strength[mModel.bonds[b].strengthClass];
-    const double toStressPa = strength.youngsModulusPa / mModel.voxelSizeM, peakM = history.strengthScale * strength.peakStretchM;
+    const double toStressPa = strength.youngsModulusPa / mModel.spacingM, peakM = history.strengthScale * strength.peakStretchM;
     const double stressPa = (1.0 - history.rateDamage) * toStressPa * equivalentStretchNowM;
     const double allowedPa = toStressPa * (history.damageDriverM <= peakM ? peakM : (1.0 - onLine) * history.damageDriverM);
     const double excessPa = stressPa - allowedPa;

@@ -15,7 +15,7 @@ void Lattice::keepOutOf(const std::vector<ObstacleBox>& boxes)
 {
     // The particle's centre may come within a quarter edge of a box's faces (its cube sinking in
     // by up to a quarter edge); deeper, it goes back out across the nearest face.
-    const double allowedM = 0.25 * mModel.voxelSizeM;
+    const double allowedM = 0.25 * mModel.spacingM;
     mModel.keptOut.clear();
     for (const ObstacleBox& box : boxes) {
         LatticeModel::KeptOut kept{box.orientation.toRotationMatrix().transpose(), box.centreM, box.halfExtentM + Eigen::Vector3d::Constant(allowedM), {}};
@@ -43,7 +43,7 @@ void Lattice::keepOutOfColliders(size_t p)
 
 void Lattice::keepAboveGround(size_t p)
 {
-    const double depth = mModel.ground.offsetM + 0.5 * mModel.voxelSizeM - mModel.ground.normal.dot(state.positionM[p]);
+    const double depth = mModel.ground.offsetM + 0.5 * mModel.spacingM - mModel.ground.normal.dot(state.positionM[p]);
     if (depth <= 0.0) return;
     state.positionM[p] += depth * mModel.ground.normal;
     const double into = mModel.ground.normal.dot(state.velocityMS[p]);

@@ -66,7 +66,7 @@ Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& con
 
 void Exposure::collectCells(const std::vector<Body>& bodies, const std::vector<char>& considered)
 {
-    mVoxelSizeM = bodies.front().voxelSizeM;
+    mCellSizeM = bodies.front().voxelSizeM;
     // The lattice goes through a voxel centre of the first body considered: the pieces of one
     // object then sit on it exactly, and each lookup is a single cell.
     for (size_t b = 0; b < bodies.size(); ++b)
@@ -175,7 +175,7 @@ void Exposure::boundGroups(const std::vector<Body>& bodies, const std::vector<ch
 
 int64_t Exposure::firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM, size_t excludeGroup) const
 {
-    const double h = mVoxelSizeM, length = (toM - fromM).norm();
+    const double h = mCellSizeM, length = (toM - fromM).norm();
     if (mCells.empty() || !(length > 0) || excludeGroup == mOnlyGroup) return -1;
     const Eigen::Vector3d dir = (toM - fromM) / length;
     // Slab test of the segment against the cells' bounds, a cell wider all round: a segment

@@ -1,12 +1,8 @@
 #include <spall/run/Run.h>
 
 #include <spall/core/AtomicFile.h>
-
-#include <spall/dynamics/Integrate.h>
 #include <spall/output/History.h>
-#include <spall/output/FrameWriter.h>
-#include <spall/voxel/VdbIo.h>
-#include <spall/render/Render.h>
+#include <spall/run/FrameSink.h>
 #include <spall/sim/Checkpoint.h>
 #include <spall/sim/Simulation.h>
 
@@ -24,132 +20,22 @@
 
 namespace spall {
 
-
 namespace {
 
-/// A frame's history: per-frame totals and per-body rows, with the events and dust since the
-/// last frame written.
-class HistoryRecorder {
-public:
-    HistoryRecorder(std::unique_ptr<HistoryWriter> writer, const Simulation& sim)
-        : mWriter(std::move(writer)), mEventsWritten(sim.fractureEvents().size()), mDustWritten(sim.dust().size())
-    {
-    }
-
-    void record(const Simulation& sim, double t, const StepStats& stats)
-    {
-        if (!mWriter) return;
-        FrameRow row;
-        row.timeS = t;
-        row.brokenLinks = stats.brokenLinks;
-        row.steps = stats.steps;
-        row.minDtS = stats.steps > 0 ? stats.minDtS : 0.0;
-        row.bodyCount = static_cast<int64_t>(sim.bodies().size());
-        std::vector<BodyRow> rows;
-        rows.reserve(sim.bodies().size());
-        for (const Body& b : sim.bodies()) {
-            row.kineticEnergyJ += kineticEnergyJ(b);
-            row.linearMomentum += linearMomentum(b);
-            row.angularMomentum += angularMomentumAboutOrigin(b);
-            row.voxelCount += b.mass.voxelCount;
-            rows.push_back({b.id, b.parentId, b.motion.positionM, Eigen::Vector4d(b.motion.orientation.w(), b.motion.orientation.x(), b.motion.orientation.y(), b.motion.orientation.z()),
-                            b.motion.linearVelocityMS, b.motion.angularVelocityRadS, b.mass.massKg, b.mass.voxelCount, b.motion.asleep, b.anchored});
-        }
-        const auto& events = sim.fractureEvents();
-        const auto& dust = sim.dust();
-        for (const DustRecord& d : dust) row.dustMassKg += d.massKg;
-        row.latticeParticleSteps = stats.latticeParticleSteps;
-        for (const HandOffRecord& h : sim.state().handOffs) row.discardedVibrationJ += h.discardedEnergyJ;
-        mWriter->appendFrame(row, rows, {events.begin() + mEventsWritten, events.end()}, {dust.begin() + mDustWritten, dust.end()});
-        mEventsWritten = events.size();
-        mDustWritten = dust.size();
-    }
-
-    void finish()
-    {
-        if (mWriter) mWriter->finish();
-    }
-
-private:
-    std::unique_ptr<HistoryWriter> mWriter;
-    size_t mEventsWritten, mDustWritten;
-};
-
-/// The preview: the bodies of a few frames spread over the run, rendered as a contact sheet.
-/// Copies share the grids, whose active voxels never change once a body exists.
-class PreviewRecorder {
-public:
-    PreviewRecorder(const RunOptions& options, int frameCount, const Scene& scene)
-        : mPath(options.previewPath), mFrames(options.previewFrames), mSettings{640, 360, scene.world.ground.offsetM}
-    {
-        if (mPath.empty() || mFrames <= 0) return;
-        const int n = std::min(mFrames, frameCount);
-        for (int i = 0; i < n; ++i) mChosen.push_back(n == 1 ? frameCount - 1 : int(std::lround(double(i) * (frameCount - 1) / (n - 1))));
-    }
-
-    void record(int frame, double t, const std::vector<Body>& bodies)
-    {
-        if (std::find(mChosen.begin(), mChosen.end(), frame) == mChosen.end()) return;
-        mBodies.push_back(bodies);
-        mTimes.push_back(t);
-    }
-
-    /// After a resumed run the frames before the resume point are no longer in memory: they are
-    /// read back from the frame files (when there are any).
-    void write(bool resumedAndComplete, bool framesOnDisk, const std::string& directory) const
-    {
-        if (mPath.empty() || mFrames <= 0) return;
-        if (resumedAndComplete) {
-            if (framesOnDisk) writeContactSheet(directory, mPath, mFrames, mSettings);
-            return;
-        }
-        if (mBodies.empty()) return;
-        const Camera camera = frameCamera({fragmentsOf(mBodies.front()), fragmentsOf(mBodies.back())}, mSettings);
-        std::vector<Image> images;
-        for (const auto& bodies : mBodies) images.push_back(renderFragments(fragmentsOf(bodies), camera, mSettings));
-        writePng(mPath, contactSheet(images, mTimes, images.size() <= 4 ? int(images.size()) : 3));
-    }
-
-private:
-    std::string mPath;
-    int mFrames;
-    RenderSettings mSettings;
-    std::vector<int> mChosen;
-    std::vector<std::vector<Body>> mBodies;
-    std::vector<double> mTimes;
-};
-
-/// What a run writes for each frame: the .vdb frame (when the scene asks for them), the history's
-/// rows and the preview's pick, in that order.
-class FrameOutputs {
-public:
-    FrameOutputs(const Simulation& sim, const RunOptions& options, int frameCount, std::unique_ptr<HistoryWriter> historyWriter)
-        : mDirectory(options.outputDirectory), mHistory(std::move(historyWriter), sim),
-          mPreview(options, frameCount, sim.scene())
-    {
-        if (sim.scene().output.vdb) mFrames = std::make_unique<FrameWriter>(mDirectory, sim.scene().output);
-    }
-
-    void write(const Simulation& sim, int frame, double timeS, const StepStats& stats)
-    {
-        if (mFrames) mFrames->write({frame, timeS}, sim.bodies());
-        mHistory.record(sim, timeS, stats);
-        mPreview.record(frame, timeS, sim.bodies());
-    }
-
-    /// After the last frame written: the preview, and the history marked whole when `complete`.
-    void finish(bool complete, bool resumed)
-    {
-        mPreview.write(complete && resumed, mFrames != nullptr, mDirectory);
-        if (complete) mHistory.finish();
-    }
-
-private:
-    std::string mDirectory;
-    std::unique_ptr<FrameWriter> mFrames;
-    HistoryRecorder mHistory;
-    PreviewRecorder mPreview;
-};
+/// The sinks the scene and the options ask for, in the order they write: frames, history,
+/// preview, glTF (which meshes the frames once the run completes).
+std::vector<std::unique_ptr<FrameSink>> frameSinks(const Simulation& sim, const RunOptions& options, int frameCount,
+                                                   std::unique_ptr<HistoryWriter> history, std::optional<GltfExportReport>& gltf)
+{
+    const OutputSettings& output = sim.scene().output;
+    std::vector<std::unique_ptr<FrameSink>> sinks;
+    if (output.vdb) sinks.push_back(makeVdbSink(options.outputDirectory, output));
+    if (history) sinks.push_back(makeHistorySink(std::move(history), sim));
+    if (!options.previewPath.empty() && options.previewFrames > 0)
+        sinks.push_back(makePreviewSink(options.previewPath, options.previewFrames, frameCount, sim.scene(), options.outputDirectory));
+    if (!options.gltfPath.empty()) sinks.push_back(makeGltfSink(options.outputDirectory, options.gltfPath, output, options.onGltfFrame, gltf));
+    return sinks;
+}
 
 /// The particles of the simulation's lattices in the deformable phase.
 size_t latticeParticles(const Simulation& sim)
@@ -179,8 +65,8 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
     const std::filesystem::path dir = options.outputDirectory;
     const std::filesystem::path checkpointPath = dir / kCheckpointFileName;
     const std::string checkpointScene = sceneToJson(scene).dump();
-    FrameOutputs outputs(sim, options, frameCount, std::move(historyWriter));
     RunReport report;
+    const auto sinks = frameSinks(sim, options, frameCount, std::move(historyWriter), report.gltf);
     report.totalSteps = stepsSoFar;
     const auto saveCheckpoint = [&](int framesDone) {
         writeCheckpoint(checkpointPath.string(), {framesDone, frameCount, report.totalSteps, checkpointScene, sim.state()});
@@ -204,7 +90,7 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
         }
         const StepStats stats = sim.takeStepStats();
         report.totalSteps += stats.steps;
-        outputs.write(sim, f, t, stats);
+        for (const auto& sink : sinks) sink->write(sim, {f, t, stats});
         report.framesWritten = f + 1;
         const auto now = std::chrono::steady_clock::now();
         lastReport = now;
@@ -218,7 +104,7 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
         if (stop) break;
     }
     report.complete = report.framesWritten == frameCount;
-    outputs.finish(report.complete, firstFrame > 0);
+    for (const auto& sink : sinks) sink->finish({report.complete, firstFrame > 0});
     if (report.complete) {
         std::error_code ec;
         std::filesystem::remove(checkpointPath, ec);  // the run is whole; nothing to resume
@@ -286,6 +172,7 @@ RunReport runScene(const Scene& scene, const RunOptions& options, const std::fun
 {
     namespace fs = std::filesystem;
     const fs::path dir = options.outputDirectory;
+    if (!options.gltfPath.empty()) requireLevelSetFrames(scene.output);
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec || !fs::is_directory(dir)) throw IoError(dir.string() + ": cannot create the output directory: " + ec.message());
@@ -308,12 +195,15 @@ RunReport resumeRun(const RunOptions& options, const std::function<bool(const Ru
         if (!fs::exists(scenePath))
             throw IoError(dir.string() + ": nothing to resume: there is no " + path + " and no " + scenePath.string() +
                           " (the run had not started writing)");
-        RunReport report = runSceneInLockedDirectory(loadScene(scenePath.string()), options, onFrame);
+        const Scene scene = loadScene(scenePath.string());
+        if (!options.gltfPath.empty()) requireLevelSetFrames(scene.output);
+        RunReport report = runSceneInLockedDirectory(scene, options, onFrame);
         report.restartedFromScene = true;
         return report;
     }
     Checkpoint checkpoint = readCheckpoint(path);
     const Scene scene = parseScene(checkpoint.sceneJson, path + " (scene)", dir.string());
+    if (!options.gltfPath.empty()) requireLevelSetFrames(scene.output);
     std::unique_ptr<HistoryWriter> history;
     if (scene.output.history)
         history = std::make_unique<HistoryWriter>(

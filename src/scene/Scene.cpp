@@ -187,7 +187,6 @@ void completeScene(ObjectReader& r, Scene& scene)
 {
     scene.world.ground.normal.normalize();
     for (StaticBox& box : scene.world.colliders) box.orientation = rotationFromDegrees(box.rotationDeg);
-    scene.setSeed(scene.seed);
     if (scene.timeStep.minTimeStepS > scene.timeStep.maxTimeStepS)
         r.fail("solver.min_time_step_s", "must not exceed solver.max_time_step_s");
     if (scene.objects.empty()) r.fail("objects", "the scene has no objects");

@@ -172,7 +172,7 @@ Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene
     mState.deformable.reindex(mState.bodies);
     for (size_t k = 0; k < mState.deformable.lattices.size(); ++k) {
         const Body& body = mState.bodies[mState.deformable.bodyIndex(k, mState.bodies)];
-        restoreDeformable(mState.deformable.lattices[k], body, mScene.materials[body.materialIndex], mScene.lattice, mStaticWorld);
+        restoreDeformable(mState.deformable.lattices[k], body, mScene.materials[body.materialIndex], mScene.lattice, mStaticWorld, mScene.seed);
     }
 }
 

@@ -100,7 +100,7 @@ std::vector<char> Simulation::fractureBodies(const std::vector<OpenWindow>& wind
         if (body.linkCount == 0 && !body.anchored) continue;
         if (!bodyInWindows(body, *mField, windows)) continue;
         if (!pressure) pressure.emplace(*mField, mState.timeS, dt);
-        const LoadResult r = loadLinks(body, mScene.materials[body.materialIndex], *pressure, dt, mScene.fracture);
+        const LoadResult r = loadLinks(body, mScene.materials[body.materialIndex], *pressure, dt, mScene.fracture, mScene.seed);
         mState.stepStats.brokenLinks += r.brokenLinks;
         cracked[i] = r.brokenLinks > 0 || r.brokenAnchors > 0;
     }
@@ -168,7 +168,7 @@ void Simulation::enterDeformablePhase(const std::vector<OpenWindow>& windows)
 {
     if (mScene.fracture.algorithm != FractureAlgorithm::Lattice || windows.empty()) return;
     const auto reached = [&](const Body& body) { return bodyInWindows(body, *mField, windows); };
-    mState.deformable.enter(mState.bodies, reached, mScene.materials, mScene.lattice, mStaticWorld, mState.timeS);
+    mState.deformable.enter(mState.bodies, reached, mScene.materials, mScene.lattice, mStaticWorld, mScene.seed, mState.timeS);
 }
 
 void Simulation::deformBodies(const FaceForces& faces, const std::vector<OpenWindow>& windows, double dtS)
@@ -206,7 +206,7 @@ void Simulation::handOffQuietBodies(double dtS)
     mState.stepStats.brokenLinks += out.brokenLinks;
     if (out.leaving.empty()) return;  // no body left in parts: the bodies are where they were
     replaceWithParts(out.parts);
-    mState.deformable.continueVibratingParts(mState.bodies, out.leaving, mScene.materials, mScene.lattice, mStaticWorld);
+    mState.deformable.continueVibratingParts(mState.bodies, out.leaving, mScene.materials, mScene.lattice, mStaticWorld, mScene.seed);
 }
 
 }  // namespace spall

@@ -31,9 +31,10 @@ struct LoadResult {
 /// Loads every intact link of `body` where the blast is now (`pressure`, a snapshot at the
 /// step's start) and breaks or weakens it (generate in parallel over leaves, apply in leaf
 /// order); the body's link count and anchored flag follow. Davison–Stevens accumulates the
-/// body's damage grid over `dtS`.
+/// body's damage grid over `dtS`. Yield limits derive from a hash of (`seed`, voxel, axis): the
+/// scene's seed.
 LoadResult loadLinks(Body& body, const Material& material, const PressureSnapshot& pressure, double dtS,
-                     const FractureSettings& settings);
+                     const FractureSettings& settings, uint64_t seed);
 
 /// A zero damage grid with the body grid's topology (Davison–Stevens only).
 DamageGrid::Ptr zeroDamageLike(const LinkGrid& grid);

@@ -37,7 +37,6 @@ struct FractureSettings {
     FractureAlgorithm algorithm = FractureAlgorithm::YieldLimit;
     bool weakening = true;    ///< algorithm 2 on top of 1
     bool orientation = true;  ///< algorithm 3 on top of 1
-    uint64_t seed = 1;        ///< yield limits derive from a hash of (seed, voxel, axis); the scene's seed
     int64_t minFragmentVoxels = 1;  ///< smaller pieces follow smallFragments (unit: voxels)
     SmallFragmentPolicy smallFragments = SmallFragmentPolicy::Keep;
 };

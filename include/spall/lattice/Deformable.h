@@ -35,12 +35,12 @@ struct DeformableBody {
 /// The lattice of a body entering the phase, moving with the body: a particle per voxel, or per
 /// block of settings.particleVoxels³ voxels (ParticleBlocks.h) with the body's momenta.
 DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
-                                    const StaticWorld& supports, double timeS);
+                                    const StaticWorld& supports, uint64_t seed, double timeS);
 
 /// Rebuilds a saved lattice (a checkpoint holds only its particles' state, the bond forces velocity
 /// Verlet carries, and its bonds' stretch and strength) from its body; throws InputError when the saved arrays do not fit the body.
 void restoreDeformable(DeformableBody& saved, const Body& body, const Material& material, const LatticeSettings& settings,
-                       const StaticWorld& supports);
+                       const StaticWorld& supports, uint64_t seed);
 
 /// Each particle's external force for the next step: the mean force on each of the body's exposed
 /// faces (body.exposedFaces order, from the loads phase; empty when nothing loads it) on the
@@ -107,7 +107,7 @@ double elasticCapacityPerVoxelJ(const Material& material, double voxelSizeM);
 /// A part of a body that left the phase (handOff) carrying on in it: a lattice of the part whose
 /// particles and bonds take their state from the body's lattice.
 DeformableBody continueDeformable(const Body& part, const DeformableBody& whole, const Material& material, const LatticeSettings& settings,
-                                  const StaticWorld& supports);
+                                  const StaticWorld& supports, uint64_t seed);
 
 /// The body back as rigid bodies: each bond that broke breaks the links across its face (the
 /// frames' fracture surface), each support bond that broke clears its voxels' anchor bits, and

@@ -53,7 +53,7 @@ public:
 
     /// Bodies with links or anchors that the blast reaches become lattices.
     void enter(std::vector<Body>& bodies, const ReachedByBlast& reached, const std::vector<Material>& materials,
-               const LatticeSettings& settings, const StaticWorld& supports, double timeS);
+               const LatticeSettings& settings, const StaticWorld& supports, uint64_t seed, double timeS);
     /// Each lattice through a step of dtS under its faces' forces (per body, FaceForces::forceN)
     /// and gravity; its body follows it. Returns the particle-steps taken.
     int64_t deform(std::vector<Body>& bodies, const std::vector<std::vector<Eigen::Vector3d>>& faceForcesN, const Eigen::Vector3d& gravityMS2,
@@ -68,7 +68,8 @@ public:
     /// Parts marked deformable of bodies that left (`leaving`) carry on in the phase, with
     /// lattices that take their state from their whole's.
     void continueVibratingParts(const std::vector<Body>& bodies, const std::vector<DeformableBody>& leaving,
-                                const std::vector<Material>& materials, const LatticeSettings& settings, const StaticWorld& supports);
+                                const std::vector<Material>& materials, const LatticeSettings& settings, const StaticWorld& supports,
+                                uint64_t seed);
 
 private:
     /// Per lattice, its body's index (reindex).

@@ -137,8 +137,9 @@ struct LatticeModel {
     size_t voxelParticleCount = 0;
     std::vector<openvdb::Coord> voxel;  ///< the body's index of each particle (a support point: the cell beyond its voxel)
     std::vector<uint8_t> held;          ///< 1: fixed to the world (an anchored voxel)
-    /// The particles' edge (unit: m): the body's voxel's, or its blocks' (`blocks`).
-    double voxelSizeM = 0.0;
+    /// The distance between neighbouring particles, each a cube of this edge: the voxel size of
+    /// the body it was built from, k h for blocks of k voxels (`blocks`) (unit: m).
+    double spacingM = 0.0;
     /// How the body's voxels make the particles (a particle per voxel by default): `voxel`
     /// holds the blocks' cells.
     VoxelBlocks blocks;
@@ -213,12 +214,12 @@ public:
     /// it), across the face that looks most directly into the ground; else across its free face
     /// whose neighbouring cell lies deepest inside a support box. An anchored voxel next to
     /// neither is held.
-    /// Its settings are taken here, once: the bulk viscosity, the damage law and the seed that
-    /// draws the strength scatter (Material::strengthCoefficientOfVariation) from `settings`, the
-    /// damping ratio from the material; with `blocks` of more than one voxel, a particle per block
-    /// (ParticleBlocks.h).
+    /// Its settings are taken here, once: the bulk viscosity and the damage law from `settings`,
+    /// the damping ratio from the material, and the scene's `seed`, which draws the strength
+    /// scatter (Material::strengthCoefficientOfVariation); with `blocks` of more than one voxel, a
+    /// particle per block (ParticleBlocks.h).
     static Lattice fromBody(const Body& body, const Material& material, const StaticWorld& supports = StaticWorld(),
-                            const LatticeSettings& settings = LatticeSettings(), const VoxelBlocks& blocks = VoxelBlocks());
+                            const LatticeSettings& settings = LatticeSettings(), const VoxelBlocks& blocks = VoxelBlocks(), uint64_t seed = 1);
 
     size_t particleCount() const { return state.positionM.size(); }
     /// The particle at a voxel (a support point at the cell beyond its voxel), or -1.

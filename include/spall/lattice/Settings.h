@@ -49,8 +49,6 @@ struct LatticeSettings {
     /// voxel; k > 1, blocks of k³ voxels, k⁴ times less work, cracks and fragments as a lattice of
     /// k h resolves them, pieces in the voxels' shape (unit: voxels).
     int particleVoxels = 1;
-    /// The scene's seed (not a key of its own): it draws the bonds' strength scatter.
-    uint64_t seed = 1;
 };
 
 // Keys and ranges (src/lattice/Settings.cpp).

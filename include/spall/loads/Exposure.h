@@ -85,9 +85,9 @@ private:
     int64_t bodyAt(const Eigen::Vector3d& xM, Skip&& skip) const;
 
     /// World point x in cell units: (x - origin) / h.
-    Eigen::Vector3d cellUnits(const Eigen::Vector3d& xM) const { return (xM - mOriginM) / mVoxelSizeM; }
+    Eigen::Vector3d cellUnits(const Eigen::Vector3d& xM) const { return (xM - mOriginM) / mCellSizeM; }
 
-    double mVoxelSizeM = 1.0;
+    double mCellSizeM = 1.0;  ///< a cell per voxel: the bodies' voxel size, read from them (unit: m)
     Eigen::Vector3d mOriginM = Eigen::Vector3d::Zero();  ///< a lattice point (unit: m)
     std::vector<Cell> mCells;  ///< sorted by key, then body
     /// Block owners that are no one group: cells of several groups, and (while the blocks are

@@ -2,9 +2,11 @@
 #pragma once
 
 #include <spall/core/Error.h>
+#include <spall/output/GltfExport.h>
 #include <spall/scene/Scene.h>
 
 #include <functional>
+#include <optional>
 #include <string>
 
 namespace spall {
@@ -19,6 +21,11 @@ struct RunOptions {
     /// from the bodies in memory (no frame files are read back).
     std::string previewPath;
     int previewFrames = 6;
+    /// When set, the debris as one .glb here once the run completes (output/GltfExport.h: needs
+    /// level-set frames, checked before the run starts); `onGltfFrame(done, total)` follows the
+    /// export's progress and may be empty.
+    std::string gltfPath;
+    std::function<void(int, int)> onGltfFrame;
     /// Asked while voxelising large meshes; may be null.
     Interrupter* interrupter = nullptr;
     /// Told what setting the scene up found that a user should know (mesh repairs, memory at
@@ -55,10 +62,12 @@ struct RunReport {
     /// --resume found no checkpoint and ran the scene again from OUTDIR/scene.json (the run is
     /// deterministic: the frames already written come out the same).
     bool restartedFromScene = false;
+    std::optional<GltfExportReport> gltf;  ///< what the .glb holds, when one was asked for and written
 };
 
 /// Runs a scene and writes OUTDIR/scene.json, fragments.NNNN.vdb, history.h5 and, after each
-/// frame but the last, checkpoint.spall. The callback returns false to stop after the current
+/// frame but the last, checkpoint.spall, through the frame sinks (run/FrameSink.h) the scene and
+/// the options ask for. The callback returns false to stop after the current
 /// frame (frames written so far stay readable; the checkpoint lets the run continue).
 RunReport runScene(const Scene& scene, const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame);
 

@@ -79,7 +79,7 @@ struct Scene {
     double voxelSizeM = 0.05;   ///< (unit: m)
     double durationS = 4.0;     ///< (unit: s)
     double frameRateHz = 24.0;  ///< (unit: 1/s)
-    uint64_t seed = 1;          ///< every random choice derives from it (fracture.seed and lattice.seed are copies: setSeed)
+    uint64_t seed = 1;          ///< every random choice derives from it (the one copy: passed to what draws)
     int64_t maxVoxels = 20'000'000;  ///< voxelising more is an error (unit: voxels)
     WorldSettings world;
     SleepSettings sleep;
@@ -94,12 +94,6 @@ struct Scene {
     std::vector<Charge> charges;
     OutputSettings output;
 
-    void setSeed(uint64_t s)
-    {
-        seed = s;
-        fracture.seed = s;
-        lattice.seed = s;
-    }
     int frameCount() const { return static_cast<int>(std::floor(durationS * frameRateHz + 1e-9)) + 1; }
     const Material& material(const std::string& name) const;
 };
