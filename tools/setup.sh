@@ -10,7 +10,7 @@ packages=(
   libeigen3-dev libhdf5-dev libgtest-dev libgmock-dev libbenchmark-dev
   libassimp-dev libcli11-dev nlohmann-json3-dev libpng-dev libtinygltf-dev
   python3-openvdb python3-h5py python3-numpy python3-matplotlib python3-pil libopenvdb-tools hdf5-tools
-  blender chromium
+  blender chromium valgrind
   slurm-wlm munge
 )
 missing=()
