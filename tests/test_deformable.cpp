@@ -62,7 +62,7 @@ TEST(Deformable, HandOffKeepsEveryPiecesMomentumAndBreaksTheLinksThatBroke)
     }
     // The four bonds between x = 3 and x = 4 have broken.
     for (size_t b = 0; b < lattice.bondCount(); ++b)
-        if (lattice.model().bonds[b].axis == 0 && lattice.model().voxel[lattice.model().bonds[b].low].x() == 3) lattice.state.bondHistory[b].damageDriverM = 1.0;
+        if (lattice.model().bonds[b].axis == 0 && lattice.model().voxel[lattice.model().bonds[b].low].x() == 3) lattice.state.bondHistory[b].maxEquivalentStretchM = 1.0;
     lattice.refreshForces();
     const HandOff handed = handOff(bar, lattice);
     ASSERT_EQ(handed.parts.size(), 2u);

@@ -189,7 +189,7 @@ TEST(Deformable, ALatticeOfBlocksHandsEveryPieceItsMomentaAndCutsTheVoxelsLinks)
     // The bonds between block columns x = 1 and x = 2 (voxels x = 3 and 4) break: 3 x 2 bonds,
     // which cut the 5 x 3 links between the voxels there.
     for (size_t b = 0; b < lattice.bondCount(); ++b)
-        if (lattice.model().bonds[b].axis == 0 && lattice.model().voxel[lattice.model().bonds[b].low].x() == 1) lattice.state.bondHistory[b].damageDriverM = 1.0;
+        if (lattice.model().bonds[b].axis == 0 && lattice.model().voxel[lattice.model().bonds[b].low].x() == 1) lattice.state.bondHistory[b].maxEquivalentStretchM = 1.0;
     lattice.refreshForces();
     const HandOff handed = handOff(body, lattice);
     ASSERT_EQ(handed.parts.size(), 2u);
@@ -230,7 +230,7 @@ TEST(Deformable, ABaseThatRestsBelowTheGroundIsNotThrownOntoItWhenItLetsGo)
     Lattice lattice = Lattice::fromBody(column, brick, StaticWorld{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}});
     ASSERT_EQ(lattice.particleCount() - lattice.model().voxelParticleCount, 16u);
     for (size_t b = 0; b < lattice.bondCount(); ++b)
-        if (std::max(lattice.model().bonds[b].low, lattice.model().bonds[b].high) >= lattice.model().voxelParticleCount) lattice.state.bondHistory[b].damageDriverM = 1.0;
+        if (std::max(lattice.model().bonds[b].low, lattice.model().bonds[b].high) >= lattice.model().voxelParticleCount) lattice.state.bondHistory[b].maxEquivalentStretchM = 1.0;
     lattice.refreshForces();
     for (int i = 0; i < 200; ++i) lattice.step(lattice.stableTimeStepS());
     const double capacityJ = elasticCapacityPerVoxelJ(brick, h) * double(lattice.model().voxelParticleCount);

@@ -86,7 +86,7 @@ TEST(Lattice, DampingKeepsMomentaAndRigidMotionAndTakesOnlyVibration)
     // vibration dies; a block spinning rigidly keeps its kinetic energy.
     Lattice lattice = latticeOfBox(8, 4, 3, damped(kConcrete, 0.05));
     for (size_t b = 0; b < lattice.bondCount(); ++b)
-        if (lattice.model().bonds[b].axis == 0 && lattice.model().voxel[lattice.model().bonds[b].low].x() == 3) lattice.state.bondHistory[b].damageDriverM = 1.0;
+        if (lattice.model().bonds[b].axis == 0 && lattice.model().voxel[lattice.model().bonds[b].low].x() == 3) lattice.state.bondHistory[b].maxEquivalentStretchM = 1.0;
     std::mt19937 random(11);
     std::normal_distribution<double> normal(0.0, 1.0);
     for (size_t p = 0; p < lattice.particleCount(); ++p) {

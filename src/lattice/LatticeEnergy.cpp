@@ -62,9 +62,9 @@ void Lattice::releaseSnapEnergy(size_t b, double volumetricJ)
     // A step carries a bond past its strength by up to a third of its peak stretch, and the
     // energy of that overshoot was never paid for by the particles (their next kick would have
     // paid it): what it held on its failure surface is the energy, quadratic in a strain the
-    // failure index is linear in, over the index squared (rate-free strength).
+    // failure index is linear in, over the index squared (its peak raised by the rate law).
     const LatticeStiffness::Strength& strength = mModel.stiffness.strength[bond.strengthClass];
-    const double index = equivalentStretchM(b, strain, lengthM, 0.0) / (state.bondHistory[b].strengthScale * strength.peakStretchM);
+    const double index = equivalentStretchM(b, strain, lengthM, 0.0) / softeningLineM(b).first;
     const double releasedJ = lostJ / std::max(1.0, index * index) - strength.fractureEnergyJPerM2 * mModel.spacingM * mModel.spacingM;
     if (!(releasedJ > 0.0)) return;
     // Kinetic energy added by dv apart, shared between the free ends (a held end takes none):

@@ -1,6 +1,6 @@
 // How a lattice's bonds fail: the failure index as an equivalent stretch (tension cut-off joined
 // to shear, Mohr–Coulomb in compression), the damage it drives on the softening line (crack band)
-// or at a rate (Davison–Stevens), and the strain-rate law's effect on the driver.
+// or at a rate (Davison–Stevens), and the strain-rate law's effect on the line's peak.
 #include <spall/lattice/Lattice.h>
 
 #include <algorithm>
@@ -13,12 +13,18 @@ double Lattice::bondDamage(size_t b) const
     return mModel.damageLaw == LatticeDamageLaw::DavisonStevens ? state.bondHistory[b].rateDamage : softeningDamage(b);
 }
 
+std::pair<double, double> Lattice::softeningLineM(size_t b) const
+{
+    const BondHistory& history = state.bondHistory[b];
+    const double scale = history.strengthScale * history.strengthFactor;
+    const LatticeStiffness::Strength& strength = mModel.stiffness.strength[mModel.bonds[b].strengthClass];
+    return {scale * strength.peakStretchM, strength.zeroTractionStretchM / scale};
+}
+
 double Lattice::softeningDamage(size_t b) const
 {
-    const double scale = state.bondHistory[b].strengthScale;
-    const LatticeStiffness::Strength& strength = mModel.stiffness.strength[mModel.bonds[b].strengthClass];
-    const double u0 = scale * strength.peakStretchM, uf = strength.zeroTractionStretchM / scale;
-    const double kappa = state.bondHistory[b].damageDriverM;
+    const auto [u0, uf] = softeningLineM(b);
+    const double kappa = state.bondHistory[b].maxEquivalentStretchM;
     if (kappa <= u0) return 0.0;
     // A bond too large to soften breaks at its peak, whatever its strength scale.
     if (kappa >= uf || snapsAtPeak(b)) return 1.0;
@@ -87,14 +93,22 @@ double Lattice::equivalentStretchM(size_t b, const BondStrain& strain, double le
     return index * terms.peakStretchM;
 }
 
+void Lattice::followStrengthRate(BondHistory& history, double increaseM, double strainRatePerS) const
+{
+    const StrengthRateLaw law = mModel.stiffness.strengthRateLaw;
+    if (law == StrengthRateLaw::None) return;
+    history.rateWeightedStretchM += increaseM / dynamicIncreaseFactor(law, strainRatePerS);
+    history.strengthFactor = history.maxEquivalentStretchM / history.rateWeightedStretchM;
+}
+
 bool Lattice::growBondDamage(size_t b, double equivalentStretchNowM, double strainRatePerS, double dtS)
 {
     BondHistory& history = state.bondHistory[b];
     const double increaseM = equivalentStretchNowM - history.maxEquivalentStretchM;
     if (increaseM > 0.0) {
+        const bool undamaged = history.maxEquivalentStretchM <= softeningLineM(b).first;
         history.maxEquivalentStretchM += increaseM;
-        history.damageDriverM +=
-            mModel.stiffness.strengthRateLaw != StrengthRateLaw::None ? increaseM / dynamicIncreaseFactor(mModel.stiffness.strengthRateLaw, strainRatePerS) : increaseM;
+        if (undamaged) followStrengthRate(history, increaseM, strainRatePerS);
     }
     if (mModel.damageLaw == LatticeDamageLaw::DavisonStevens) {
         history.rateDamage = rateDamageAfter(b, equivalentStretchNowM, dtS);
@@ -113,9 +127,10 @@ double Lattice::rateDamageAfter(size_t b, double equivalentStretchNowM, double d
     // Stresses in tension's terms: the bond's (its equivalent stretch on its damaged spring) and
     // what the softening line allows at its damage driver.
     const LatticeStiffness::Strength& strength = k.strength[mModel.bonds[b].strengthClass];
-    const double toStressPa = strength.youngsModulusPa / mModel.spacingM, peakM = history.strengthScale * strength.peakStretchM;
+    const double toStressPa = strength.youngsModulusPa / mModel.spacingM, peakM = softeningLineM(b).first;
+    const double kappa = history.maxEquivalentStretchM;
     const double stressPa = (1.0 - history.rateDamage) * toStressPa * equivalentStretchNowM;
-    const double allowedPa = toStressPa * (history.damageDriverM <= peakM ? peakM : (1.0 - onLine) * history.damageDriverM);
+    const double allowedPa = toStressPa * (kappa <= peakM ? peakM : (1.0 - onLine) * kappa);
     const double excessPa = stressPa - allowedPa;
     if (excessPa <= 0.0) return history.rateDamage;
     // exp(C σx) − 1 by expm1; past exp(50) the step breaks the bond anyway.

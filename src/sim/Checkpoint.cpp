@@ -134,7 +134,8 @@ void transferDeformable(Archive& a, D& d)
     a.sequence(lattice.state.bondHistory, "bond histories", [&](auto& h) {
         a.pod(h.strengthScale, "bond strength");
         a.pod(h.maxEquivalentStretchM, "bond stretch");
-        a.pod(h.damageDriverM, "bond damage driver");
+        a.pod(h.strengthFactor, "bond strength factor");
+        a.pod(h.rateWeightedStretchM, "bond rate-weighted stretch");
         a.pod(h.rateDamage, "bond damage");
     });
 }

@@ -81,13 +81,22 @@ LatticeStiffness calibrateLattice(const Material& material, double voxelSizeM);
 struct BondHistory {
     /// Its strength as a fraction of the material's (1 by default; a notch, a weak joint).
     double strengthScale = 1.0;
-    /// The largest equivalent stretch it has seen (Lattice::equivalentStretchM; unit: m).
+    /// The largest equivalent stretch it has seen (Lattice::equivalentStretchM): what drives its
+    /// damage along the softening line (unit: m).
     double maxEquivalentStretchM = 0.0;
-    /// What drives its damage: the same with each increase divided by the rate law's dynamic
-    /// increase factor at the strain rate of that moment (unit: m). Weighting by increase, not
-    /// by the moment, keeps a bond loaded steadily at a rate as strong as the law says, though
-    /// ringing makes its instantaneous strain rate swing through zero.
-    double damageDriverM = 0.0;
+    /// The material's strain-rate law raises a bond's strength, not its fracture energy: its
+    /// softening line starts at strengthFactor × its peak stretch and ends where the area under
+    /// it is still Gf (Lattice::softeningDamage). The factor is the dynamic increase factor
+    /// averaged over the bond's loading up to its peak, weighted by each increase of its stretch
+    /// (ringing swings the instantaneous rate through zero; a bond loaded steadily at a rate is
+    /// as strong as the law says), and frozen once the bond is damaged: after that its opening
+    /// rate is a crack's, which grows as 1/h, and the line stays where the continuum's rate put
+    /// it (unit: 1).
+    double strengthFactor = 1.0;
+    /// The same stretch with each increase divided by the factor at the strain rate of that
+    /// moment, while the bond is undamaged (rate laws only): strengthFactor is the stretch over
+    /// it (unit: m).
+    double rateWeightedStretchM = 0.0;
     /// Davison–Stevens damage (that law only) (unit: 1).
     double rateDamage = 0.0;
 };
@@ -358,10 +367,18 @@ private:
     /// The failure index as a stretch (equivalentStretchM) from a measured strain and the
     /// bond's damage.
     double equivalentStretchM(size_t b, const BondStrain& strain, double lengthM, double damage) const;
-    /// Damage grows with the damage driver (and under Davison–Stevens, over the step's
-    /// duration); what it takes away stays away. Returns whether the damage may have changed.
+    /// Damage grows with the largest equivalent stretch (and under Davison–Stevens, over the
+    /// step's duration); what it takes away stays away. Returns whether the damage may have
+    /// changed.
     bool growBondDamage(size_t b, double equivalentStretchNowM, double strainRatePerS, double dtS);
-    /// 0 intact … 1 broken on the softening line, from the damage driver.
+    /// The rate law's strength factor follows an increase of a bond's stretch while the bond is
+    /// undamaged (BondHistory::strengthFactor).
+    void followStrengthRate(BondHistory& history, double increaseM, double strainRatePerS) const;
+    /// A bond's softening line: its peak stretch u0 and the stretch uf where it carries nothing,
+    /// for its strength scale s and strength factor f: s f u0 and uf / (s f), so the energy under
+    /// it, ½ k u0 uf, is the material's Gf h² whatever the scatter and the rate (unit: m).
+    std::pair<double, double> softeningLineM(size_t b) const;
+    /// 0 intact … 1 broken on the softening line, from the largest equivalent stretch.
     double softeningDamage(size_t b) const;
     /// Davison–Stevens: a bond's damage after dtS, at its equivalent stretch now.
     double rateDamageAfter(size_t b, double equivalentStretchNowM, double dtS) const;
