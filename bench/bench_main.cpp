@@ -236,7 +236,8 @@ void loadsPass(benchmark::State& state, LoadModel model, bool behindABarrier = f
     }
     const double t = field.tableParameters(0, 4.5).arrivalTimeS + 1e-4;
     const std::vector<OpenWindow> windows = field.openWindows(t);
-    StaticWorld geometry{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
+    StaticWorld geometry;
+    geometry.ground = GroundPlane{true, Eigen::Vector3d::UnitZ(), 0.0};
     if (behindABarrier)
         geometry.boxes.push_back({Eigen::Vector3d(3.5, 0.5, 1.0), Eigen::Vector3d(0.05, 5.0, 1.0), Eigen::Quaterniond::Identity()});
     const BlastLoads loads(field, windows, LoadSettings{model}, geometry);

@@ -3,6 +3,7 @@
 #include <spall/fracture/Fracture.h>
 #include <spall/voxel/VdbIo.h>
 #include <spall/voxel/Body.h>
+#include <spall/world/StaticWorld.h>
 
 #include <openvdb/openvdb.h>
 
@@ -52,6 +53,14 @@ inline std::vector<Body> barBrokenInTwo(Body bar, int64_t firstId)
     std::vector<Body> halves = splitBody(bar);
     for (size_t i = 0; i < halves.size(); ++i) halves[i].id = firstId + int64_t(i);
     return halves;
+}
+
+/// A static world of the ground plane z = 0 alone.
+inline StaticWorld groundAtZero()
+{
+    StaticWorld world;
+    world.ground = GroundPlane{true, Eigen::Vector3d::UnitZ(), 0.0};
+    return world;
 }
 
 /// A small scene run through in a second: a 2 m brick wall at 10 cm voxels, anchored, 3 kg of

@@ -292,7 +292,7 @@ TEST(Deformable, AnchorsHoldTheMaterialsTensileStrengthAndThenLetGo)
         if (it.getCoord().z() == 0) it.setValue(*it | kAnchorBit);
     refreshDerivedData(column);
     column.motion.positionM = Eigen::Vector3d(0.0, 0.0, 0.125);  // the base's faces on z = 0
-    Lattice lattice = Lattice::fromBody(column, brick, StaticWorld{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}});
+    Lattice lattice = Lattice::fromBody(column, brick, test::groundAtZero());
     ASSERT_EQ(lattice.particleCount() - lattice.model().voxelParticleCount, 16u) << "one ground point per anchored voxel";
     const double strengthN = brick.tensileStrengthPa * 0.1 * 0.1;
     const double columnMassKg = lattice.model().particleMassKg * double(lattice.model().voxelParticleCount);

@@ -46,7 +46,8 @@ TEST(Lattice, CalibrationGivesTheContinuumModuli)
     const double lambda = e * nu / ((1 + nu) * (1 - 2 * nu)), mu = e / (2 * (1 + nu));
     for (int axis = 0; axis < 3; ++axis) {
         EXPECT_NEAR(k.normalNPerM[axis] / kH + k.lameLambdaPa, lambda + 2 * mu, 1e-6 * e);
-        EXPECT_NEAR(k.shearNPerM[axis] / (2 * kH), mu, 1e-6 * e);
+        EXPECT_NEAR(k.shearNPerM[axis][(axis + 1) % 3] / (2 * kH), mu, 1e-6 * e);
+        EXPECT_NEAR(k.shearNPerM[axis][(axis + 2) % 3] / (2 * kH), mu, 1e-6 * e);
     }
 }
 

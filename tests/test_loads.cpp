@@ -145,7 +145,7 @@ TEST(Loads, FiniteWallClearsAsTheCfdReferenceSays)
     // take, over their face, this part of the front impulse a very tall wall takes over the
     // same face (positive phase): 0.875 for H = 0.5 m, 0.994 for H = 2 m. Long walls (20 m),
     // so only the top edge clears, as in the axisymmetric reference.
-    const StaticWorld ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
+    const StaticWorld ground = test::groundAtZero();
     const double h = 0.1, p0 = 101325.0;
     auto wallOfHeight = [&](int voxels) { return test::boxBody(1, 200, voxels, h, 2000.0, Eigen::Vector3d(2.0 + 0.5 * h, 0, 0.5 * h * voxels)); };
     const Body tall = wallOfHeight(35);
@@ -254,7 +254,7 @@ TEST(Loads, BoxBehindABlastWallTakesTheDiffractedLoad)
     // and 0.105, T2 0.39 and 0.30. Reflecting the diffracted wave as a shock gave T1's net push
     // twice the CFD's (0.18).
     const BlastField field({Charge{Eigen::Vector3d::Zero(), 0.365, 0.0, BurstType::Surface}}, BlastSettings());
-    const StaticWorld open{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
+    const StaticWorld open = test::groundAtZero();
     StaticWorld walled = open;
     walled.boxes.push_back({Eigen::Vector3d(2.05, 0, 0.5), Eigen::Vector3d(0.05, 10, 0.5), Eigen::Quaterniond::Identity()});
     struct Target {
@@ -295,7 +295,7 @@ TEST(Loads, DiffractedWaveBehindABarrierKeepsWhatTheCfdFinds)
     // ray model has no penumbra; docs/accuracy.md). Checked: the weakest point within 30 % of
     // the CFD's, every point weakened, and the wave travelling on over the top.
     const BlastField field({Charge{Eigen::Vector3d::Zero(), 0.365, 0.0, BurstType::Surface}}, BlastSettings());
-    StaticWorld walled{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
+    StaticWorld walled = test::groundAtZero();
     const ObstacleBox barrier{Eigen::Vector3d(2.05, 0, 0.5), Eigen::Vector3d(0.05, 10, 0.5), Eigen::Quaterniond::Identity()};
     auto sideOnImpulse = [](const PointPulse& p) {
         return p.peakOverpressurePa * p.positiveDurationS * friedlanderImpulseFraction(p.decayCoefficient);
@@ -329,7 +329,7 @@ TEST(Loads, GroundReflectsAFreeAirCharge)
     // wall standing on the ground is Kingery–Bulmash's hemispherical surface burst; the linear
     // image sums two free-air waves where the real ones merge (docs/accuracy.md).
     const double tnt = 1.0, h = 0.1;
-    const StaticWorld ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
+    const StaticWorld ground = test::groundAtZero();
     const Body wall = test::boxBody(1, 100, 20, h, 2000.0, Eigen::Vector3d(3.0 + 0.5 * h, 0, 1.0));
     auto strip = [](const ExposedFace& f) { return f.face == kNegX && f.voxel.y() >= 48 && f.voxel.y() <= 51 && f.voxel.z() < 5; };
     const BlastParameters p = blastParameters(BlastDataset::KingeryBulmash, BurstType::Surface, tnt, 3.0);
@@ -356,7 +356,7 @@ TEST(Loads, AWindowInAWallOfCollidersIsLoadedAsThatPartOfASolidWall)
     // as a 0.6 m plate standing free, it cleared round its own edges and filled behind at once.
     const double h = 0.1, tnt = 1.0, distance = 6.0;
     const BlastField field({Charge{Eigen::Vector3d::Zero(), tnt, 0.0, BurstType::Surface}}, BlastSettings());
-    const StaticWorld open{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
+    const StaticWorld open = test::groundAtZero();
     const Body solid = test::boxBody(1, 40, 30, h, 2500.0, Eigen::Vector3d(distance + 0.5 * h, 0, 1.5));
     Body pane = test::boxBody(1, 6, 6, h, 2500.0, Eigen::Vector3d(distance + 0.5 * h, 0, 1.5));
     pane.anchored = true;
@@ -387,7 +387,7 @@ TEST(Loads, ABlockOnTheGroundIsPressedIntoItNotLifted)
 {
     // No air under a face resting on the ground, and the ground's reflection does not wrap round
     // what stands on it: a block under an air burst is pushed down.
-    const StaticWorld ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
+    const StaticWorld ground = test::groundAtZero();
     const Charge air{Eigen::Vector3d(0.5, 0, 1.5), 1.0, 0.0, BurstType::FreeAir};
     const BlastField field(withGroundImages({air}, Eigen::Vector3d::UnitZ(), 0.0), BlastSettings());
     const Body block = test::boxBody(4, 4, 4, 0.1, 2000.0, Eigen::Vector3d(0, 0, 0.2));
@@ -400,7 +400,7 @@ TEST(Loads, TheWaveGoesRoundANarrowObstacleAlongTheGround)
 {
     // A post 0.2 m wide and 3 m high between a surface charge and a point on the ground behind
     // it: the shortest way is round its side at ground level, not over its top.
-    const StaticWorld ground{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}};
+    const StaticWorld ground = test::groundAtZero();
     const ObstacleBox post{Eigen::Vector3d(2.0, 0, 1.5), Eigen::Vector3d(0.1, 0.1, 1.5), Eigen::Quaterniond::Identity()};
     const Eigen::Vector3d behind(4.0, 0, 0.05);
     const EdgePath path = shortestPathAround(post, Eigen::Vector3d::Zero(), behind, ground, 0.01);

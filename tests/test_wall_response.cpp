@@ -138,7 +138,7 @@ LatticeResponse loadWall(const WallStrip& wall, double peakPa, double durationS,
         if (it.getCoord().z() == 0) it.setValue(*it | kAnchorBit);
     refreshDerivedData(body);
     body.motion.positionM = Eigen::Vector3d(0.0, 0.0, 0.5 * wall.heightM);  // the base's faces on z = 0
-    Lattice lattice = Lattice::fromBody(body, wall.material, StaticWorld{{true, Eigen::Vector3d::UnitZ(), 0.0}, {}, {}});
+    Lattice lattice = Lattice::fromBody(body, wall.material, test::groundAtZero());
     std::vector<size_t> front;
     for (size_t p = 0; p < lattice.model().voxelParticleCount; ++p)
         if (lattice.model().voxel[p].y() == 0) front.push_back(p);

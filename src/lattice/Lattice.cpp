@@ -30,7 +30,8 @@ Eigen::Quaterniond rotationOf(const Eigen::Vector3d& turn)
 double Lattice::stableTimeStepS() const
 {
     const LatticeStiffness& k = mModel.stiffness;
-    const double shear = *std::max_element(k.shearNPerM.begin(), k.shearNPerM.end());
+    double shear = 0.0;
+    for (const Eigen::Vector3d& springs : k.shearNPerM) shear = std::max(shear, springs.maxCoeff());
     const double normal = *std::max_element(k.normalNPerM.begin(), k.normalNPerM.end());
     const double omegaSquared = (12.0 * shear + 4.0 * normal + 12.0 * k.lameLambdaPa * mModel.spacingM) / mModel.particleMassKg;
     return 0.9 * 2.0 / std::sqrt(omegaSquared);

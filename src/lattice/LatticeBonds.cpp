@@ -109,7 +109,7 @@ uint8_t Lattice::measureBond(size_t b, double dtS, bool growDamage)
     if (snapped) mSnapped[b] = 1;
     const double intact = 1.0 - damage, sqrtIntact = std::sqrt(intact);
     const bool opening = lengthM > mModel.spacingM;
-    Eigen::Vector3d local = -intact * k.shearNPerM[a] * s.displacementM;
+    Eigen::Vector3d local = (-intact * k.shearNPerM[a]).cwiseProduct(s.displacementM);
     local[a] = -intact * k.normalNPerM[a] * s.displacementM[a];
     terms.forceOnHighN = s.frame * local;
     if (bond.pinned) {

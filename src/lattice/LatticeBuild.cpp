@@ -48,16 +48,15 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
     const double gAcross = eAcross / (2.0 * (1.0 + m.poissonRatio)), gAlong = grained ? m.alongGrainShearModulusPa : gAcross;
     const int grainAxis = grainAxisIndex(m);
     const auto [dAcross, dAlong, lambda] = normalModuli(eAcross, m.poissonRatio, eAlong);
-    // Shear: C44 across the grain is (2 s_T) / 4h = G_T, along it (s_L + s_T) / 4h = G_L.
-    const double sAcross = 2.0 * gAcross * h, sAlong = (4.0 * gAlong - 2.0 * gAcross) * h;
-    SPALL_CHECK(sAlong > 0.0);  // validateMaterial: G along the grain above half of G across it
     LatticeStiffness k;
     k.lameLambdaPa = lambda;
     for (int axis = 0; axis < 3; ++axis) {
         const bool along = axis == grainAxis;
         k.normalModulusPa[axis] = along ? dAlong : dAcross;
         k.normalNPerM[axis] = k.normalModulusPa[axis] * h;
-        k.shearNPerM[axis] = along ? sAlong : sAcross;
+        // Shear: the plane (axis, direction) holds the grain when either is its axis.
+        for (int direction = 0; direction < 3; ++direction)
+            k.shearNPerM[axis][direction] = direction == axis ? 0.0 : 2.0 * h * (along || direction == grainAxis ? gAlong : gAcross);
         k.bendingNmPerRad[axis] = (along ? eAlong : eAcross) * h * h * h / 12.0;
         // Twisting about the axis shears the two planes that hold it.
         k.twistingNmPerRad[axis] = kSquareTorsionConstant * (along ? gAlong : 0.5 * (gAlong + gAcross)) * h * h * h;
@@ -106,7 +105,7 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
     lattice.mModel.stiffness = calibrateLattice(material, h);
     lattice.computeFailureTerms();
     lattice.mModel.ground = supports.ground;
-    lattice.keepOutOf(supports.boxes);
+    lattice.keepOutOf(supports);
     lattice.addVoxelParticles(body);
     // A body may rest a little below the plane (anchored within a quarter voxel of it; blocks of
     // voxels reach lower than their voxels): the contact plane is then where its cubes rest, so

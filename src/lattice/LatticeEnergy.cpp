@@ -8,13 +8,27 @@
 
 namespace spall {
 
+namespace {
+
+/// A bond's shear springs' energy, doubled: Σ k_b d_b² over the directions b across its axis.
+double shearEnergyTerm(const Eigen::Vector3d& factor, const Eigen::Vector3d& displacement, int axis)
+{
+    const int b = (axis + 1) % 3, c = (axis + 2) % 3;
+    // Equal factors (every plane of an isotropic material): one product, as the golden states
+    // were recorded with.
+    if (factor[b] == factor[c]) return factor[b] * (displacement.squaredNorm() - displacement[axis] * displacement[axis]);
+    return factor[b] * displacement[b] * displacement[b] + factor[c] * displacement[c] * displacement[c];
+}
+
+}  // namespace
+
 double Lattice::elasticEnergyJ(size_t b, const BondStrain& s, double intact) const
 {
     const LatticeStiffness& k = mModel.stiffness;
     const int a = mModel.bonds[b].axis;
     const double normal = s.displacementM[a], twist = s.rotationRad[a];
     return 0.5 * intact *
-           (k.normalNPerM[a] * normal * normal + k.shearNPerM[a] * (s.displacementM.squaredNorm() - normal * normal) +
+           (k.normalNPerM[a] * normal * normal + shearEnergyTerm(k.shearNPerM[a], s.displacementM, a) +
             k.bendingNmPerRad[a] * (s.rotationRad.squaredNorm() - twist * twist) + k.twistingNmPerRad[a] * twist * twist);
 }
 

@@ -8,6 +8,19 @@
 
 namespace spall {
 
+namespace {
+
+/// The shear traction over the shear strength: |(k_b d_b, k_c d_c)| / (h² c) across axis a.
+double shearIndexOf(const Eigen::Vector3d& perM, const Eigen::Vector3d& displacementM, int a)
+{
+    const int b = (a + 1) % 3, c = (a + 2) % 3;
+    // Equal factors (isotropic): one product, as the golden states were recorded with.
+    if (perM[b] == perM[c]) return perM[b] * std::sqrt(std::max(0.0, displacementM.squaredNorm() - displacementM[a] * displacementM[a]));
+    return std::hypot(perM[b] * displacementM[b], perM[c] * displacementM[c]);
+}
+
+}  // namespace
+
 double Lattice::bondDamage(size_t b) const
 {
     return mModel.damageLaw == LatticeDamageLaw::DavisonStevens ? state.bondHistory[b].rateDamage : softeningDamage(b);
@@ -68,7 +81,7 @@ double Lattice::equivalentStretchM(size_t b, const BondStrain& strain, double le
     const LatticeModel::FailureTerms& terms = mModel.failureTerms[bond.strengthClass][size_t(a)];
     // The shear displacement: across the bond's axis in its half-way frame.
     const double normalM = strain.displacementM[a];
-    const double shearIndex = terms.shearIndexPerM * std::sqrt(std::max(0.0, strain.displacementM.squaredNorm() - normalM * normalM));
+    const double shearIndex = shearIndexOf(terms.shearIndexPerM, strain.displacementM, a);
     // The stretch at the face's most stretched corner: the moment the bond carries, (1 − D) of
     // its bending stiffness times θ, opens one edge by (1 − D) θ h/2 per axis across it, so the
     // outermost bonds of a bent member see the strain of its surface, E κ t/2, as a continuum

@@ -96,6 +96,7 @@ Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(sc
         mState.bodies.push_back(std::move(body));
     }
     noteFragmentMemory();
+    noteFractureLimits();
     mState.stepStats.minDtS = scene.timeStep.maxTimeStepS;
 }
 
@@ -160,6 +161,31 @@ void Simulation::noteFragmentMemory()
          << "the run would need about " << allBroken / 1e9 << " GB, and " << available / 1e9
          << " GB is available: a larger voxel_size_m needs fewer (memory falls with its cube)";
     mNotes.push_back(note.str());
+}
+
+void Simulation::noteFractureLimits()
+{
+    const FractureAlgorithm algorithm = mScene.fracture.algorithm;
+    if (algorithm == FractureAlgorithm::YieldLimit || algorithm == FractureAlgorithm::DavisonStevens)
+        mNotes.push_back("fracture.algorithm \"" + std::string(enumName(algorithm)) +
+                         "\" is one of the paper's rules (Mazarak et al. 1999), kept as a baseline: links break on the blast's pressure "
+                         "where they are, whatever its impulse and whatever shields them; \"lattice\" breaks them by the stress the loads "
+                         "put into the material");
+    if (algorithm != FractureAlgorithm::Lattice) return;
+    const double particleM = mScene.voxelSizeM * mScene.lattice.particleVoxels;
+    for (size_t i = 0; i < mScene.objects.size(); ++i) {
+        const Material& material = mScene.material(mScene.objects[i].material);
+        const double courseM = material.unitHeightM + material.jointThicknessM;
+        // Lattice::classifyUnitBonds: a particle taller than a course makes every bond a joint's.
+        if (!hasUnits(material) || particleM <= courseM) continue;
+        std::ostringstream note;
+        note.precision(3);
+        note << "objects[" << i << "] ('" << mScene.objects[i].name << "', " << material.name << "): its lattice's particles (" << particleM
+             << " m: voxel_size_m x lattice.particle_voxels) are taller than a course (" << courseM
+             << " m), so no bond lies inside a unit and the whole object breaks at its joints' strength; particles of at most "
+             << courseM << " m resolve its units";
+        mNotes.push_back(note.str());
+    }
 }
 
 Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene), mState(std::move(state))

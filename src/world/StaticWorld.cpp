@@ -72,6 +72,7 @@ StaticWorld buildStaticWorld(const GroundPlane& ground, const std::vector<Static
     for (const StaticBox& box : colliders) {
         world.boxes.push_back({box.centreM, box.halfExtentM, box.orientation});
         world.pinned.push_back(box.holds == SupportHold::Pinned ? 1 : 0);
+        world.friction.push_back(box.friction);
     }
     return world;
 }

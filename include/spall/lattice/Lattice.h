@@ -30,14 +30,19 @@ namespace spall {
 
 /// The bonds' stiffnesses per axis of the body's index space and the volumetric modulus, for
 /// voxels of edge h. Derivation (energy per voxel of the lattice equal to the continuum's,
-/// docs/architecture.md): the normal stiffness matrix is diag(d) + λ 1 1ᵀ, normal bonds d h,
-/// shear bonds so that C44 of each plane (a, b) is (s_a + s_b) / 4h; bending E h³/12 and
-/// twisting 0.1406 G h³, those of a square beam of side and length h (Roark's torsion constant
-/// 0.1406 a⁴), which matter only at the scale of a voxel. Isotropic: d = 2μ, s = 2μh. Wood
-/// (a grain axis L) is transversely isotropic: d and s differ along L (docs/accuracy.md).
+/// docs/architecture.md): the normal stiffness matrix is diag(d) + λ 1 1ᵀ, normal bonds d h;
+/// a bond along a displaced across it along b shears the plane (a, b), and its spring there is
+/// 2 h G of that plane, as is the spring of the plane's other bond, so C44 of each plane is
+/// G_ab whether the particles turn with the material or their rotations relax (a bond with one
+/// spring for both its directions puts a plane's two springs in series when they relax, issue
+/// 47); bending E h³/12 and twisting 0.1406 G h³, those of a square beam of side and length h
+/// (Roark's torsion constant 0.1406 a⁴), which matter only at the scale of a voxel. Isotropic:
+/// d = 2μ, s = 2μh. Wood (a grain axis L) is transversely isotropic: d differs along L, and the
+/// planes holding L have G_L (docs/accuracy.md).
 struct LatticeStiffness {
     std::array<double, 3> normalNPerM{};
-    std::array<double, 3> shearNPerM{};
+    /// Per bond axis a, its shear spring along each direction b ≠ a (component a is 0) (unit: N/m).
+    std::array<Eigen::Vector3d, 3> shearNPerM{};
     std::array<double, 3> bendingNmPerRad{};
     std::array<double, 3> twistingNmPerRad{};
     /// d per axis, the normal stiffness less λ (2μ when isotropic) (unit: Pa).
@@ -176,7 +181,7 @@ struct LatticeModel {
     struct FailureTerms {
         double peakStretchM = 0.0;        ///< u0
         double tensionIndexPerM = 0.0;    ///< 1 / u0
-        double shearIndexPerM = 0.0;      ///< k_s / (h² c): shear displacement to index
+        Eigen::Vector3d shearIndexPerM = Eigen::Vector3d::Zero();  ///< k_s / (h² c) per direction: shear displacement to index
         double normalIndexPerM = 0.0;     ///< k_n / (h² c): normal displacement to traction over c
         double indexPerPa = 0.0;          ///< 1 / c
         double frictionCoefficient = 0.0;
@@ -207,6 +212,7 @@ struct LatticeModel {
         Eigen::Matrix3d toBox;
         Eigen::Vector3d centreM, reachM;
         Eigen::AlignedBox3d boundsM;
+        double friction = 0.0;  ///< Coulomb coefficient along its faces (unit: 1)
     };
     std::vector<KeptOut> keptOut;
 };
@@ -394,7 +400,7 @@ private:
     /// depth and loses its velocity into the box, as on the ground. The quarter leaves a support
     /// bond's elastic give alone and matches the rigid phase's tolerance
     /// (collisions.penetration_tolerance_voxels' default).
-    void keepOutOf(const std::vector<ObstacleBox>& boxes);
+    void keepOutOf(const StaticWorld& supports);
     void addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& placeM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
                      const Eigen::Quaterniond& q, bool isHeld);
     void addVoxelParticles(const Body& body);
@@ -422,10 +428,17 @@ private:
     /// f(i) for i < count: in parallel for large lattices, in order for small ones.
     template <typename F>
     void forEach(size_t count, const F& f) const;
-    /// Puts a particle that sank into a collider back to the allowed depth (keepOutOf).
+    /// Puts a particle that sank into a collider back to the allowed depth (keepOutOf), with
+    /// the box's friction (pushOut).
     void keepOutOfColliders(size_t p);
-    /// Puts a particle that sank into the ground back on it (GroundPlane).
+    /// Puts a particle that sank into the ground back on it (GroundPlane), with its friction.
     void keepAboveGround(size_t p);
+    /// Moves a particle `depthM` out along `outward` and takes away its speed into the surface
+    /// and, by Coulomb's law, up to `friction` times that speed along it: the impulse that stops
+    /// it sinking bounds the impulse that stops it sliding, so a particle pressed on a surface
+    /// by a force N slides to rest under μ N (applied at its centre: a cube's contact would
+    /// also turn it; its bonds hold it from turning in a lattice).
+    void pushOut(size_t p, const Eigen::Vector3d& outward, double depthM, double friction);
     /// Whether a particle is still bonded to its ground point: it then bears on the ground
     /// through that bond, and the plane (a plastic contact at its rest height) would hold the
     /// compression side of a bent base rigid, stiffening and strengthening it.

@@ -132,6 +132,10 @@ private:
     std::pair<Eigen::Vector3d, Eigen::Vector3d> totalMomenta() const;
     /// A note when the memory available could not hold every voxel as a fragment of its own.
     void noteFragmentMemory();
+    /// What the scene's fracture settings cannot see, as notes naming the key and what would:
+    /// the paper's rules ignore impulse and shielding; masonry in voxels coarser than a course
+    /// has no bricks, only joints.
+    void noteFractureLimits();
     /// Setting up: each object's mesh (empty for primitives), its voxels, its body in place.
     std::vector<TriangleMesh> loadMeshes();
     VoxeliseResult voxeliseObject(const ObjectSpec& spec, const TriangleMesh& mesh, Interrupter* interrupter);

@@ -83,6 +83,8 @@ struct StaticWorld {
     /// Per box, 1 when it holds by a pin (a pane in glazing beads, simply supported), else 0
     /// (clamped, as if the box were more of the material); empty: every box clamps.
     std::vector<uint8_t> pinned;
+    /// Per box, the Coulomb coefficient of what slides on it (unit: 1); empty: frictionless.
+    std::vector<double> friction;
 };
 
 /// The scene's ground (its normal made of unit length) and colliders as the static world.
