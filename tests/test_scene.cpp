@@ -98,6 +98,19 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
               std::string::npos);
 }
 
+TEST(Scene, ABuriedChargeIsRefusedNamingItsPlace)
+{
+    // The blast model is of charges in air or on the surface: one under the ground or inside a
+    // collider would run as a surface or free-air burst, silently.
+    const std::string box = R"("primitive": {"shape": "box", "size_m": [1, 1, 1]})";
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "charges": [{"position_m": [5, 0, -1]}]})").find("charges[0].position_m: the charge is 1"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "charges": [{"position_m": [5, 0, 0.5]}], "colliders": [{"position_m": [5, 0, 0.5]}]})")
+                  .find("charges[0].position_m: the charge is inside colliders[0]"),
+              std::string::npos);
+    EXPECT_EQ(errorOf(R"({"objects": [{)" + box + R"(}], "charges": [{"position_m": [5, 0, 0], "burst": "surface"}]})"), "");
+}
+
 TEST(Scene, MaterialAndLatticeErrorsNameTheKeyAndReason)
 {
     const std::string box = R"("primitive": {"shape": "box", "size_m": [1, 1, 1]})";

@@ -53,6 +53,25 @@ void checkSceneFits(const Scene& scene, const std::vector<TriangleMesh>& meshes)
     }
 }
 
+/// A charge under the ground or inside a collider is buried: the blast model is of charges in
+/// air or on the surface (Kingery–Bulmash), so it would run as one there, silently.
+void refuseBuriedCharges(const Scene& scene, const StaticWorld& world)
+{
+    constexpr double kToleranceM = 1e-6;
+    for (size_t c = 0; c < scene.charges.size(); ++c) {
+        const Eigen::Vector3d& x = scene.charges[c].positionM;
+        const std::string key = scene.sourceName + ": charges[" + std::to_string(c) + "].position_m: ";
+        const double heightM = world.ground.enabled ? world.ground.normal.dot(x) - world.ground.offsetM : 0.0;
+        if (heightM < -kToleranceM)
+            throw InputError(key + "the charge is " + std::to_string(-heightM) + " m below the ground; the blast model is of charges in air "
+                             "or on the surface (a surface burst sits on the ground: height 0)");
+        for (size_t b = 0; b < world.boxes.size(); ++b)
+            if (depthInsideM(world.boxes[b], x) > kToleranceM)
+                throw InputError(key + "the charge is inside colliders[" + std::to_string(b) + "]; the blast model is of charges in air or on "
+                                 "the surface");
+    }
+}
+
 /// A charge inside an object would need contact detonation physics the model does not have.
 void refuseChargesInside(const Body& body, const std::string& objectName, const Scene& scene)
 {
@@ -87,6 +106,7 @@ Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(sc
     initialiseOpenVdb();
     mField = makeField(scene);
     mStaticWorld = buildStaticWorld(scene.world.ground, scene.world.colliders);
+    refuseBuriedCharges(scene, mStaticWorld);
     const std::vector<TriangleMesh> meshes = loadMeshes();
     checkSceneFits(scene, meshes);
     for (size_t i = 0; i < scene.objects.size(); ++i) {
