@@ -104,7 +104,10 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
     options.onNote = [](const std::string& note) { std::fprintf(stderr, "spall run: note: %s\n", note.c_str()); };
     options.maxFrames = frames;
     if (preview) options.previewPath = (std::filesystem::path(outDir) / "preview.png").string();
-    if (gltf) options.gltfPath = defaultGlbPath(outDir), options.onGltfFrame = gltfProgress(quiet);
+    if (gltf) {
+        options.gltfPath = defaultGlbPath(outDir);
+        options.onGltfFrame = gltfProgress(quiet);
+    }
     const auto onFrame = progressBar(quiet);
     spall::RunReport report;
     if (resume) {
@@ -113,9 +116,7 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
     } else {
         spall::Scene scene = scenePath.empty() ? spall::parseScene(spall::defaultSceneJson(), "<built-in default scene>", ".")
                                                : spall::loadScene(scenePath);
-        if (seed >= 0) {
-            scene.seed = static_cast<uint64_t>(seed);
-        }
+        if (seed >= 0) scene.seed = static_cast<uint64_t>(seed);
         if (!quiet) std::fprintf(stderr, "spall run: %s -> %s\n", scene.sourceName.c_str(), outDir.c_str());
         try {
             report = spall::runScene(scene, options, onFrame);

@@ -24,7 +24,7 @@ bool glbIsCurrent(const std::string& outDir, const fs::path& glb)
 
 int viewCommand(const std::string& outDir, std::string htmlPath, bool quiet)
 {
-    const fs::path glb = fs::path(outDir) / "debris.glb";
+    const fs::path glb = defaultGlbPath(outDir);
     if (!glbIsCurrent(outDir, glb)) exportGltfCommand(outDir, glb.string(), quiet);
     if (htmlPath.empty()) htmlPath = (fs::path(outDir) / "view.html").string();
     const std::string title = fs::absolute(outDir).lexically_normal().filename().string();

@@ -165,10 +165,9 @@ void requireLevelSetFrames(const OutputSettings& settings)
                          std::string(settings.vdb ? "fog frames (output.fragment_grids \"fog\")" : "no frames (output.vdb false)"));
 }
 
-std::unique_ptr<FrameSink> makeGltfSink(const std::string& directory, const std::string& glbPath, const OutputSettings& settings,
-                                        std::function<void(int, int)> onFrame, std::optional<GltfExportReport>& report)
+std::unique_ptr<FrameSink> makeGltfSink(const std::string& directory, const std::string& glbPath, std::function<void(int, int)> onFrame,
+                                        std::optional<GltfExportReport>& report)
 {
-    requireLevelSetFrames(settings);
     return std::make_unique<GltfSink>(directory, glbPath, std::move(onFrame), report);
 }
 

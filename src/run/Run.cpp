@@ -33,7 +33,7 @@ std::vector<std::unique_ptr<FrameSink>> frameSinks(const Simulation& sim, const 
     if (history) sinks.push_back(makeHistorySink(std::move(history), sim));
     if (!options.previewPath.empty() && options.previewFrames > 0)
         sinks.push_back(makePreviewSink(options.previewPath, options.previewFrames, frameCount, sim.scene(), options.outputDirectory));
-    if (!options.gltfPath.empty()) sinks.push_back(makeGltfSink(options.outputDirectory, options.gltfPath, output, options.onGltfFrame, gltf));
+    if (!options.gltfPath.empty()) sinks.push_back(makeGltfSink(options.outputDirectory, options.gltfPath, options.onGltfFrame, gltf));
     return sinks;
 }
 

@@ -54,9 +54,9 @@ std::unique_ptr<FrameSink> makePreviewSink(const std::string& path, int sheetFra
 void requireLevelSetFrames(const OutputSettings& settings);
 
 /// When the run completes, its debris as one .glb at `glbPath`, meshed from the level-set frames
-/// in `directory` (output/GltfExport.h; requireLevelSetFrames); `onFrame(done, total)` reports
-/// the export's progress and the report lands in `report`.
-std::unique_ptr<FrameSink> makeGltfSink(const std::string& directory, const std::string& glbPath, const OutputSettings& settings,
-                                        std::function<void(int, int)> onFrame, std::optional<GltfExportReport>& report);
+/// in `directory` (output/GltfExport.h; the caller has checked requireLevelSetFrames before the
+/// run); `onFrame(done, total)` reports the export's progress and the report lands in `report`.
+std::unique_ptr<FrameSink> makeGltfSink(const std::string& directory, const std::string& glbPath, std::function<void(int, int)> onFrame,
+                                        std::optional<GltfExportReport>& report);
 
 }  // namespace spall
