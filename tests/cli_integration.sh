@@ -8,6 +8,10 @@ rm -rf "$dir" && mkdir -p "$dir"
 py=/usr/bin/python3
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
+# --version names the program and its version
+version=$("$spall" --version)
+[[ $version =~ ^spall\ [0-9]+\.[0-9]+\.[0-9]+$ ]] || fail "--version printed: $version"
+
 # voxelise: a primitive and a mesh, read back by vdb_print and pyopenvdb
 "$spall" voxelise --primitive box:1,0.5,0.4 --voxel-size 0.1 -o "$dir/box.vdb" --quiet > "$dir/box.txt"
 grep -q "voxels: *200" "$dir/box.txt" || fail "box voxel count: $(cat "$dir/box.txt")"
@@ -225,6 +229,23 @@ grep -q "cube.obj/out" "$dir/err.txt" || fail "error does not name the output di
 if "$spall" run "$dir/missing-scene.json" -o "$dir/x" --quiet > /dev/null 2> "$dir/err.txt"; then fail "missing scene accepted"; fi
 grep -q "missing-scene.json" "$dir/err.txt" || fail "error does not name the scene: $(cat "$dir/err.txt")"
 
+# outputs never mix: a second run into a run's directory is refused, naming --overwrite, and
+# leaves it as it was; with --overwrite it replaces it (a shorter run leaves no frames of the
+# longer); a run that fails before its first frame leaves nothing; no run leaves its lock
+frames_before=$(ls "$dir"/out/fragments.*.vdb | wc -l)
+if "$spall" run "$dir/scene.json" -o "$dir/out" --quiet --no-preview > /dev/null 2> "$dir/err.txt"; then fail "a second run into out/ accepted"; fi
+grep -q -- "--overwrite" "$dir/err.txt" || fail "the refusal does not name --overwrite: $(cat "$dir/err.txt")"
+[[ $(ls "$dir"/out/fragments.*.vdb | wc -l) -eq $frames_before ]] || fail "a refused run changed out/"
+cp -r "$dir/out" "$dir/out-again"
+"$spall" run "$dir/scene.json" -o "$dir/out-again" --frames 2 --overwrite --quiet --no-preview > /dev/null
+[[ $(ls "$dir"/out-again/fragments.*.vdb | wc -l) -eq 2 ]] || fail "--overwrite left the earlier run's frames: $(ls "$dir/out-again")"
+[[ ! -e "$dir/out-again/preview.png" && ! -e "$dir/out-again/run.lock" ]] || fail "--overwrite left the earlier preview or a lock: $(ls "$dir/out-again")"
+sed 's/"position_m": \[0.2, -2.0, 0.0\], "tnt_kg": 0.5, "burst": "surface"/"position_m": [0.2, -2.0, -1.0], "tnt_kg": 0.5, "burst": "free-air"/' \
+  "$dir/scene.json" > "$dir/buried.json"
+if "$spall" run "$dir/buried.json" -o "$dir/buried" --quiet > /dev/null 2> "$dir/err.txt"; then fail "a buried charge accepted"; fi
+grep -q "below the ground" "$dir/err.txt" || fail "the buried charge was not refused at set-up: $(cat "$dir/err.txt")"
+[[ -d "$dir/buried" && -z "$(ls -A "$dir/buried")" ]] || fail "a run that failed at set-up left files: $(ls "$dir/buried")"
+
 # Identical content of output directories (history, fragment metadata and transforms, density).
 compare="$(dirname "$0")/../tools/compare_runs.py"
 
@@ -383,6 +404,16 @@ grep -q "fragments.0000.vdb" "$dir/err.txt" || fail "render error: $(cat "$dir/e
 # inspect: text and JSON, a frame and a body; bad input named
 "$spall" inspect "$dir/out" | grep -q "7 frames" || fail "inspect summary"
 "$spall" inspect "$dir/out/history.h5" --json --frame 3 --body 0 | $py -c "import json,sys; j=json.load(sys.stdin); assert j['frame']['index']==3 and j['body']['id']==0"
+# its size histogram by decades: every body of the last frame in the bucket its voxel count names
+"$spall" inspect "$dir/out/history.h5" --json | $py -c "
+import json, sys, h5py
+j = json.load(sys.stdin); counts = j['frame']['fragment_voxel_counts']
+f = h5py.File(sys.argv[1]); start = int(f['frames/body_offset'][-2]); vox = f['bodies/voxel_count'][start:]
+edges = {'1': (1, 1), '2-9': (2, 9), '10-99': (10, 99), '100-999': (100, 999), '1000-9999': (1000, 9999), '>=10000': (10000, 1 << 62)}
+for name, (lo, hi) in edges.items():
+    assert counts[name] == sum(1 for v in vox if lo <= v <= hi), (name, counts, sorted(vox))
+" "$dir/out/history.h5" || fail "inspect's size histogram"
+
 if "$spall" inspect "$dir/out" --frame 99 2> "$dir/err.txt"; then fail "inspect accepted a missing frame"; fi
 grep -q "frame 99 does not exist" "$dir/err.txt" || fail "inspect error: $(cat "$dir/err.txt")"
 if "$spall" inspect "$dir/cube.obj" 2> "$dir/err.txt"; then fail "inspect accepted a non-HDF5 file"; fi

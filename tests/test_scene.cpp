@@ -50,6 +50,11 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
     const std::string box = R"("primitive": {"shape": "box", "size_m": [1, 1, 1]})";
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(, "material": "cheese"}]})").find("objects[0].material"), std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(, "spin": 1}]})").find("objects[0].spin: unknown key"), std::string::npos);
+    // A key twice: JSON leaves it undefined and the parser kept the last (issue 50).
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}, {)" + box + R"(, "material": "glass", "material": "wood"}]})")
+                  .find("objects[1].material: the key appears twice"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"seed": 1, "objects": [], "seed": 2})").find("seed: the key appears twice"), std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{"mesh": "missing.obj"}]})").find("missing.obj"), std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(, "shell_thickness_m": 0.2}]})").find("objects[0].shell_thickness_m: applies to meshes only"),
               std::string::npos);
@@ -198,7 +203,7 @@ const char* kEveryKeyScene = R"({
   "gravity_m_s2": [0.1, 0.2, -9.7],
   "atmosphere": {"pressure_Pa": 90000, "temperature_K": 300},
   "ground": {"enabled": false, "normal": [0, 0.6, 0.8], "height_m": 0.5, "restitution": 0.3, "friction": 0.7},
-  "colliders": [{"position_m": [1, 2, 3], "size_m": [1, 2, 0.5], "rotation_deg": [0, 0, 10], "restitution": 0.1, "friction": 0.2, "holds": "pinned"}],
+  "colliders": [{"position_m": [1, 2, 3], "size_m": [1, 2, 0.5], "rotation_deg": [0, 0, 10], "restitution": 0.1, "friction": 0.2, "holds": "pinned", "bearing_pressure_pa": 20000}],
   "materials": {"stone": {"density_kg_m3": 2500, "mean_yield_Pa": 60000, "yield_variation": 0.2, "weakening_fraction": 0.3,
                           "orientation_factor": 0.05, "damage_rate_per_s": 200, "damage_stress_scale_per_Pa": 1e-5,
                           "youngs_modulus_Pa": 2e10, "poisson_ratio": 0.25, "tensile_strength_Pa": 4e6, "fracture_energy_J_per_m2": 90,

@@ -18,6 +18,13 @@ namespace {
 
 const char* const kSizeBucketNames[] = {"1", "2-9", "10-99", "100-999", "1000-9999", ">=10000"};
 
+/// The bucket of kSizeBucketNames a voxel count falls in: 1 alone, then decades from 2.
+int sizeBucket(int64_t voxels)
+{
+    if (voxels <= 1) return 0;
+    return std::min(5, 1 + static_cast<int>(std::floor(std::log10(double(voxels)))));
+}
+
 /// Frame f's bodies: count, mass, extremes and fragment sizes by decades of voxel count.
 nlohmann::json summariseFrame(const spall::History& h, int f)
 {
@@ -26,7 +33,7 @@ nlohmann::json summariseFrame(const spall::History& h, int f)
     double mass = 0, largest = 0, fastest = 0;
     int64_t asleep = 0, anchored = 0;
     for (int64_t i = begin; i < end; ++i) {
-        buckets[std::min(5, static_cast<int>(std::floor(std::log10(double(h.bodyVoxelCount[i])))))]++;
+        buckets[sizeBucket(h.bodyVoxelCount[i])]++;
         mass += h.bodyMassKg[i];
         largest = std::max(largest, h.bodyMassKg[i]);
         fastest = std::max(fastest, h.bodyLinearVelocityMS[i].norm());

@@ -89,9 +89,21 @@ void printRunSummary(const spall::RunReport& report, const std::string& outDir)
                      report.framesWritten);
 }
 
-int runRun(const std::string& scenePath, const std::string& outDir, bool resume, int threads, int64_t seed, int frames, bool quiet,
-           bool preview, bool gltf)
+/// What `spall run` was asked.
+struct RunRequest {
+    std::string scene, output = "out", resume;
+    int threads = 0, frames = -1;
+    int64_t seed = -1;
+    bool quiet = false, noPreview = false, gltf = false, overwrite = false;
+};
+
+int runRun(const RunRequest& request)
 {
+    const bool resume = !request.resume.empty(), quiet = request.quiet, preview = !request.noPreview, gltf = request.gltf;
+    const std::string& outDir = resume ? request.resume : request.output;
+    const std::string& scenePath = request.scene;
+    const int threads = request.threads;
+    const int64_t seed = request.seed;
     std::unique_ptr<tbb::global_control> threadLimit;
     if (threads > 0) threadLimit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
     // Ctrl-C finishes the current frame, so everything written stays readable.
@@ -102,7 +114,8 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
     options.outputDirectory = outDir;
     options.interrupter = &stopRequest;
     options.onNote = [](const std::string& note) { std::fprintf(stderr, "spall run: note: %s\n", note.c_str()); };
-    options.maxFrames = frames;
+    options.maxFrames = request.frames;
+    options.replaceEarlierRun = request.overwrite;
     if (preview) options.previewPath = (std::filesystem::path(outDir) / "preview.png").string();
     if (gltf) {
         options.gltfPath = defaultGlbPath(outDir);
@@ -139,13 +152,7 @@ int runRun(const std::string& scenePath, const std::string& outDir, bool resume,
 
 void addRunCommand(CLI::App& app, CommandAction& action)
 {
-    struct Options {
-        std::string scene, output = "out", resume;
-        int threads = 0, frames = -1;
-        int64_t seed = -1;
-        bool quiet = false, noPreview = false, gltf = false;
-    };
-    auto o = std::make_shared<Options>();
+    auto o = std::make_shared<RunRequest>();
     auto* sub = app.add_subcommand("run", "Simulate a scene (default: the built-in wall demo) and write frames and history");
     sub->add_option("scene", o->scene, "Scene JSON (docs/scene-format.md); omit for the built-in default");
     sub->add_option("-o,--output", o->output, "Output directory");
@@ -155,15 +162,14 @@ void addRunCommand(CLI::App& app, CommandAction& action)
     sub->add_flag("--quiet", o->quiet, "No progress bar");
     sub->add_flag("--no-preview", o->noPreview, "Do not render OUTDIR/preview.png");
     sub->add_flag("--gltf", o->gltf, "When the run completes, write OUTDIR/debris.glb (as spall export gltf OUTDIR)");
+    sub->add_flag("--overwrite", o->overwrite, "Replace an earlier run's output in OUTDIR (without it such a directory is refused)");
     sub->add_option("--resume", o->resume, "Continue the interrupted run in this output directory from its checkpoint")
         ->excludes(sub->get_option("scene"))
         ->excludes("--seed")
         ->excludes("--frames")
-        ->excludes("--output");
+        ->excludes("--output")
+        ->excludes("--overwrite");
     sub->callback([o, &action] {
-        action = [o] {
-            const bool resume = !o->resume.empty();
-            return runRun(o->scene, resume ? o->resume : o->output, resume, o->threads, o->seed, o->frames, o->quiet, !o->noPreview, o->gltf);
-        };
+        action = [o] { return runRun(*o); };
     });
 }

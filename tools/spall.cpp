@@ -52,6 +52,7 @@ void addBenchCommands(CLI::App& app, CommandAction& action)
 int main(int argc, char** argv)
 {
     CLI::App app{"spall: volumetric debris from a physically based blast"};
+    app.set_version_flag("--version", "spall " SPALL_VERSION);
     app.require_subcommand(1);
     CommandAction action;
     addVoxeliseCommand(app, action);

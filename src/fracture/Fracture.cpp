@@ -230,21 +230,24 @@ DamageGrid::Ptr zeroDamageLike(const LinkGrid& grid)
 
 namespace {
 
-/// The parent's damage, cut along the same labels as its voxels.
-std::vector<DamageGrid::Ptr> splitDamage(const DamageGrid& damage, const ComponentLabels& labels, size_t partCount)
+/// A per-voxel grid of the parent (its damage), cut along the same labels as its voxels.
+template <typename GridT>
+std::vector<typename GridT::Ptr> splitAlongLabels(const GridT& values, const ComponentLabels& labels, size_t partCount)
 {
-    std::vector<DamageGrid::Ptr> parts(partCount);
-    for (auto& d : parts) {
-        d = DamageGrid::create(0.0f);
-        d->setTransform(damage.transform().copy());
-        d->setName(damage.getName());
+    using ValueT = typename GridT::ValueType;
+    const ValueT zero = openvdb::zeroVal<ValueT>();
+    std::vector<typename GridT::Ptr> parts(partCount);
+    for (auto& part : parts) {
+        part = GridT::create(zero);
+        part->setTransform(values.transform().copy());
+        part->setName(values.getName());
     }
     for (size_t n = 0; n < labels.leaves.size(); ++n) {
         const LinkLeaf& leaf = *labels.leaves[n];
-        const auto* source = damage.constTree().probeConstLeaf(leaf.origin());
+        const auto* source = values.constTree().probeConstLeaf(leaf.origin());
         for (auto it = leaf.cbeginValueOn(); it; ++it) {
             const uint32_t label = labels.labelOfSlot[n * LinkLeaf::SIZE + it.pos()];
-            parts[label]->tree().touchLeaf(leaf.origin())->setValueOn(it.pos(), source ? source->getValue(it.pos()) : 0.0f);
+            parts[label]->tree().touchLeaf(leaf.origin())->setValueOn(it.pos(), source ? source->getValue(it.pos()) : zero);
         }
     }
     return parts;
@@ -259,7 +262,9 @@ std::vector<Body> splitBody(const Body& body)
     if (labels.componentCount <= 1) return parts;
     std::vector<LinkGrid::Ptr> grids = splitByLabels(*body.grid, labels);
     std::vector<DamageGrid::Ptr> damage(grids.size());
-    if (body.damage) damage = splitDamage(*body.damage, labels, grids.size());
+    if (body.damage) damage = splitAlongLabels(*body.damage, labels, grids.size());
+    std::vector<LinkDamageGrid::Ptr> linkDamage(grids.size());
+    if (body.linkDamage) linkDamage = splitAlongLabels(*body.linkDamage, labels, grids.size());
     const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
     parts.reserve(grids.size());
     for (size_t i = 0; i < grids.size(); ++i) {
@@ -268,6 +273,7 @@ std::vector<Body> splitBody(const Body& body)
         child.materialIndex = body.materialIndex;
         child.grid = grids[i];
         child.damage = damage[i];
+        child.linkDamage = linkDamage[i];
         child.voxelSizeM = body.voxelSizeM;
         child.densityKgM3 = body.densityKgM3;
         refreshDerivedData(child);

@@ -61,23 +61,6 @@ uint32_t particleOfVoxel(const Lattice& lattice, const openvdb::Coord& voxel)
     return uint32_t(p);
 }
 
-/// f(voxel) for the body's cells in a block: all k³ of them, or with `face` >= 0 the k² on
-/// that face.
-template <typename F>
-void forEachCellOfBlock(const openvdb::Coord& block, const VoxelBlocks& blocks, int face, F&& f)
-{
-    const int k = blocks.voxels;
-    openvdb::Coord low = openvdb::Coord(block.x() * k, block.y() * k, block.z() * k) + blocks.origin;
-    openvdb::Coord high = low.offsetBy(k - 1);
-    if (face >= 0) {
-        const int axis = faceAxis(face);
-        low[axis] = high[axis] = faceSign(face) > 0 ? high[axis] : low[axis];
-    }
-    for (int x = low.x(); x <= high.x(); ++x)
-        for (int y = low.y(); y <= high.y(); ++y)
-            for (int z = low.z(); z <= high.z(); ++z) f(openvdb::Coord(x, y, z));
-}
-
 /// A particle's place in the body frame, index h (unit: m).
 Eigen::Vector3d restPlaceM(const Lattice& lattice, uint32_t p)
 {
@@ -168,6 +151,14 @@ void setExternalForces(DeformableBody& deformable, const Body& body, const std::
     // The body's weight, over its particles (blocks at the surface are heavier than its voxels).
     const Eigen::Vector3d weight = body.mass.massKg / double(lattice.model().voxelParticleCount) * gravityMS2;
     for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = lattice.model().held[p] ? Eigen::Vector3d::Zero() : weight;
+    // A support bears on its voxel while they touch, its bond broken or not (a floor rests on a
+    // cracked head): while the voxel lies within a quarter voxel of where the support held it.
+    const double reachM = 1.25 * lattice.model().spacingM;
+    for (const LatticeModel::BearingLoad& load : lattice.model().bearingLoads) {
+        const LatticeBond& bond = lattice.model().bonds[load.bond];
+        const uint32_t voxel = std::min(bond.low, bond.high), support = std::max(bond.low, bond.high);
+        if ((lattice.state.positionM[voxel] - lattice.state.positionM[support]).norm() <= reachM) lattice.externalForceN[voxel] += load.forceN;
+    }
     if (faceForcesN.empty()) return;
     SPALL_CHECK(deformable.particleOfFace.size() == faceForcesN.size());  // the lattice's own body's faces
     for (size_t f = 0; f < faceForcesN.size(); ++f) {
@@ -283,6 +274,22 @@ void addRigidMomentum(Lattice& lattice, const Eigen::Vector3d& linearKgMS, const
     }
 }
 
+namespace {
+
+/// Each piece's strain energy: its bonds' and its particles' volumetric terms. A broken bond
+/// between two pieces holds only contact: its energy belongs to neither.
+std::vector<double> pieceStrainEnergiesJ(const Lattice& lattice, const std::vector<uint32_t>& pieceOf, size_t pieceCount)
+{
+    std::vector<double> strainJ(pieceCount, 0.0);
+    for (size_t b = 0; b < lattice.bondCount(); ++b)
+        if (pieceOf[lattice.model().bonds[b].low] == pieceOf[lattice.model().bonds[b].high])
+            strainJ[pieceOf[lattice.model().bonds[b].low]] += lattice.bondStrainEnergyJ(b);
+    for (uint32_t p = 0; p < lattice.particleCount(); ++p) strainJ[pieceOf[p]] += lattice.volumetricEnergyJ(p);
+    return strainJ;
+}
+
+}  // namespace
+
 LatticePieces latticePieces(const Lattice& lattice)
 {
     LatticePieces pieces;
@@ -302,15 +309,19 @@ LatticePieces latticePieces(const Lattice& lattice)
         pieces.held[size_t(piece)] |= lattice.model().held[p];
         pieces.voxels[size_t(piece)] += p < lattice.model().voxelParticleCount;
     }
-    pieces.vibrationJ.assign(pieces.particles.size(), 0.0);
-    // A broken bond between two pieces holds only contact: its energy belongs to neither.
-    for (size_t b = 0; b < lattice.bondCount(); ++b)
-        if (pieces.pieceOf[lattice.model().bonds[b].low] == pieces.pieceOf[lattice.model().bonds[b].high])
-            pieces.vibrationJ[pieces.pieceOf[lattice.model().bonds[b].low]] += lattice.bondStrainEnergyJ(b);
-    for (uint32_t p = 0; p < lattice.particleCount(); ++p) pieces.vibrationJ[pieces.pieceOf[p]] += lattice.volumetricEnergyJ(p);
+    pieces.vibrationJ = pieceStrainEnergiesJ(lattice, pieces.pieceOf, pieces.particles.size());
+    const std::vector<float>& settledJ = lattice.model().settledStrainJ;
     for (size_t i = 0; i < pieces.particles.size(); ++i) {
         const RigidFit fit = fitRigidMotion(lattice, pieces.particles[i]);
-        pieces.vibrationJ[i] += fit.kineticEnergyJ - (pieces.held[i] ? 0.0 : rigidKineticEnergyJ(lattice, pieces.particles[i], fit));
+        if (!pieces.held[i]) {
+            pieces.vibrationJ[i] += fit.kineticEnergyJ - rigidKineticEnergyJ(lattice, pieces.particles[i], fit);
+            continue;
+        }
+        // A held piece at rest still holds what its dead loads strain (settleUnderDeadLoads).
+        double deadJ = 0.0;
+        if (!settledJ.empty())
+            for (const uint32_t p : pieces.particles[i]) deadJ += settledJ[p];
+        pieces.vibrationJ[i] = std::max(0.0, pieces.vibrationJ[i] - deadJ) + fit.kineticEnergyJ;
     }
     return pieces;
 }
@@ -361,6 +372,36 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
     return d;
 }
 
+/// The damage of the bonds that survive, on the links and anchors of the voxels they join
+/// (Body::linkDamage); null when none is damaged.
+LinkDamageGrid::Ptr survivingDamage(const Body& body, const Lattice& lattice)
+{
+    const auto survivesDamaged = [&](size_t b) { return lattice.bondDamage(b) > 0.0 && lattice.bondDamage(b) < 1.0; };
+    size_t b = 0;
+    while (b < lattice.bondCount() && !survivesDamaged(b)) ++b;
+    if (b == lattice.bondCount()) return nullptr;
+    auto grid = LinkDamageGrid::create(openvdb::Vec4s(0.0f));
+    grid->setTransform(body.grid->transform().copy());
+    copyActiveTopology(grid->tree(), body.grid->constTree(), openvdb::Vec4s(0.0f));
+    auto values = grid->getAccessor();
+    const auto links = body.grid->getConstAccessor();
+    for (; b < lattice.bondCount(); ++b) {
+        if (!survivesDamaged(b)) continue;
+        const LatticeBond& bond = lattice.model().bonds[b];
+        const bool anchor = std::max(bond.low, bond.high) >= lattice.model().voxelParticleCount;
+        const int face = anchor ? -1 : 2 * bond.axis + 1, component = anchor ? kAnchorDamage : bond.axis;
+        const int32_t needs = anchor ? kAnchorBit : 1 << face;
+        const float damage = float(std::min(lattice.bondDamage(b), kLargestIntactDamage));
+        forEachCellOfBlock(lattice.model().voxel[std::min(bond.low, bond.high)], lattice.model().blocks, face, [&](const openvdb::Coord& v) {
+            if (!links.isValueOn(v) || !(links.getValue(v) & needs)) return;
+            openvdb::Vec4s value = values.getValue(v);
+            value[component] = damage;
+            values.setValueOn(v, value);
+        });
+    }
+    return grid;
+}
+
 HandOff handOff(const Body& body, const Lattice& lattice)
 {
     HandOff result;
@@ -384,6 +425,7 @@ HandOff handOff(const Body& body, const Lattice& lattice)
         });
         result.brokenBonds += result.brokenLinks > linksBefore ? 1 : 0;
     }
+    whole.linkDamage = survivingDamage(whole, lattice);
     refreshDerivedData(whole);
     result.parts = splitBody(whole);
     if (result.parts.empty()) result.parts.push_back(std::move(whole));

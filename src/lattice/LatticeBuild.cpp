@@ -6,6 +6,7 @@
 
 #include <spall/core/Error.h>
 #include <spall/loads/Exposure.h>
+#include <spall/voxel/LinkBits.h>
 
 #include <algorithm>
 #include <cmath>
@@ -119,12 +120,15 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
     if (hasGrain(material)) lattice.classifyGrainBonds(material);
     lattice.state.bondHistory.assign(lattice.mModel.bonds.size(), BondHistory());
     if (material.strengthCoefficientOfVariation > 0.0) lattice.scatterStrengths(material, seed);
+    if (wholeBody.linkDamage) lattice.takeOverLinkDamage(wholeBody);
     const LatticeStiffness& k = lattice.mModel.stiffness;
     const double stiffestPa = *std::max_element(k.normalModulusPa.begin(), k.normalModulusPa.end());
     const double pWaveSpeed = std::sqrt((k.lameLambdaPa + stiffestPa) / material.densityKgM3);
     lattice.mModel.dashpotPerViscosityNSPerM = material.densityKgM3 * pWaveSpeed * h * h;
     lattice.condenseVolumetricModulus();
     lattice.refreshForces();
+    // The weight's share per particle as setExternalForces gives it.
+    lattice.settleUnderDeadLoads(wholeBody.mass.massKg / double(lattice.mModel.voxelParticleCount) * supports.gravityMS2);
     return lattice;
 }
 
@@ -196,6 +200,8 @@ void Lattice::addSupportBonds(const Body& body, const StaticWorld& supports)
         else addBond(supportPoint, p, axis);
         if (hold.box < 0) mModel.groundBond[p] = int32_t(mModel.bonds.size() - 1);
         else if (size_t(hold.box) < supports.pinned.size()) mModel.bonds.back().pinned = supports.pinned[size_t(hold.box)];
+        if (hold.box >= 0 && size_t(hold.box) < supports.bearingPressurePa.size())
+            recordBearingLoad(mModel.bonds.size() - 1, face, supports.bearingPressurePa[size_t(hold.box)], body.motion.orientation);
     }
 }
 
@@ -227,6 +233,32 @@ void Lattice::classifyGrainBonds(const Material& material)
     const int grainAxis = grainAxisIndex(material);
     for (LatticeBond& bond : mModel.bonds)
         if (bond.axis == grainAxis) bond.strengthClass = 1;
+}
+
+void Lattice::takeOverLinkDamage(const Body& body)
+{
+    const auto damage = body.linkDamage->getConstAccessor();
+    const auto links = body.grid->getConstAccessor();
+    for (size_t b = 0; b < mModel.bonds.size(); ++b) {
+        const LatticeBond& bond = mModel.bonds[b];
+        const bool anchor = std::max(bond.low, bond.high) >= mModel.voxelParticleCount;
+        const int face = anchor ? -1 : 2 * bond.axis + 1;
+        // A bond of blocks takes the mean over the voxel pairs its face joins, a pair whose
+        // link broke counting as broken; an anchor's, the mean over its block's anchored voxels.
+        double sum = 0.0;
+        int count = 0;
+        forEachCellOfBlock(mModel.voxel[std::min(bond.low, bond.high)], mModel.blocks, face, [&](const openvdb::Coord& v) {
+            const int32_t bits = links.isValueOn(v) ? links.getValue(v) : 0;
+            if (anchor && (bits & kAnchorBit)) {
+                sum += damage.getValue(v)[kAnchorDamage];
+                ++count;
+            } else if (!anchor && links.isValueOn(v) && links.isValueOn(v + faceOffset(face))) {
+                sum += (bits & (1 << face)) ? damage.getValue(v)[bond.axis] : 1.0;
+                ++count;
+            }
+        });
+        if (count > 0 && sum > 0.0) startDamaged(b, sum / count);
+    }
 }
 
 void Lattice::condenseVolumetricModulus()

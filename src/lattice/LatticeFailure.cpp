@@ -45,6 +45,18 @@ double Lattice::softeningDamage(size_t b) const
     return 1.0 - (u0 / kappa) * (uf - kappa) / (uf - u0);
 }
 
+void Lattice::startDamaged(size_t b, double damage)
+{
+    // Below 1: the link the bond stands for is intact, and float storage may have rounded it up.
+    damage = std::min(damage, kLargestIntactDamage);
+    BondHistory& history = state.bondHistory[b];
+    const auto [u0, uf] = softeningLineM(b);
+    // softeningDamage inverted: (1 − D) κ / u0 = (uf − κ) / (uf − u0) gives
+    // κ = u0 uf / ((1 − D)(uf − u0) + u0). A bond that breaks at its peak has no such line.
+    history.maxEquivalentStretchM = snapsAtPeak(b) ? u0 : u0 * uf / ((1.0 - damage) * (uf - u0) + u0);
+    history.rateDamage = damage;
+}
+
 bool Lattice::snapsAtPeak(size_t b) const
 {
     const LatticeStiffness::Strength& strength = mModel.stiffness.strength[mModel.bonds[b].strengthClass];

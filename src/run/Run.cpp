@@ -5,6 +5,7 @@
 #include <spall/run/FrameSink.h>
 #include <spall/sim/Checkpoint.h>
 #include <spall/sim/Simulation.h>
+#include <spall/voxel/Voxelise.h>
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -17,6 +18,8 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
+#include <vector>
 
 namespace spall {
 
@@ -120,32 +123,67 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
 /// it when the process ends, however it ends.
 class OutputDirectoryLock {
 public:
-    explicit OutputDirectoryLock(const std::filesystem::path& dir)
+    explicit OutputDirectoryLock(const std::filesystem::path& dir) : mPath((dir / kRunLockFileName).string())
     {
-        const std::string path = (dir / kRunLockFileName).string();
-        mFd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-        if (mFd < 0) throw IoError(path + ": cannot open the run's lock file: " + std::strerror(errno));
+        mFd = ::open(mPath.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+        if (mFd < 0) throw IoError(mPath + ": cannot open the run's lock file: " + std::strerror(errno));
         if (::flock(mFd, LOCK_EX | LOCK_NB) != 0) {
             ::close(mFd);
-            throw IoError(dir.string() + ": another spall run is writing to this directory (it holds " + path + ")");
+            throw IoError(dir.string() + ": another spall run is writing to this directory (it holds " + mPath + ")");
         }
     }
-    ~OutputDirectoryLock() { ::close(mFd); }
+    /// The lock file goes with the run, so a directory holds only outputs once it ends (a run
+    /// that dies keeps it, harmlessly: the kernel has released its lock).
+    ~OutputDirectoryLock()
+    {
+        ::unlink(mPath.c_str());
+        ::close(mFd);
+    }
     OutputDirectoryLock(const OutputDirectoryLock&) = delete;
     OutputDirectoryLock& operator=(const OutputDirectoryLock&) = delete;
 
 private:
+    std::string mPath;
     int mFd = -1;
 };
+
+/// The files an earlier run (or what read it) left in a directory, in name order.
+std::vector<std::filesystem::path> earlierRunOutputs(const std::filesystem::path& dir)
+{
+    std::vector<std::filesystem::path> files;
+    for (const auto& entry : std::filesystem::directory_iterator(dir))
+        if (entry.is_regular_file() && isRunOutputName(entry.path().filename().string())) files.push_back(entry.path());
+    std::sort(files.begin(), files.end());
+    return files;
+}
+
+/// A fresh run starts in a directory with no earlier run's output: what is there is removed when
+/// `replace`, else the run is refused, naming what is there and the ways on.
+void clearEarlierRun(const std::filesystem::path& dir, bool replace)
+{
+    const std::vector<std::filesystem::path> files = earlierRunOutputs(dir);
+    if (files.empty()) return;
+    if (!replace) {
+        const auto frames = std::count_if(files.begin(), files.end(), [](const auto& f) { return f.filename().string().rfind("fragments.", 0) == 0; });
+        std::string listed;
+        for (const auto& f : files)
+            if (f.filename().string().rfind("fragments.", 0) != 0 && listed.size() < 120) listed += (listed.empty() ? "" : ", ") + f.filename().string();
+        throw InputError(dir.string() + ": holds the output of an earlier run (" + listed + (frames > 0 ? (listed.empty() ? "" : ", ") + std::to_string(frames) + " frames" : "") +
+                         "), which a new run would mix with; give --overwrite to replace it, continue it with spall run --resume " + dir.string() +
+                         ", or choose another output directory");
+    }
+    for (const auto& f : files) {
+        std::error_code ec;
+        std::filesystem::remove(f, ec);
+        if (ec) throw IoError(f.string() + ": cannot remove the earlier run's file: " + ec.message());
+    }
+}
 
 /// runScene once the directory exists and is locked.
 RunReport runSceneInLockedDirectory(const Scene& scene, const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame)
 {
     namespace fs = std::filesystem;
     const fs::path dir = options.outputDirectory;
-    std::error_code ec;
-    // A checkpoint of an earlier run in the same directory must not be resumed into this one.
-    fs::remove(dir / kCheckpointFileName, ec);
     const nlohmann::json resolvedScene = sceneToJson(scene);
     writeFileAtomically((dir / "scene.json").string(), [&](std::ostream& out) { out << resolvedScene.dump(2) << "\n"; });
 
@@ -168,6 +206,22 @@ RunReport runSceneInLockedDirectory(const Scene& scene, const RunOptions& option
 
 }  // namespace
 
+bool isRunOutputName(const std::string& fileName)
+{
+    static const std::set<std::string> kNames = {"scene.json", "history.h5", kCheckpointFileName, "preview.png", "debris.h5", "debris.csv",
+                                                 "debris_throw.png", "debris_density.png", "debris_mass.png", "debris.glb", "view.html",
+                                                 "sheet.png"};
+    const auto numbered = [&](const char* prefix, const char* suffix) {
+        const std::string p = prefix, s = suffix;
+        if (fileName.size() != p.size() + 4 + s.size() || fileName.compare(0, p.size(), p) != 0 || fileName.compare(fileName.size() - s.size(), s.size(), s) != 0)
+            return false;
+        return std::all_of(fileName.begin() + long(p.size()), fileName.end() - long(s.size()), [](char c) { return c >= '0' && c <= '9'; });
+    };
+    const size_t partial = fileName.find(".partial.");
+    if (partial != std::string::npos) return isRunOutputName(fileName.substr(0, partial));
+    return kNames.count(fileName) > 0 || numbered("fragments.", ".vdb") || numbered("frame.", ".png");
+}
+
 RunReport runScene(const Scene& scene, const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame)
 {
     namespace fs = std::filesystem;
@@ -177,7 +231,25 @@ RunReport runScene(const Scene& scene, const RunOptions& options, const std::fun
     fs::create_directories(dir, ec);
     if (ec || !fs::is_directory(dir)) throw IoError(dir.string() + ": cannot create the output directory: " + ec.message());
     const OutputDirectoryLock lock(dir);
-    return runSceneInLockedDirectory(scene, options, onFrame);
+    clearEarlierRun(dir, options.replaceEarlierRun);
+    bool wroteAFrame = false;
+    const auto watched = [&](const RunProgress& progress) {
+        wroteAFrame = wroteAFrame || progress.frameWritten;
+        return !onFrame || onFrame(progress);
+    };
+    try {
+        return runSceneInLockedDirectory(scene, options, watched);
+    } catch (const VoxeliseInterrupted&) {
+        throw;  // stopped on request: its scene.json lets --resume start it again
+    } catch (...) {
+        // A run that failed before its first frame leaves nothing that looks like a run.
+        try {
+            if (!wroteAFrame) clearEarlierRun(dir, true);
+        } catch (const std::exception&) {
+            // What could not be removed stays; the run's own error is the one to report.
+        }
+        throw;
+    }
 }
 
 RunReport resumeRun(const RunOptions& options, const std::function<bool(const RunProgress&)>& onFrame)

@@ -1,8 +1,64 @@
 #include "FieldIo.h"
 
+#include <vector>
+
 namespace spall {
 
 using nlohmann::json;
+
+namespace {
+
+/// Where the parser is: an object (its keys so far, the last one) or an array (its element).
+struct OpenContainer {
+    bool isArray = false;
+    size_t element = 0;
+    std::set<std::string> keys;
+    std::string key;
+};
+
+std::string pathOf(const std::vector<OpenContainer>& open)
+{
+    std::string path;
+    for (const OpenContainer& c : open)
+        path += c.isArray ? "[" + std::to_string(c.element) + "]" : (path.empty() ? "" : ".") + c.key;
+    return path;
+}
+
+}  // namespace
+
+json parseJsonStrictly(const std::string& text, const std::string& file)
+{
+    std::vector<OpenContainer> open;
+    const auto valueDone = [&] {
+        if (!open.empty() && open.back().isArray) ++open.back().element;
+    };
+    const json::parser_callback_t watch = [&](int, json::parse_event_t event, json& parsed) {
+        switch (event) {
+            case json::parse_event_t::object_start: open.push_back({}); break;
+            case json::parse_event_t::array_start:
+                open.emplace_back();
+                open.back().isArray = true;
+                break;
+            case json::parse_event_t::key:
+                open.back().key = parsed.get<std::string>();
+                if (!open.back().keys.insert(open.back().key).second) throw InputError(file + ": " + pathOf(open) + ": the key appears twice");
+                break;
+            case json::parse_event_t::object_end:
+            case json::parse_event_t::array_end:
+                open.pop_back();
+                valueDone();
+                break;
+            case json::parse_event_t::value: valueDone(); break;
+        }
+        return true;
+    };
+    try {
+        return json::parse(text, watch);
+    } catch (const json::exception& e) {
+        // parse_error, and out_of_range for numbers beyond a double (found by fuzz/fuzz_scene).
+        throw InputError(file + ": not valid JSON: " + e.what());
+    }
+}
 
 ObjectReader::ObjectReader(const json& value, std::string file, std::string path)
     : mValue(value), mFile(std::move(file)), mPath(std::move(path))

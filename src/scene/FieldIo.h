@@ -15,6 +15,11 @@
 
 namespace spall {
 
+/// JSON text as a value; throws InputError naming `file` when it is not JSON, or when an object
+/// holds a key twice (JSON leaves that undefined, and the parser would keep the last silently),
+/// naming the key's path as ObjectReader does.
+nlohmann::json parseJsonStrictly(const std::string& text, const std::string& file);
+
 /// Reads one JSON object strictly: every key must be read, types must match, values must pass
 /// their checks; errors name the file, the key path and the reason. Nested objects get readers
 /// of their own, which finish() checks with their parent.

@@ -258,13 +258,7 @@ const char* paperWallSceneJson()
 
 Scene parseScene(const std::string& text, const std::string& sourceName, const std::string& baseDirectory)
 {
-    json root;
-    try {
-        root = json::parse(text);
-    } catch (const json::exception& e) {
-        // parse_error, and out_of_range for numbers beyond a double (found by fuzz/fuzz_scene).
-        throw InputError(sourceName + ": not valid JSON: " + e.what());
-    }
+    const json root = parseJsonStrictly(text, sourceName);
     Scene scene;
     scene.sourceName = sourceName;
     scene.materials = materialPresets();

@@ -154,9 +154,9 @@ void transferHandOff(Archive& a, H& h)
 }
 
 /// Every field but the grids, in file order. `C` is `const Checkpoint` when writing.
-/// `hasDamage[i]` says whether body i has a damage grid.
+/// `extraGrids[i]` says which grids besides its links body i has (kDamageGrid, kLinkDamageGrid).
 template <typename Archive, typename C>
-void transferFields(Archive& a, C& c, std::vector<uint8_t>& hasDamage)
+void transferFields(Archive& a, C& c, std::vector<uint8_t>& extraGrids)
 {
     auto& s = c.state;
     a.pod(c.framesDone, "frames done");
@@ -186,8 +186,8 @@ void transferFields(Archive& a, C& c, std::vector<uint8_t>& hasDamage)
         a.flag(b.motion.deformable, "deformable");
         a.pod(b.motion.restTimeS, "rest time");
         // Mass, faces, bounds, link count and anchoring are derived from the grid on reading.
-        if constexpr (Archive::kReading) hasDamage.resize(index + 1);
-        a.pod(hasDamage[index++], "damage flag");
+        if constexpr (Archive::kReading) extraGrids.resize(index + 1);
+        a.pod(extraGrids[index++], "damage grids");
     });
     a.sequence(s.events, "events", [&](auto& e) {
         a.pod(e.timeS, "event time");
@@ -215,24 +215,28 @@ void transferFields(Archive& a, C& c, std::vector<uint8_t>& hasDamage)
 
 std::string gridName(const char* kind, size_t body) { return std::string(kind) + "_" + std::to_string(body); }
 
+/// Which of a body's optional grids a checkpoint holds (bits of its "damage grids" byte).
+constexpr uint8_t kDamageGrid = 1, kLinkDamageGrid = 2;
+
 }  // namespace
 
 void writeCheckpoint(const std::string& path, const Checkpoint& c)
 {
     const SimulationState& s = c.state;
-    std::vector<uint8_t> hasDamage(s.bodies.size());
-    for (size_t i = 0; i < s.bodies.size(); ++i) hasDamage[i] = s.bodies[i].damage != nullptr;
-
+    std::vector<uint8_t> extraGrids(s.bodies.size());
     openvdb::GridCPtrVec grids;
+    // Each a copy that shares the tree; only the name differs.
+    const auto add = [&](const auto& grid, const char* kind, size_t i) {
+        auto named = grid->copyGrid();
+        named->setName(gridName(kind, i));
+        grids.push_back(named);
+    };
     for (size_t i = 0; i < s.bodies.size(); ++i) {
-        auto links = s.bodies[i].grid->copyGrid();  // shares the tree; only the name differs
-        links->setName(gridName("links", i));
-        grids.push_back(links);
-        if (hasDamage[i]) {
-            auto damage = s.bodies[i].damage->copyGrid();
-            damage->setName(gridName("damage", i));
-            grids.push_back(damage);
-        }
+        const Body& b = s.bodies[i];
+        add(b.grid, "links", i);
+        if (b.damage) add(b.damage, "damage", i);
+        if (b.linkDamage) add(b.linkDamage, "link_damage", i);
+        extraGrids[i] = uint8_t((b.damage ? kDamageGrid : 0) | (b.linkDamage ? kLinkDamageGrid : 0));
     }
     initialiseOpenVdb();
     std::ostringstream vdb(std::ios::binary);
@@ -244,7 +248,7 @@ void writeCheckpoint(const std::string& path, const Checkpoint& c)
         Writer w(out);
         out.write(kMagic, sizeof kMagic);
         w.pod(kCheckpointFormatVersion, "version");
-        transferFields(w, c, hasDamage);
+        transferFields(w, c, extraGrids);
         w.text(vdb.str(), "grids");
         out.write(kMagic, sizeof kMagic);  // a trailer: a file cut short is recognised
     });
@@ -265,8 +269,8 @@ Checkpoint readCheckpoint(const std::string& path)
         throw IoError(path + ": checkpoint format version " + std::to_string(version) + " is not the supported " +
                       std::to_string(kCheckpointFormatVersion));
     Checkpoint c;
-    std::vector<uint8_t> hasDamage;
-    transferFields(r, c, hasDamage);
+    std::vector<uint8_t> extraGrids;
+    transferFields(r, c, extraGrids);
     const auto& cached = c.state.contactCache.points;
     if (!std::is_sorted(cached.begin(), cached.end(), [](const ContactCache::Point& x, const ContactCache::Point& y) { return x.key < y.key; }))
         r.fail("contact points out of order");
@@ -294,9 +298,13 @@ Checkpoint readCheckpoint(const std::string& path)
         b.grid = openvdb::gridPtrCast<LinkGrid>(byName[gridName("links", i)]);
         if (!b.grid) r.fail("the link grid of body " + std::to_string(i) + " is missing");
         refreshDerivedData(b);
-        if (hasDamage[i]) {
+        if (extraGrids[i] & kDamageGrid) {
             b.damage = openvdb::gridPtrCast<DamageGrid>(byName[gridName("damage", i)]);
             if (!b.damage) r.fail("the damage grid of body " + std::to_string(i) + " is missing");
+        }
+        if (extraGrids[i] & kLinkDamageGrid) {
+            b.linkDamage = openvdb::gridPtrCast<LinkDamageGrid>(byName[gridName("link_damage", i)]);
+            if (!b.linkDamage) r.fail("the link damage grid of body " + std::to_string(i) + " is missing");
         }
     }
     return c;

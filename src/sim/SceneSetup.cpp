@@ -105,7 +105,7 @@ Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(sc
 {
     initialiseOpenVdb();
     mField = makeField(scene);
-    mStaticWorld = buildStaticWorld(scene.world.ground, scene.world.colliders);
+    mStaticWorld = buildStaticWorld(scene.world.ground, scene.world.colliders, scene.world.gravityMS2);
     refuseBuriedCharges(scene, mStaticWorld);
     const std::vector<TriangleMesh> meshes = loadMeshes();
     checkSceneFits(scene, meshes);
@@ -213,7 +213,7 @@ Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene
     requireVoxelSize(mState.bodies, scene.voxelSizeM);
     initialiseOpenVdb();
     mField = makeField(scene);
-    mStaticWorld = buildStaticWorld(scene.world.ground, scene.world.colliders);
+    mStaticWorld = buildStaticWorld(scene.world.ground, scene.world.colliders, scene.world.gravityMS2);
     // A saved lattice holds its state; its bonds and stiffness follow from its body again.
     mState.deformable.reindex(mState.bodies);
     for (size_t k = 0; k < mState.deformable.lattices.size(); ++k) {

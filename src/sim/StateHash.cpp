@@ -47,6 +47,10 @@ public:
             add(int64_t(c.x()) << 42 ^ int64_t(c.y()) << 21 ^ int64_t(c.z()));
             add(int64_t(*it));
         }
+        // What the deformable phase left in its surviving bonds.
+        if (body.linkDamage)
+            for (auto it = body.linkDamage->cbeginValueOn(); it; ++it)
+                for (int c = 0; c < 4; ++c) add(double((*it)[c]));
     }
     uint64_t value() const { return mHash; }
 

@@ -215,6 +215,9 @@ RunReport runOrResume(const std::string& out, const SweepPlan& plan, const Sweep
     RunOptions options;
     options.outputDirectory = out;
     options.interrupter = interrupter;
+    // The variant's directory is the sweep's: what an attempt that failed before its history
+    // left there is replaced.
+    options.replaceEarlierRun = true;
     const auto onFrame = [interrupter](const RunProgress&) { return !(interrupter && interrupter->wasInterrupted(0)); };
     if (fs::exists(out + "/history.h5")) {
         if (readHistory(out + "/history.h5").runComplete) {

@@ -23,6 +23,7 @@ void initialiseOpenVdb()
         // spall's own tree shapes, so checkpoints can stream them.
         if (!LinkGrid::isRegistered()) LinkGrid::registerGrid();
         if (!DamageGrid::isRegistered()) DamageGrid::registerGrid();
+        if (!LinkDamageGrid::isRegistered()) LinkDamageGrid::registerGrid();
     });
 }
 

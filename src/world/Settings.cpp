@@ -25,6 +25,7 @@ const std::vector<Field<StaticBox>>& fieldTable<StaticBox>()
         {"restitution", &StaticBox::restitution, closed(0, kMaxRestitution)},
         {"friction", &StaticBox::friction, closed(0, kMaxFriction)},
         {"holds", choice(&StaticBox::holds)},
+        {"bearing_pressure_pa", &StaticBox::bearingPressurePa, closed(0, 1e9)},
     };
     return table;
 }

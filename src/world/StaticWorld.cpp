@@ -64,15 +64,17 @@ bool boxesMeet(const ObstacleBox& a, const ObstacleBox& b, double gapM)
     return true;
 }
 
-StaticWorld buildStaticWorld(const GroundPlane& ground, const std::vector<StaticBox>& colliders)
+StaticWorld buildStaticWorld(const GroundPlane& ground, const std::vector<StaticBox>& colliders, const Eigen::Vector3d& gravityMS2)
 {
     StaticWorld world;
+    world.gravityMS2 = gravityMS2;
     world.ground = ground;
     world.ground.normal = ground.normal.normalized();
     for (const StaticBox& box : colliders) {
         world.boxes.push_back({box.centreM, box.halfExtentM, box.orientation});
         world.pinned.push_back(box.holds == SupportHold::Pinned ? 1 : 0);
         world.friction.push_back(box.friction);
+        world.bearingPressurePa.push_back(box.bearingPressurePa);
     }
     return world;
 }

@@ -44,8 +44,8 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
 
 /// Each particle's external force for the next step: the mean force on each of the body's exposed
 /// faces (body.exposedFaces order, from the loads phase; empty when nothing loads it) on the
-/// particle behind the face (its block's, ParticleBlocks.h), and an equal share of the body's
-/// weight.
+/// particle behind the face (its block's, ParticleBlocks.h), an equal share of the body's
+/// weight, and the supports' bearing loads (LatticeModel::bearingLoads) while their voxels touch them.
 void setExternalForces(DeformableBody& deformable, const Body& body, const std::vector<Eigen::Vector3d>& faceForcesN, const Eigen::Vector3d& gravityMS2);
 
 /// Advances a body's lattice over a rigid step of dtS under the external forces setExternalForces
@@ -87,7 +87,9 @@ void addRigidMomentum(Lattice& lattice, const Eigen::Vector3d& linearKgMS, const
 
 /// A lattice's particles in pieces held together by bonds that have not broken (numbered by their
 /// lowest particle), each with its vibration: the strain energy of its bonds and particles plus
-/// its kinetic energy about its rigid motion, or all of it for a piece a support holds.
+/// its kinetic energy about its rigid motion; for a piece a support holds, all its kinetic
+/// energy and the strain energy beyond what its dead loads held on entry
+/// (LatticeModel::settledStrainJ).
 struct LatticePieces {
     std::vector<uint32_t> pieceOf;                  ///< per particle
     std::vector<std::vector<uint32_t>> particles;   ///< per piece

@@ -106,6 +106,10 @@ struct BondHistory {
     double rateDamage = 0.0;
 };
 
+/// The most damage a bond still intact can carry into a body's link damage and back (Vec4s
+/// storage is single precision; 1 would be broken).
+inline constexpr double kLargestIntactDamage = 0.99999;
+
 /// A bond joins particle `low` to its +axis neighbour `high`.
 struct LatticeBond {
     uint32_t low = 0, high = 0;
@@ -215,6 +219,17 @@ struct LatticeModel {
         double friction = 0.0;  ///< Coulomb coefficient along its faces (unit: 1)
     };
     std::vector<KeptOut> keptOut;
+    /// A support's dead load on a voxel it holds (StaticBox::bearingPressurePa over the
+    /// particle's face), acting while the voxel touches the support (setExternalForces).
+    struct BearingLoad {
+        uint32_t bond = 0;                                 ///< the support bond
+        Eigen::Vector3d forceN = Eigen::Vector3d::Zero();  ///< on its voxel particle, world frame
+    };
+    std::vector<BearingLoad> bearingLoads;
+    /// Per particle, its share of the strain energy its dead loads held when it entered
+    /// (settleUnderDeadLoads: half of each of its bonds' and its volumetric term's); empty
+    /// without dead loads. A held piece vibrates by what it holds beyond them (unit: J).
+    std::vector<float> settledStrainJ;
 };
 
 /// Particles (one per voxel, in the grid's leaf order) and bonds (one per intact link) as flat
@@ -368,6 +383,41 @@ private:
     /// spring's, which stays as contact) and `volumetricJ`, its share of what its stretch held
     /// in its particles' volumetric terms, at its failure surface, less Gf h².
     void releaseSnapEnergy(size_t b, double volumetricJ);
+    /// A support bond's bearing load (LatticeModel::bearingLoads) from its box's pressure.
+    void recordBearingLoad(size_t supportBond, int face, double pressurePa, const Eigen::Quaterniond& bodyToWorld);
+    /// The lattice in equilibrium with its dead loads before anything else acts (fromBody): its
+    /// weight (`weightPerParticleN` on each free voxel particle, as setExternalForces applies it)
+    /// and its supports' bearing loads along the columns of particles along the body's axis
+    /// nearest the weight, each column standing on a support taking down what lies on it. Exact
+    /// for a prism on its base; a column over a gap, and loads across the columns, start
+    /// unloaded and settle dynamically as before (docs/accuracy.md).
+    void settleUnderDeadLoads(const Eigen::Vector3d& weightPerParticleN);
+    /// The bearing loads' mean direction (world frame).
+    Eigen::Vector3d bearingDirection() const;
+    /// Each particle's dead load along the way down (unit: N).
+    std::vector<double> deadLoadsAlong(const Eigen::Vector3d& weightPerParticleN, const Eigen::Vector3d& downWorld) const;
+    /// Per particle, what its bond below carries, how far it has moved down, and how far its
+    /// sides spread per unit of their distance from its layer's centre (unit: N, m, 1).
+    struct ColumnLoads {
+        std::vector<double> carriedN, shorteningM, lateralStrain;
+    };
+    /// The loads taken down the columns along `axis` (down: its `sign`) to the supports.
+    ColumnLoads takeDownLoads(int axis, int sign, const std::vector<double>& loadN) const;
+    /// The shortenings and spread of one column, from its top particle down (takeDownLoads).
+    void shortenColumn(uint32_t top, int axis, int faceBelow, ColumnLoads& columns) const;
+    /// How much a particle's sides spread per unit of its strain along the axis under uniaxial
+    /// stress along it (its Poisson ratio in the lattice, with its condensed λ).
+    double lateralPoissonRatio(uint32_t p, int axis) const;
+    /// Each particle's move into equilibrium in the body frame: down its column, and its sides
+    /// out from its layer's centre; supports beside a voxel move with it (unit: m).
+    std::vector<Eigen::Vector3d> settlingMoves(int axis, int sign, const ColumnLoads& columns) const;
+    void recordSettledStrainEnergies();
+    /// Each bond starts with the damage its body's links remember (Body::linkDamage; fromBody).
+    void takeOverLinkDamage(const Body& body);
+    /// A bond starts at damage D: on its softening line where the secant stiffness is 1 − D
+    /// (the rate law's strength factor back at 1, as its history before is not kept), and with
+    /// Davison–Stevens damage D.
+    void startDamaged(size_t b, double damage);
     /// The failure index's factors (LatticeModel::failureTerms), from the stiffness.
     void computeFailureTerms();
     /// The failure index as a stretch (equivalentStretchM) from a measured strain and the

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <spall/voxel/Body.h>
+#include <spall/voxel/LinkBits.h>
 
 #include <cstdint>
 
@@ -24,6 +25,23 @@ VoxelBlocks blocksFor(const Body& body, int particleVoxels);
 
 /// The block (the coarsened body's voxel) holding a voxel: floor((ijk − origin) / k) per axis.
 openvdb::Coord particleCell(const openvdb::Coord& voxel, const VoxelBlocks& blocks);
+
+/// f(voxel) for the cells of a block (voxels of the body or not): all k³ of them, or with
+/// `face` >= 0 the k² on that face.
+template <typename F>
+void forEachCellOfBlock(const openvdb::Coord& block, const VoxelBlocks& blocks, int face, F&& f)
+{
+    const int k = blocks.voxels;
+    openvdb::Coord low = openvdb::Coord(block.x() * k, block.y() * k, block.z() * k) + blocks.origin;
+    openvdb::Coord high = low.offsetBy(k - 1);
+    if (face >= 0) {
+        const int axis = faceAxis(face);
+        low[axis] = high[axis] = faceSign(face) > 0 ? high[axis] : low[axis];
+    }
+    for (int x = low.x(); x <= high.x(); ++x)
+        for (int y = low.y(); y <= high.y(); ++y)
+            for (int z = low.z(); z <= high.z(); ++z) f(openvdb::Coord(x, y, z));
+}
 
 /// The body as blocks of k³ voxels: a block is in it when any of its voxels is, linked to a
 /// neighbouring block when any link joins their voxels, anchored when any of its voxels is;

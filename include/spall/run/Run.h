@@ -14,8 +14,17 @@ namespace spall {
 /// The file a run holds locked in its output directory while it writes there.
 inline constexpr const char* kRunLockFileName = "run.lock";
 
+/// Whether a file in an output directory is one spall writes there: a run's scene.json,
+/// history.h5, checkpoint, fragments.NNNN.vdb and preview.png, what spall debris, export,
+/// view and render write from them, and what a write cut short left (NAME.partial.PID).
+bool isRunOutputName(const std::string& fileName);
+
 struct RunOptions {
     std::string outputDirectory = "out";
+    /// A fresh run into a directory that holds an earlier run's output (its files by the names
+    /// spall writes: isRunOutputName) replaces them; otherwise it is refused, so two runs never
+    /// mix in one directory.
+    bool replaceEarlierRun = false;
     int maxFrames = -1;  ///< stop after this many frames (-1: the scene's duration)
     /// When set, a contact sheet of `previewFrames` frames spread over the run is rendered here
     /// from the bodies in memory (no frame files are read back).

@@ -29,6 +29,12 @@ using LinkLeaf = LinkTree::LeafNodeType;
 /// Per-voxel Davison–Stevens damage, same shallow configuration.
 using DamageTree = openvdb::tree::Tree4<float, 3, 3, 3>::Type;
 using DamageGrid = openvdb::Grid<DamageTree>;
+/// Per voxel, the damage of the deformable phase's bonds (0 intact … 1 broken) across its +x,
+/// +y and +z faces and of its anchor's bond (components 0–2 and 3), same shallow configuration.
+using LinkDamageTree = openvdb::tree::Tree4<openvdb::Vec4s, 3, 3, 3>::Type;
+using LinkDamageGrid = openvdb::Grid<LinkDamageTree>;
+/// The component of LinkDamageTree's values that holds the anchor's bond.
+constexpr int kAnchorDamage = 3;
 
 /// Activates in `target` every active voxel of `source` with `value` (any configurations with 8^3
 /// leaves; `source` must hold no active tiles).
@@ -87,6 +93,10 @@ struct Body {
     /// Per-voxel Davison–Stevens damage, same topology as the grid; only for that fracture rule
     /// (else null). It follows the voxels through every split.
     DamageGrid::Ptr damage;
+    /// The damage its lattice left in the bonds that survived the deformable phase, same
+    /// topology as the grid (null: none), so a body that enters the phase again starts as weak
+    /// as it left (Lattice::fromBody). It follows the voxels through every split.
+    LinkDamageGrid::Ptr linkDamage;
     double voxelSizeM = 0.1;
     double densityKgM3 = 1000.0;
 

@@ -69,6 +69,10 @@ struct StaticBox {
     double restitution = 0.2;  ///< (unit: fraction)
     double friction = 0.6;     ///< Coulomb coefficient (unit: 1)
     SupportHold holds = SupportHold::Clamped;
+    /// The pressure it bears on the voxels it holds, into them (the floors and roof a house
+    /// wall carries under its head): a dead load in the deformable phase while they touch it,
+    /// bonded or cracked apart (unit: Pa).
+    double bearingPressurePa = 0.0;
 };
 
 /// The static world a simulation is set up with, built once (buildStaticWorld) and read by every
@@ -85,10 +89,15 @@ struct StaticWorld {
     std::vector<uint8_t> pinned;
     /// Per box, the Coulomb coefficient of what slides on it (unit: 1); empty: frictionless.
     std::vector<double> friction;
+    /// Per box, the pressure it bears on the voxels it holds (StaticBox) (unit: Pa); empty: none.
+    std::vector<double> bearingPressurePa;
+    /// What the bodies weigh by: a lattice enters the phase carrying its weight
+    /// (Lattice::fromBody) (unit: m/s²); none unless set.
+    Eigen::Vector3d gravityMS2 = Eigen::Vector3d::Zero();
 };
 
-/// The scene's ground (its normal made of unit length) and colliders as the static world.
-StaticWorld buildStaticWorld(const GroundPlane& ground, const std::vector<StaticBox>& colliders);
+/// The scene's ground (its normal made of unit length), colliders and gravity as the static world.
+StaticWorld buildStaticWorld(const GroundPlane& ground, const std::vector<StaticBox>& colliders, const Eigen::Vector3d& gravityMS2);
 
 // Keys and ranges (src/world/Settings.cpp).
 template <>
