@@ -354,4 +354,11 @@ TEST(Scene, FractureSettingsSayWhatTheyCannotSee)
     EXPECT_TRUE(said(coarse, "objects[0] ('wall', brick-masonry): its lattice's particles (0.1 m")) << (coarse.empty() ? "" : coarse.front());
     EXPECT_TRUE(said(coarse, "particles of at most 0.075 m resolve its units"));
     EXPECT_FALSE(said(notesOf(defaultSceneJson()), "taller than a course"));
+    // A charge 2 cm from the wall's face (Z = 0.02 m/kg^(1/3) for 1 kg) is nearer than the blast
+    // data reach (issue 50); the default scene's is not.
+    const std::string near = R"(, "voxel_size_m": 0.1, "charges": [{"position_m": [0, -0.12, 0.3], "tnt_kg": 1.0, "burst": "free-air"}])";
+    const std::vector<std::string> nearNotes = notesOf("{" + wall + near + "}");
+    EXPECT_TRUE(said(nearNotes, "m from objects[0] ('wall'), scaled distance")) << (nearNotes.empty() ? "" : nearNotes.back());
+    EXPECT_TRUE(said(nearNotes, "nearer than the blast data's fits reach"));
+    EXPECT_FALSE(said(notesOf(defaultSceneJson()), "nearer than the blast data"));
 }

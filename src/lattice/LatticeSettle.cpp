@@ -19,6 +19,23 @@ namespace {
 /// The other particle of a bond.
 uint32_t across(const LatticeBond& bond, uint32_t p) { return bond.low == p ? bond.high : bond.low; }
 
+/// x with lower[i] x[i−1] + diagonal[i] x[i] + upper[i] x[i+1] = rhs[i], by Thomas's algorithm
+/// (Press et al., Numerical Recipes, 3rd ed., §2.4; stable for the diagonally dominant systems
+/// of a column).
+std::vector<double> solveTridiagonal(const std::vector<double>& lower, std::vector<double> diagonal, const std::vector<double>& upper,
+                                     std::vector<double> rhs)
+{
+    const size_t n = diagonal.size();
+    for (size_t i = 1; i < n; ++i) {
+        const double w = lower[i] / diagonal[i - 1];
+        diagonal[i] -= w * upper[i - 1];
+        rhs[i] -= w * rhs[i - 1];
+    }
+    std::vector<double> x(n);
+    for (size_t i = n; i-- > 0;) x[i] = (rhs[i] - (i + 1 < n ? upper[i] * x[i + 1] : 0.0)) / diagonal[i];
+    return x;
+}
+
 }  // namespace
 
 void Lattice::recordBearingLoad(size_t supportBond, int face, double pressurePa, const Eigen::Quaterniond& bodyToWorld)
@@ -162,8 +179,7 @@ void Lattice::shortenColumn(uint32_t top, int axis, int faceBelow, ColumnLoads& 
     // (1 − m ν) times the strain along the axis). A bond's force is its spring's, k δ_i, and the
     // volumetric term's (completeBondForce), h Σ over its two ends of λ_p (1 − m ν_p) / n_p²
     // times the shortenings of p's bonds along the axis (their mean over h is p's strain along
-    // it, and each bond takes 1/n of λ tr ε): a tridiagonal system, solved by Thomas's
-    // algorithm (Press et al., Numerical Recipes, 3rd ed., §2.4). A support above the column
+    // it, and each bond takes 1/n of λ tr ε): a tridiagonal system. A support above the column
     // carries none of it (its bearing acts as a force): its bond is one more unknown, carrying
     // nothing, and the support is placed where that leaves it.
     std::vector<uint32_t> particles{top};
@@ -197,13 +213,7 @@ void Lattice::shortenColumn(uint32_t top, int axis, int faceBelow, ColumnLoads& 
         if (i + 1 < n) upper[i] = below;
         rhs[i] = mModel.held[particles[i]] ? 0.0 : columns.carriedN[particles[i]];
     }
-    for (size_t i = 1; i < n; ++i) {
-        const double w = lower[i] / diagonal[i - 1];
-        diagonal[i] -= w * upper[i - 1];
-        rhs[i] -= w * rhs[i - 1];
-    }
-    std::vector<double> shorteningM(n);
-    for (size_t i = n; i-- > 0;) shorteningM[i] = (rhs[i] - (i + 1 < n ? upper[i] * shorteningM[i + 1] : 0.0)) / diagonal[i];
+    const std::vector<double> shorteningM = solveTridiagonal(lower, diagonal, upper, rhs);
     double downM = 0.0;
     for (size_t i = n; i-- > 0;) {
         downM += shorteningM[i];

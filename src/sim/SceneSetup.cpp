@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace spall {
@@ -51,6 +52,19 @@ void checkSceneFits(const Scene& scene, const std::vector<TriangleMesh>& meshes)
                 << available / 1e9 << " GB of memory is available (use a larger voxel_size_m: memory falls with its cube)";
         throw InputError(problem.str());
     }
+}
+
+/// The distance from a point to the nearest voxel cube of a body (unit: m).
+double nearestVoxelDistanceM(const Body& body, const Eigen::Vector3d& pointM)
+{
+    const Eigen::Vector3d local = body.motion.orientation.inverse() * (pointM - body.motion.positionM) + body.mass.centreOfMassLocalM;
+    double nearestM = std::numeric_limits<double>::infinity();
+    for (const openvdb::Coord& v : body.boundaryVoxels) {
+        const Eigen::Vector3d centre = Eigen::Vector3d(v.x(), v.y(), v.z()) * body.voxelSizeM;
+        const Eigen::Vector3d outside = ((local - centre).cwiseAbs().array() - 0.5 * body.voxelSizeM).max(0.0).matrix();
+        nearestM = std::min(nearestM, outside.norm());
+    }
+    return nearestM;
 }
 
 /// A charge under the ground or inside a collider is buried: the blast model is of charges in
@@ -117,6 +131,7 @@ Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(sc
     }
     noteFragmentMemory();
     noteFractureLimits();
+    noteChargesNearerThanTheBlastData();
     mState.stepStats.minDtS = scene.timeStep.maxTimeStepS;
 }
 
@@ -181,6 +196,26 @@ void Simulation::noteFragmentMemory()
          << "the run would need about " << allBroken / 1e9 << " GB, and " << available / 1e9
          << " GB is available: a larger voxel_size_m needs fewer (memory falls with its cube)";
     mNotes.push_back(note.str());
+}
+
+void Simulation::noteChargesNearerThanTheBlastData()
+{
+    for (size_t c = 0; c < mScene.charges.size(); ++c) {
+        const Charge& charge = mScene.charges[c];
+        for (size_t i = 0; i < mState.bodies.size(); ++i) {
+            const double distanceM = nearestVoxelDistanceM(mState.bodies[i], charge.positionM);
+            if (!(distanceM > 0.0)) continue;
+            const BlastParameters p = blastParameters(mScene.blast.dataset, charge.burst, charge.tntKg, distanceM, mScene.blast.atmosphere);
+            if (p.status != RangeStatus::ClampedNear) continue;
+            std::ostringstream note;
+            note.precision(3);
+            note << "charges[" << c << "] is " << distanceM << " m from objects[" << i << "] ('" << mScene.objects[i].name << "'), scaled distance "
+                 << p.scaledDistanceMKg13 << " m/kg^(1/3), nearer than the blast data's fits reach (" << enumName(mScene.blast.dataset) << ", "
+                 << enumName(charge.burst) << "): its pressures there are held at the fits' near end, so the nearest faces' loads are "
+                 << "underestimated; the model is of charges in air, not in contact";
+            mNotes.push_back(note.str());
+        }
+    }
 }
 
 void Simulation::noteFractureLimits()

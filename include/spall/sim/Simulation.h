@@ -136,6 +136,9 @@ private:
     /// the paper's rules ignore impulse and shielding; masonry in voxels coarser than a course
     /// has no bricks, only joints.
     void noteFractureLimits();
+    /// A note for each charge nearer to an object than its blast data's fits reach (the
+    /// pressures are held at the fits' near end there).
+    void noteChargesNearerThanTheBlastData();
     /// Setting up: each object's mesh (empty for primitives), its voxels, its body in place.
     std::vector<TriangleMesh> loadMeshes();
     VoxeliseResult voxeliseObject(const ObjectSpec& spec, const TriangleMesh& mesh, Interrupter* interrupter);
