@@ -279,6 +279,8 @@ TEST(Checkpoint, RunStoppedWithinAFrameResumesAndEndsAsTheUninterruptedOne)
     EXPECT_EQ(saved.framesDone, first.framesWritten);
     EXPECT_LT(saved.state.timeS, saved.framesDone / scene.frameRateHz) << "the stop was meant to fall within a frame";
     EXPECT_GT(saved.state.stepStats.steps, 0);
+    // The interrupted run's report counts the steps it took, the unfinished frame's included.
+    EXPECT_EQ(first.totalSteps, saved.totalSteps + saved.state.stepStats.steps);
 
     options.interrupter = nullptr;
     const RunReport resumed = resumeRun(options, {});

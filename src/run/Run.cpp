@@ -89,6 +89,7 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
             // Asked to stop within the frame (a frame of the deformable phase can take minutes):
             // the state between two steps is saved, frame f still to write.
             if (scene.output.checkpointEveryS > 0) saveCheckpoint(f);
+            report.totalSteps += sim.state().stepStats.steps;  // what the summary counts: the unfinished frame's too
             break;
         }
         const StepStats stats = sim.takeStepStats();
