@@ -126,9 +126,10 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
     const double pWaveSpeed = std::sqrt((k.lameLambdaPa + stiffestPa) / material.densityKgM3);
     lattice.mModel.dashpotPerViscosityNSPerM = material.densityKgM3 * pWaveSpeed * h * h;
     lattice.condenseVolumetricModulus();
-    lattice.refreshForces();
     // The weight's share per particle as setExternalForces gives it.
-    lattice.settleUnderDeadLoads(wholeBody.mass.massKg / double(lattice.mModel.voxelParticleCount) * supports.gravityMS2);
+    const bool settled = lattice.settleUnderDeadLoads(wholeBody.mass.massKg / double(lattice.mModel.voxelParticleCount) * supports.gravityMS2);
+    lattice.refreshForces();
+    if (settled) lattice.recordSettledStrainEnergies();
     return lattice;
 }
 

@@ -46,9 +46,11 @@ void Lattice::recordBearingLoad(size_t supportBond, int face, double pressurePa,
     mModel.bearingLoads.push_back({uint32_t(supportBond), forceN});
 }
 
-void Lattice::settleUnderDeadLoads(const Eigen::Vector3d& weightPerParticleN)
+bool Lattice::settleUnderDeadLoads(const Eigen::Vector3d& weightPerParticleN)
 {
-    if (weightPerParticleN.isZero() && mModel.bearingLoads.empty()) return;
+    if (weightPerParticleN.isZero() && mModel.bearingLoads.empty()) return false;
+    // Only what stands on a support carries anything.
+    if (std::none_of(mModel.held.begin(), mModel.held.end(), [](uint8_t held) { return held != 0; })) return false;
     const Eigen::Quaterniond bodyToWorld = state.orientation.front();  // every particle's, on entry
     const Eigen::Vector3d downInBody = bodyToWorld.inverse() * (weightPerParticleN.isZero() ? -bearingDirection() : weightPerParticleN);
     int axis = 0;
@@ -58,8 +60,7 @@ void Lattice::settleUnderDeadLoads(const Eigen::Vector3d& weightPerParticleN)
     const ColumnLoads columns = takeDownLoads(axis, sign, deadLoadsAlong(weightPerParticleN, downWorld));
     const std::vector<Eigen::Vector3d> moveInBodyM = settlingMoves(axis, sign, columns);
     for (size_t p = 0; p < particleCount(); ++p) state.positionM[p] += bodyToWorld * moveInBodyM[p];
-    refreshForces();
-    recordSettledStrainEnergies();
+    return true;
 }
 
 std::vector<Eigen::Vector3d> Lattice::settlingMoves(int axis, int sign, const ColumnLoads& columns) const
@@ -154,19 +155,24 @@ Lattice::ColumnLoads Lattice::takeDownLoads(int axis, int sign, const std::vecto
     return columns;
 }
 
+int Lattice::lateralAxesWithBonds(uint32_t p, int axis) const
+{
+    int count = 0;
+    for (int b = 0; b < 3; ++b) count += b != axis && mModel.inverseBondCount[p][b] > 0.0;
+    return count;
+}
+
 double Lattice::lateralPoissonRatio(uint32_t p, int axis) const
 {
     // Uniaxial stress along the axis: each lateral axis with bonds is free of stress,
     // d ε_lat + λ tr ε = 0 with tr ε = ε_axis + m ε_lat over the m lateral axes with bonds, so
-    // ε_lat = −λ / (d + m λ) ε_axis (isotropic in the bulk: λ / (2μ + 2λ) = ν).
-    int lateralAxes = 0;
+    // ε_lat = −λ / (d + m λ) ε_axis (isotropic in the bulk: λ / (2μ + 2λ) = ν), d the mean of
+    // those axes' moduli.
+    const int lateralAxes = lateralAxesWithBonds(p, axis);
+    if (lateralAxes == 0) return 0.0;
     double modulusPa = 0.0;
     for (int b = 0; b < 3; ++b)
-        if (b != axis && mModel.inverseBondCount[p][b] > 0.0) {
-            ++lateralAxes;
-            modulusPa += mModel.stiffness.normalModulusPa[size_t(b)];
-        }
-    if (lateralAxes == 0) return 0.0;
+        if (b != axis && mModel.inverseBondCount[p][b] > 0.0) modulusPa += mModel.stiffness.normalModulusPa[size_t(b)];
     const double lambda = mModel.lambdaPa[p];
     return lambda / (modulusPa / lateralAxes + lateralAxes * lambda);
 }
@@ -196,13 +202,8 @@ void Lattice::shortenColumn(uint32_t top, int axis, int faceBelow, ColumnLoads& 
     }
     const size_t n = bonds.size();
     const double h = mModel.spacingM;
-    const auto lateralAxes = [&](uint32_t p) {
-        int m = 0;
-        for (int b = 0; b < 3; ++b) m += b != axis && mModel.inverseBondCount[p][b] > 0.0;
-        return m;
-    };
     const auto volumetricPerM = [&](uint32_t p) {
-        const double spread = 1.0 - lateralAxes(p) * lateralPoissonRatio(p, axis);
+        const double spread = 1.0 - lateralAxesWithBonds(p, axis) * lateralPoissonRatio(p, axis);
         return h * mModel.lambdaPa[p] * spread * mModel.inverseBondCount[p][axis] * mModel.inverseBondCount[p][axis];
     };
     std::vector<double> lower(n, 0.0), diagonal(n), upper(n, 0.0), rhs(n);

@@ -184,8 +184,10 @@ private:
     /// and its supports' bearing loads along the columns of particles along the body's axis
     /// nearest the weight, each column standing on a support taking down what lies on it. Exact
     /// for a prism on its base; a column over a gap, and loads across the columns, start
-    /// unloaded and settle dynamically as before (docs/accuracy.md).
-    void settleUnderDeadLoads(const Eigen::Vector3d& weightPerParticleN);
+    /// unloaded and settle dynamically as before (docs/accuracy.md). Moves the particles only:
+    /// the caller refreshes the forces. Returns whether there was anything to settle (a body
+    /// held by nothing falls as it is).
+    bool settleUnderDeadLoads(const Eigen::Vector3d& weightPerParticleN);
     /// The bearing loads' mean direction (world frame).
     Eigen::Vector3d bearingDirection() const;
     /// Each particle's dead load along the way down (unit: N).
@@ -199,12 +201,15 @@ private:
     ColumnLoads takeDownLoads(int axis, int sign, const std::vector<double>& loadN) const;
     /// The shortenings and spread of one column, from its top particle down (takeDownLoads).
     void shortenColumn(uint32_t top, int axis, int faceBelow, ColumnLoads& columns) const;
+    /// The axes across `axis` along which a particle has bonds.
+    int lateralAxesWithBonds(uint32_t p, int axis) const;
     /// How much a particle's sides spread per unit of its strain along the axis under uniaxial
     /// stress along it (its Poisson ratio in the lattice, with its condensed λ).
     double lateralPoissonRatio(uint32_t p, int axis) const;
     /// Each particle's move into equilibrium in the body frame: down its column, and its sides
     /// out from its layer's centre; supports beside a voxel move with it (unit: m).
     std::vector<Eigen::Vector3d> settlingMoves(int axis, int sign, const ColumnLoads& columns) const;
+    /// LatticeModel::settledStrainJ from the settled state's forces.
     void recordSettledStrainEnergies();
     /// Each bond starts with the damage its body's links remember (Body::linkDamage; fromBody).
     void takeOverLinkDamage(const Body& body);
