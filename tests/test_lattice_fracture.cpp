@@ -2,6 +2,7 @@
 // the fracture energy a bar pulled apart dissipates at every voxel size and for every preset, the
 // Mohr–Coulomb envelope in direct shear, spall depth from one-dimensional wave theory and the
 // rate effect on strength.
+#include "BarLoading.h"
 #include "LatticeTestUtil.h"
 
 #include <spall/fracture/Material.h>
@@ -15,103 +16,6 @@
 
 using namespace spall;
 using namespace spall::test;
-
-namespace {
-
-struct BarPull {
-    double dissipatedJ = 0.0, peakStressPa = 0.0, youngsModulusPa = 0.0;
-    int broken = 0, across = 0, damagedElsewhere = 0;
-    int brokenAnywhere = 0;  ///< bonds along any axis, anywhere
-};
-
-/// A bar pulled apart in direct tension: `material`, length × side × side, voxel size h, one end
-/// pulled at pullMS, the bonds across its middle `notch` times as strong as the rest.
-struct BarSpec {
-    Material material = kConcrete;
-    double lengthM = 0.04, sideM = 0.02, h = 0.01, pullMS = 0.05, notch = 0.8;
-    LatticeDamageLaw law = LatticeDamageLaw::Softening;
-    double bulkViscosity = LatticeSettings().bulkViscosity;
-};
-
-/// The bar's end layers held (the grips), one end pulled (the whole bar starting on the matching
-/// uniform strain rate, so no shock runs ahead) until it could have broken through at its notch
-/// (bonds 20 % weaker across the middle by default: the stress rises 7 % while an unloading wave
-/// crosses half the bar at 0.05 m/s, so a weaker notch could crack twice). Energy balance: work
-/// done on the held ends minus what is left as kinetic and strain energy is what the crack took.
-/// E is the stress over the mean strain between the grips when the stress first reaches ft/2.
-/// What a bar of the material pulled along x should show: along the grain when it lies along x.
-struct TensionTarget {
-    double youngsModulusPa, tensileStrengthPa, fractureEnergyJPerM2;
-    int strengthClass;
-};
-TensionTarget tensionTargetOf(const Material& m)
-{
-    if (m.grainAxis == GrainAxis::X) return {m.alongGrainYoungsModulusPa, m.alongGrainTensileStrengthPa, m.alongGrainFractureEnergyJPerM2, 1};
-    return {m.youngsModulusPa, m.tensileStrengthPa, m.fractureEnergyJPerM2, 0};
-}
-
-BarPull pullBarApart(const BarSpec& spec)
-{
-    const Material& material = spec.material;
-    const TensionTarget target = tensionTargetOf(material);
-    const double h = spec.h, pullMS = spec.pullMS, sideM = spec.sideM;
-    const int nx = int(std::lround(spec.lengthM / h)), ny = int(std::lround(sideM / h));
-    Body body = test::boxBody(nx, ny, ny, h, material.densityKgM3);
-    for (auto it = body.grid->tree().beginValueOn(); it; ++it)
-        if (it.getCoord().x() == 0 || it.getCoord().x() == nx - 1) it.setValue(*it | kAnchorBit);
-    LatticeSettings settings;
-    settings.damageLaw = spec.law;
-    settings.bulkViscosity = spec.bulkViscosity;
-    Lattice lattice = Lattice::fromBody(body, material, StaticWorld(), settings);
-    const double x0 = lattice.state.positionM[0].x(), gaugeM = (nx - 1) * h;
-    for (size_t p = 0; p < lattice.particleCount(); ++p) {
-        lattice.state.velocityMS[p] = Eigen::Vector3d(pullMS * (lattice.state.positionM[p].x() - x0) / gaugeM, 0, 0);
-        if (lattice.model().held[p] && lattice.model().voxel[p].x() == 0) lattice.state.velocityMS[p].setZero();
-    }
-    // Held layers cannot contract sideways, which concentrates stress at the grips' corners (more
-    // sharply the finer h): the quarters next to the grips are 50 % stronger, as a dog-bone
-    // specimen's are thicker.
-    for (size_t b = 0; b < lattice.bondCount(); ++b) {
-        const int x = lattice.model().voxel[lattice.model().bonds[b].low].x();
-        if (x < nx / 4 || x >= nx - nx / 4) lattice.state.bondHistory[b].strengthScale = 1.5;
-        if (lattice.model().bonds[b].axis == 0 && x == nx / 2 - 1) lattice.state.bondHistory[b].strengthScale = spec.notch;
-    }
-    const double energy0 = lattice.kineticEnergyJ() + lattice.strainEnergyJ();
-    const double dt = lattice.stableTimeStepS();
-    // Long enough to stretch the bar to its strength and open the crack through.
-    const double pullTimeS =
-        1.5 * (lattice.model().stiffness.strength[target.strengthClass].zeroTractionStretchM + target.tensileStrengthPa / target.youngsModulusPa * gaugeM) /
-        pullMS;
-BarPull result;
-    double workJ = 0.0;
-    auto heldPower = [&] {  // the agent holding the ends balances the bonds' force on them
-        double power = 0.0;
-        for (size_t p = 0; p < lattice.particleCount(); ++p)
-            if (lattice.model().held[p]) power -= lattice.state.bondForceN[p].dot(lattice.state.velocityMS[p]);
-        return power;
-    };
-    for (double t = 0.0; t < pullTimeS; t += dt) {
-        const double before = heldPower();
-        lattice.step(dt);
-        workJ += 0.5 * (before + heldPower()) * dt;
-        const double stressPa = heldPower() / pullMS / (sideM * sideM);
-        if (result.youngsModulusPa == 0.0 && stressPa >= 0.5 * target.tensileStrengthPa)
-            result.youngsModulusPa = stressPa / (pullMS * (t + dt) / gaugeM);
-        result.peakStressPa = std::max(result.peakStressPa, stressPa);
-    }
-    result.dissipatedJ = workJ - (lattice.kineticEnergyJ() + lattice.strainEnergyJ() - energy0);
-    for (size_t b = 0; b < lattice.bondCount(); ++b) {
-        result.brokenAnywhere += lattice.bondDamage(b) == 1.0;
-        if (lattice.model().bonds[b].axis != 0) continue;
-        const bool middle = lattice.model().voxel[lattice.model().bonds[b].low].x() == nx / 2 - 1;
-        result.across += middle;
-        result.broken += middle && lattice.bondDamage(b) == 1.0;
-        result.damagedElsewhere += !middle && lattice.bondDamage(b) > 0.5;
-    }
-    return result;
-}
-
-}  // namespace
 
 TEST(Lattice, BarPulledApartDissipatesTheFractureEnergyAtEveryVoxelSize)
 {

@@ -83,6 +83,24 @@ Material withShear(Material m, double shearStrengthPa, double frictionCoefficien
     return m;
 }
 
+/// Gc / fc, the crushed band's ductility index Lourenço gives for masonry below 12 MPa
+/// ("Structural masonry analysis: recent developments and prospects", 14th International Brick
+/// and Block Masonry Conference, 2008); wood borrows it.
+constexpr double kCrushingDuctilityM = 1.6e-3;
+
+/// `m` crushing at a compressive strength with its fracture energy (Material::compressiveStrengthPa;
+/// with a grain, those across it, then along it), and the source.
+Material withCrushing(Material m, double compressiveStrengthPa, double fractureEnergyJPerM2, const std::string& source,
+                      double alongGrainStrengthPa = 0.0, double alongGrainFractureEnergyJPerM2 = 0.0)
+{
+    m.compressiveStrengthPa = compressiveStrengthPa;
+    m.compressiveFractureEnergyJPerM2 = fractureEnergyJPerM2;
+    m.alongGrainCompressiveStrengthPa = alongGrainStrengthPa;
+    m.alongGrainCompressiveFractureEnergyJPerM2 = alongGrainFractureEnergyJPerM2;
+    m.source += "; crushing: " + source;
+    return m;
+}
+
 /// `m` built of units: their size, the joint between them, their strength and fracture energy
 /// (tension; in shear Rankine linearised, c = ft and μ = 0.5, as they fail by principal tension)
 /// and the source.
@@ -163,10 +181,12 @@ Material glassPreset()
 /// E_R/E_L 0.078), ν 0.35 (ν_RT 0.435 and ν_TR 0.245), tension 2.5 MPa, Gf 250 J/m² (mode I,
 /// TL; Stanzl-Tschegg, Tan & Tschegg 1995, Wood Sci. Technol. 29); shear parallel to the grain
 /// 7.9 MPa (table 5-3b, Sitka spruce, 12 % moisture), no friction (the handbook gives none).
+/// Crushing: table 5-3a's compression perpendicular and parallel to the grain; for Gc no
+/// published value for wood was found, so it takes masonry's ductility index Gc / fc.
 Material woodPreset()
 {
     constexpr double kAlongGrainPa = 10e9;
-    return withDamping(withGrain(withShear(withElasticity(calibrateMaterial("wood", 500.0, 6.9e3, 13.8e3, "Clancey 1972: wood panels fail at 6.9-13.8 kPa"),
+    const Material wood = withDamping(withGrain(withShear(withElasticity(calibrateMaterial("wood", 500.0, 6.9e3, 13.8e3, "Clancey 1972: wood panels fail at 6.9-13.8 kPa"),
                                               0.06 * kAlongGrainPa, 0.35, 2.5e6, 250.0,
                                               "across the grain: Wood Handbook FPL-GTR-190 tables 5-1, 5-2, 5-3 (E_T, nu, tension); "
                                               "Stanzl-Tschegg et al. 1995 (Gf)"),
@@ -175,6 +195,10 @@ Material woodPreset()
                      "along the grain: Wood Handbook tables 5-1 (E_L, G_LT) and 5-3a (modulus of rupture as tensile strength); "
                      "Ashby & Jones table 13.1 (Gf across the fibres); Kollmann & Cote 1968 (shear across the fibres)"),
                        0.005, "half the flexural loss factor of wood, about 10^-2 (Cremer & Heckl 1988)");
+    return withCrushing(wood, 4.0e6, kCrushingDuctilityM * 4.0e6,
+                        "Wood Handbook table 5-3a, Sitka spruce at 12 % moisture: 4.0 MPa across the grain, 38.7 MPa along it; "
+                        "Gc from masonry's ductility index 1.6 mm (Lourenco 2008; no value for wood found)",
+                        38.7e6, kCrushingDuctilityM * 38.7e6);
 }
 
 /// Bricks in mortar. The joints (the material's own values): E = 1000 fk with fk 5 MPa (EN
@@ -184,6 +208,9 @@ Material woodPreset()
 /// fvko = 0.3 MPa and eq. 3.5, fvk = fvko + 0.4 σd. The units: 215 × 102.5 × 65 mm (the UK work
 /// size) in 10 mm joints, running bond, cracking at 2.0 MPa with 80 J/m² (Lourenço & Rots 1997,
 /// J. Eng. Mech. 123(7), the potential cracks in the units of the TU Eindhoven shear walls).
+/// No crushing (compressive_strength_Pa 0): with its fk, 5 MPa, the house wall of issue 47
+/// carrying its floors collapses where it stands without (docs/accuracy.md, "Crushing"); a scene
+/// may set it (docs/materials.md gives fk and Gc = 1.6 mm × fk, Lourenço 2008).
 Material brickMasonryPreset()
 {
     return withDamping(withUnits(withShear(withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
@@ -203,18 +230,21 @@ Material brickMasonryPreset()
 /// (and MC2010 5.1.5.1) put the 5 % fractile of the tensile strength at 0.7 fctm, so a normal
 /// scatter's CoV is 0.3 / 1.645 = 0.18; its correlation length is the maximum aggregate size of
 /// a common C30/37 mix, 16 mm (issue 18: "near its aggregate size"; a modelling choice, not a
-/// measured length).
+/// measured length). Crushing at fcm with Gc = 250 Gf, the ratio the Dutch guidelines for
+/// nonlinear finite element analysis of concrete recommend (Rijkswaterstaat RTD 1016-1:2017,
+/// Hendriks et al.).
 Material c30ConcretePreset(const std::string& name, double densityKgM3, double failureLowPa, double failureHighPa,
                            const std::string& failureSource, const std::string& elasticityNote)
 {
     const auto [cohesionPa, friction] = mohrCoulombThrough(38e6, 2.9e6);
-    return withDamping(withScatter(withShear(withElasticity(calibrateMaterial(name, densityKgM3, failureLowPa, failureHighPa, failureSource), 33.6e9, 0.2,
+    const Material concrete = withDamping(withScatter(withShear(withElasticity(calibrateMaterial(name, densityKgM3, failureLowPa, failureHighPa, failureSource), 33.6e9, 0.2,
                                                 2.9e6, 141.0, "fib Model Code 2010, C30/37: E 33.6 GPa, fctm 2.9 MPa, Gf 141 J/m^2" + elasticityNote),
                                  cohesionPa, friction, StrengthRateLaw::FibModelCode2010,
                                  "Mohr-Coulomb through fcm 38 MPa and fctm (Jaeger, Cook & Zimmerman 2007); rate: fib MC2010 5.1.11"),
                        0.3 / 1.645, 0.016,
                        "strength CoV 0.18 from EN 1992-1-1 table 3.1 (fctk,0.05 = 0.7 fctm), correlated over 16 mm (maximum aggregate size)"),
                        0.02, "ENV 1998-6:2003 Annex B, concrete elements 2-7 % (the lower end: cracks are resolved)");
+    return withCrushing(concrete, 38e6, 250.0 * 141.0, "fcm 38 MPa (fib MC2010, C30/37); Gc = 250 Gf (Rijkswaterstaat RTD 1016-1:2017)");
 }
 
 /// Reinforced concrete: the same concrete (its steel is not modelled). Its failure range's high
@@ -268,6 +298,8 @@ const std::vector<Field<Material>>& fieldTable<Material>()
         {"fracture_energy_J_per_m2", &Material::fractureEnergyJPerM2, aboveZeroUpTo(1e7)},
         {"shear_strength_Pa", &Material::shearStrengthPa, aboveZeroUpTo(1e11)},
         {"friction_coefficient", &Material::frictionCoefficient, closed(0.0, 10.0)},
+        {"compressive_strength_Pa", &Material::compressiveStrengthPa, closed(0.0, 1e11)},
+        {"compressive_fracture_energy_J_per_m2", &Material::compressiveFractureEnergyJPerM2, closed(0.0, 1e8)},
         {"strength_rate_law", choice(&Material::strengthRateLaw)},
         {"strength_cov", &Material::strengthCoefficientOfVariation, closed(0.0, 1.0)},
         {"strength_correlation_length_m", &Material::strengthCorrelationLengthM, aboveZeroUpTo(100.0)},
@@ -288,6 +320,8 @@ const std::vector<Field<Material>>& fieldTable<Material>()
         {"along_grain_tensile_strength_Pa", &Material::alongGrainTensileStrengthPa, closed(0.0, 1e11)},
         {"along_grain_fracture_energy_J_per_m2", &Material::alongGrainFractureEnergyJPerM2, closed(0.0, 1e7)},
         {"along_grain_shear_strength_Pa", &Material::alongGrainShearStrengthPa, closed(0.0, 1e11)},
+        {"along_grain_compressive_strength_Pa", &Material::alongGrainCompressiveStrengthPa, closed(0.0, 1e11)},
+        {"along_grain_compressive_fracture_energy_J_per_m2", &Material::alongGrainCompressiveFractureEnergyJPerM2, closed(0.0, 1e8)},
     };
     return table;
 }
@@ -310,6 +344,18 @@ FieldProblem grainCalibrationProblem(const Material& m)
     if (!(1.0 - kappa * (1.0 / along + 2.0 / across) > 0.0))
         return {"along_grain_youngs_modulus_Pa", "is too small against youngs_modulus_Pa and poisson_ratio across the grain (the lattice's "
                                                  "volumetric modulus would not be positive)"};
+    return {};
+}
+
+/// A material that crushes needs the energy crushing takes, and with a grain, both along it.
+FieldProblem crushingProblem(const Material& m)
+{
+    if (!(m.compressiveStrengthPa > 0.0)) return {};
+    const char* reason = "must be above 0 when compressive_strength_Pa is (crushing dissipates energy; compressive_strength_Pa 0 never crushes)";
+    if (!(m.compressiveFractureEnergyJPerM2 > 0.0)) return {"compressive_fracture_energy_J_per_m2", reason};
+    if (!hasGrain(m)) return {};
+    if (!(m.alongGrainCompressiveStrengthPa > 0.0)) return {"along_grain_compressive_strength_Pa", reason};
+    if (!(m.alongGrainCompressiveFractureEnergyJPerM2 > 0.0)) return {"along_grain_compressive_fracture_energy_J_per_m2", reason};
     return {};
 }
 
@@ -337,6 +383,7 @@ FieldProblem structureProblem(const Material& m)
     }
     for (const auto& [key, value] : needed)
         if (!(value > 0.0)) return {key, reason};
+    if (const FieldProblem problem = crushingProblem(m); !problem.key.empty()) return problem;
     if (hasGrain(m)) return grainCalibrationProblem(m);
     return {};
 }

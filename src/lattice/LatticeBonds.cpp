@@ -69,22 +69,31 @@ void Lattice::computeVolumetricStrain()
 {
     mVolumetricStrain.resize(particleCount());
     mVolumetricStressShare.resize(particleCount());
+    const bool crushes = canCrush();
+    if (crushes) {
+        mUncrushedLambdaTracePa.resize(particleCount());
+        mBondNormalStressPa.resize(bondCount());
+    }
     const double inverseH = 1.0 / mModel.spacingM;
     forEach(
         particleCount(),
         [&](size_t p) {
-            double trace = 0.0;
+            double trace = 0.0, uncrushedTrace = 0.0;
             for (int axis = 0; axis < 3; ++axis) {
-                double sum = 0.0;
+                double sum = 0.0, uncrushedSum = 0.0;
                 for (const int face : {2 * axis, 2 * axis + 1}) {
                     const int32_t b = mModel.bondAcross[p][face];
-                    if (b >= 0) sum += mBondTerms[size_t(b)].effectiveStretchM * inverseH;
+                    if (b < 0) continue;
+                    sum += mBondTerms[size_t(b)].effectiveStretchM * inverseH;
+                    uncrushedSum += mBondTerms[size_t(b)].uncrushedStretchM * inverseH;
                 }
                 trace += sum * mModel.inverseBondCount[p][axis];
+                uncrushedTrace += uncrushedSum * mModel.inverseBondCount[p][axis];
             }
             mVolumetricStrain[p] = trace;
             // d(½ λ h³ (tr ε)²) / d(stretch of one bond along the axis) / h³.
             mVolumetricStressShare[p] = mModel.lambdaPa[p] * trace * mModel.inverseBondCount[p];
+            if (crushes) mUncrushedLambdaTracePa[p] = mModel.lambdaPa[p] * uncrushedTrace;
         });
 }
 
@@ -101,11 +110,14 @@ uint8_t Lattice::measureBond(size_t b, double dtS, bool growDamage)
     const double openingRateMS = (state.velocityMS[bond.high] - state.velocityMS[bond.low]).dot(along);
     const double damageBefore = bondDamage(b);
     double damage = damageBefore;
-    if (growDamage && growBondDamage(b, equivalentStretchM(b, s, lengthM, damage), std::abs(openingRateMS) / mModel.spacingM, dtS))
+    if (growDamage && growBondDamage(b, equivalentStretchM(b, s, lengthM, damage), crushingShorteningM(b, s.displacementM[a]),
+                                     std::abs(openingRateMS) / mModel.spacingM, dtS))
         damage = bondDamage(b);
+    // Compression carries what crushing left (a crack in tension or shear closes on itself).
+    const double crushed = crushingDamage(b), uncrushed = 1.0 - crushed;
     const bool broke = damage >= 1.0 && damageBefore < 1.0;
     // What a pin held is lost where it fails (the glazing's own dissipation).
-    const bool snapped = broke && mModel.damageLaw == LatticeDamageLaw::Softening && snapsAtPeak(b) && !bond.pinned;
+    const bool snapped = broke && mModel.damageLaw == LatticeDamageLaw::Softening && snapsAtPeak(b) && !bond.pinned && crackingDamage(b) >= 1.0;
     if (snapped) mSnapped[b] = 1;
     const double intact = 1.0 - damage, sqrtIntact = std::sqrt(intact);
     const bool opening = lengthM > mModel.spacingM;
@@ -115,21 +127,27 @@ uint8_t Lattice::measureBond(size_t b, double dtS, bool growDamage)
     if (bond.pinned) {
         // Across its axis only: no contact, dashpot, moment or volumetric share.
         terms.bendingMomentNm.setZero();
-        terms.effectiveStretchM = terms.volumetricAreaPerArmM = 0.0;
+        terms.effectiveStretchM = terms.uncrushedStretchM = terms.volumetricAreaPerArmM = 0.0;
         return uint8_t(broke ? kBroke : 0);
     }
-    // What damage took still carries compression, as contact: along the line of centres, and
+    // What cracking took still carries compression, as contact: along the line of centres, and
     // only while the two cubes overlap. (In the bond's frame it would push apart particles that
     // have slid past each other or turned over, which feeds energy into a shattered lattice.)
     const double overlapM = mModel.spacingM - lengthM;
-    if (intact < 1.0 && overlapM > 0.0) terms.forceOnHighN += (1.0 - intact) * k.normalNPerM[a] * overlapM * along;
+    if (intact < uncrushed && overlapM > 0.0) terms.forceOnHighN += (uncrushed - intact) * k.normalNPerM[a] * overlapM * along;
+    // The crushed part's rubble carries again once squeezed past the softening line's end:
+    // k (D_c overlap − uf), which grows with D_c from nothing, so no force jumps in.
+    const double rubbleM = crushed * overlapM - k.strength[bond.strengthClass].crushingEndShorteningM;
+    if (crushed > 0.0 && rubbleM > 0.0) terms.forceOnHighN += k.normalNPerM[a] * rubbleM * along;
     // A crack opening carries no viscous stress either: the dashpot softens with the spring.
-    if (mModel.bulkViscosity > 0.0) terms.forceOnHighN -= (opening ? intact : 1.0) * mModel.bulkViscosity * mModel.dashpotPerViscosityNSPerM * openingRateMS * along;
+    if (mModel.bulkViscosity > 0.0) terms.forceOnHighN -= (opening ? intact : uncrushed) * mModel.bulkViscosity * mModel.dashpotPerViscosityNSPerM * openingRateMS * along;
     Eigen::Vector3d bending = -intact * k.bendingNmPerRad[a] * s.rotationRad;
     bending[a] = -intact * k.twistingNmPerRad[a] * s.rotationRad[a];
     terms.bendingMomentNm = s.frame * bending;
-    terms.effectiveStretchM = opening ? sqrtIntact * (lengthM - mModel.spacingM) : lengthM - mModel.spacingM;
-    terms.volumetricAreaPerArmM = (opening ? sqrtIntact : 1.0) * mModel.spacingM * mModel.spacingM / lengthM;
+    const double sqrtUncrushed = crushed == 0.0 ? 1.0 : std::sqrt(uncrushed);
+    terms.uncrushedStretchM = opening ? sqrtIntact * (lengthM - mModel.spacingM) : lengthM - mModel.spacingM;
+    terms.effectiveStretchM = opening ? terms.uncrushedStretchM : sqrtUncrushed * terms.uncrushedStretchM;
+    terms.volumetricAreaPerArmM = (opening ? sqrtIntact : sqrtUncrushed) * mModel.spacingM * mModel.spacingM / lengthM;
     return uint8_t((snapped ? kSnapped : 0) | (broke ? kBroke : 0));
 }
 
@@ -140,6 +158,9 @@ void Lattice::completeBondForce(size_t b)
     BondForceTerms& terms = mBondTerms[b];
     const double sharesPa = mVolumetricStressShare[bond.low][bond.axis] + mVolumetricStressShare[bond.high][bond.axis];
     terms.forceOnHighN -= (terms.volumetricAreaPerArmM * sharesPa) * terms.armM;
+    // Read across its particles by the next substep's crushing (confinementPa).
+    if (!mBondNormalStressPa.empty())
+        mBondNormalStressPa[b] = -terms.forceOnHighN.dot(terms.armM) / (terms.armM.norm() * mModel.spacingM * mModel.spacingM);
     // The bond acts at the face between its particles: the pair's moment about either centre
     // is the same, -(arm / 2) × force. A pin acts at its voxel's centre (its other end is held).
     terms.pairMomentNm = bond.pinned ? Eigen::Vector3d::Zero() : Eigen::Vector3d(-0.5 * terms.armM.cross(terms.forceOnHighN));

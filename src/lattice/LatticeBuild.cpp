@@ -63,7 +63,8 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
         k.twistingNmPerRad[axis] = kSquareTorsionConstant * (along ? gAlong : 0.5 * (gAlong + gAcross)) * h * h * h;
     }
     SPALL_CHECK(m.tensileStrengthPa > 0.0 && m.fractureEnergyJPerM2 > 0.0 && m.shearStrengthPa > 0.0 && m.frictionCoefficient >= 0.0);
-    const auto strengthOf = [&](double youngsPa, double tensilePa, double fractureEnergyJPerM2, double shearPa, double friction) {
+    const auto strengthOf = [&](double youngsPa, double tensilePa, double fractureEnergyJPerM2, double shearPa, double friction,
+                                double compressivePa, double compressiveFractureEnergyJPerM2) {
         LatticeStiffness::Strength s;
         s.youngsModulusPa = youngsPa;
         s.peakStretchM = tensilePa * h / youngsPa;
@@ -74,15 +75,24 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
         s.fractureEnergyJPerM2 = fractureEnergyJPerM2;
         s.shearStrengthPa = shearPa;
         s.frictionCoefficient = friction;
+        if (compressivePa > 0.0) {
+            s.compressiveStrengthPa = compressivePa;
+            s.confinementM = compressivePa / tensilePa;
+            s.crushingPeakShorteningM = compressivePa * h / youngsPa;
+            s.crushingEndShorteningM = std::max(2.0 * compressiveFractureEnergyJPerM2 / compressivePa, s.crushingPeakShorteningM);
+        }
         return s;
     };
-    k.strength[0] = strengthOf(eAcross, m.tensileStrengthPa, m.fractureEnergyJPerM2, m.shearStrengthPa, m.frictionCoefficient);
+    const double gc = m.compressiveFractureEnergyJPerM2;
+    k.strength[0] = strengthOf(eAcross, m.tensileStrengthPa, m.fractureEnergyJPerM2, m.shearStrengthPa, m.frictionCoefficient, m.compressiveStrengthPa, gc);
     k.strength[1] = k.strength[0];
-    if (hasUnits(m))
-        k.strength[1] = strengthOf(eAcross, m.unitTensileStrengthPa, m.unitFractureEnergyJPerM2, m.unitShearStrengthPa, m.unitFrictionCoefficient);
+    if (hasUnits(m))  // masonry crushes as an assembly: its units as its joints
+        k.strength[1] = strengthOf(eAcross, m.unitTensileStrengthPa, m.unitFractureEnergyJPerM2, m.unitShearStrengthPa, m.unitFrictionCoefficient,
+                                   m.compressiveStrengthPa, gc);
     else if (grained)
         k.strength[1] = strengthOf(eAlong, m.alongGrainTensileStrengthPa, m.alongGrainFractureEnergyJPerM2, m.alongGrainShearStrengthPa,
-                                   m.frictionCoefficient);
+                                   m.frictionCoefficient, m.compressiveStrengthPa > 0.0 ? m.alongGrainCompressiveStrengthPa : 0.0,
+                                   m.alongGrainCompressiveFractureEnergyJPerM2);
     k.strengthRateLaw = m.strengthRateLaw;
     k.damageRatePerS = m.damageRatePerS;
     k.damageStressScalePerPa = m.damageStressScalePerPa > 0.0 ? m.damageStressScalePerPa : 1.0 / m.tensileStrengthPa;

@@ -102,9 +102,15 @@ double Lattice::kineticEnergyJ() const
 
 double Lattice::bondStrainEnergyJ(size_t b) const
 {
-    const double intact = 1.0 - bondDamage(b);
-    const double overlapM = mModel.bonds[b].pinned ? 0.0 : std::max(0.0, mModel.spacingM - (state.positionM[mModel.bonds[b].high] - state.positionM[mModel.bonds[b].low]).norm());
-    return elasticEnergyJ(b, strainOf(mModel.bonds[b]), intact) + 0.5 * (1.0 - intact) * mModel.stiffness.normalNPerM[size_t(mModel.bonds[b].axis)] * overlapM * overlapM;
+    const LatticeBond& bond = mModel.bonds[b];
+    const double intact = 1.0 - bondDamage(b), crushed = crushingDamage(b);
+    const double overlapM = bond.pinned ? 0.0 : std::max(0.0, mModel.spacingM - (state.positionM[bond.high] - state.positionM[bond.low]).norm());
+    // measureBond's contact terms: the closed crack's and the crushed part's rubble, whose force
+    // k (D_c x − uf) has the potential k (D_c x − uf)² / 2 D_c at its D_c.
+    const double rubbleM = crushed > 0.0 ? std::max(0.0, crushed * overlapM - mModel.stiffness.strength[bond.strengthClass].crushingEndShorteningM) : 0.0;
+    const double normalNPerM = mModel.stiffness.normalNPerM[size_t(bond.axis)];
+    return elasticEnergyJ(b, strainOf(bond), intact) + 0.5 * (1.0 - crushed - intact) * normalNPerM * overlapM * overlapM +
+           (crushed > 0.0 ? 0.5 * normalNPerM * rubbleM * rubbleM / crushed : 0.0);
 }
 
 double Lattice::volumetricEnergyJ(size_t p) const

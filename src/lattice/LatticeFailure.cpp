@@ -1,10 +1,12 @@
 // How a lattice's bonds fail: the failure index as an equivalent stretch (tension cut-off joined
 // to shear, Mohr–Coulomb in compression), the damage it drives on the softening line (crack band)
-// or at a rate (Davison–Stevens), and the strain-rate law's effect on the line's peak.
+// or at a rate (Davison–Stevens), the strain-rate law's effect on the line's peak, and crushing
+// (Hoek–Brown in compression, its own softening line).
 #include <spall/lattice/Lattice.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace spall {
 
@@ -19,11 +21,68 @@ double shearIndexOf(const Eigen::Vector3d& perM, const Eigen::Vector3d& displace
     return std::hypot(perM[b] * displacementM[b], perM[c] * displacementM[c]);
 }
 
+/// Damage on a linear softening line from u0 to uf at the driver κ: the secant stiffness
+/// (1 − D) κ / u0 = (uf − κ) / (uf − u0) (Bažant & Oh 1983's crack band, linear).
+double lineDamage(double kappa, double u0, double uf)
+{
+    if (kappa <= u0) return 0.0;
+    if (kappa >= uf) return 1.0;
+    return 1.0 - (u0 / kappa) * (uf - kappa) / (uf - u0);
+}
+
 }  // namespace
 
 double Lattice::bondDamage(size_t b) const
 {
+    const double cracked = crackingDamage(b), crushed = crushingDamage(b);
+    // Without crushing, exactly D_t (1 − (1 − D_t) need not round back to it).
+    return crushed == 0.0 ? cracked : 1.0 - (1.0 - cracked) * (1.0 - crushed);
+}
+
+double Lattice::crackingDamage(size_t b) const
+{
     return mModel.damageLaw == LatticeDamageLaw::DavisonStevens ? state.bondHistory[b].rateDamage : softeningDamage(b);
+}
+
+double Lattice::crushingDamage(size_t b) const
+{
+    const BondHistory& history = state.bondHistory[b];
+    const LatticeStiffness::Strength& strength = mModel.stiffness.strength[mModel.bonds[b].strengthClass];
+    if (history.maxCrushingShorteningM <= 0.0) return 0.0;
+    // The strength scale (scatter, a weak joint) scales crushing as it scales cracking.
+    return lineDamage(history.maxCrushingShorteningM, history.strengthScale * strength.crushingPeakShorteningM,
+                      strength.crushingEndShorteningM / history.strengthScale);
+}
+
+bool Lattice::canCrush() const
+{
+    return mModel.stiffness.strength[0].compressiveStrengthPa > 0.0 || mModel.stiffness.strength[1].compressiveStrengthPa > 0.0;
+}
+
+double Lattice::confinementPa(uint32_t p, int a) const
+{
+    double leastCompressionPa = std::numeric_limits<double>::infinity();
+    for (const int lateral : {(a + 1) % 3, (a + 2) % 3}) {
+        double sumPa = 0.0;
+        for (const int face : {2 * lateral, 2 * lateral + 1})
+            if (const int32_t b = mModel.bondAcross[p][face]; b >= 0) sumPa += mBondNormalStressPa[size_t(b)];
+        leastCompressionPa = std::min(leastCompressionPa, -sumPa * mModel.inverseBondCount[p][lateral]);
+    }
+    return std::max(0.0, leastCompressionPa);
+}
+
+double Lattice::crushingShorteningM(size_t b, double normalM) const
+{
+    const LatticeBond& bond = mModel.bonds[b];
+    const LatticeStiffness::Strength& strength = mModel.stiffness.strength[bond.strengthClass];
+    if (strength.compressiveStrengthPa <= 0.0 || bond.pinned || normalM >= 0.0 || mBondNormalStressPa.empty()) return 0.0;
+    const int a = bond.axis;
+    const double compressionPa =
+        -(mModel.stiffness.normalModulusPa[size_t(a)] * normalM / mModel.spacingM + 0.5 * (mUncrushedLambdaTracePa[bond.low] + mUncrushedLambdaTracePa[bond.high]));
+    if (compressionPa <= 0.0) return 0.0;
+    const double fc = strength.compressiveStrengthPa, lateralPa = 0.5 * (confinementPa(bond.low, a) + confinementPa(bond.high, a));
+    const double strengthPa = lateralPa + fc * std::sqrt(strength.confinementM * lateralPa / fc + 1.0);
+    return compressionPa / strengthPa * strength.crushingPeakShorteningM;
 }
 
 std::pair<double, double> Lattice::softeningLineM(size_t b) const
@@ -38,11 +97,9 @@ double Lattice::softeningDamage(size_t b) const
 {
     const auto [u0, uf] = softeningLineM(b);
     const double kappa = state.bondHistory[b].maxEquivalentStretchM;
-    if (kappa <= u0) return 0.0;
     // A bond too large to soften breaks at its peak, whatever its strength scale.
-    if (kappa >= uf || snapsAtPeak(b)) return 1.0;
-    // Secant stiffness on the softening line: (1 - D) κ / u0 = (uf - κ) / (uf - u0).
-    return 1.0 - (u0 / kappa) * (uf - kappa) / (uf - u0);
+    if (kappa > u0 && snapsAtPeak(b)) return 1.0;
+    return lineDamage(kappa, u0, uf);
 }
 
 void Lattice::startDamaged(size_t b, double damage)
@@ -126,9 +183,11 @@ void Lattice::followStrengthRate(BondHistory& history, double increaseM, double 
     history.strengthFactor = history.maxEquivalentStretchM / history.rateWeightedStretchM;
 }
 
-bool Lattice::growBondDamage(size_t b, double equivalentStretchNowM, double strainRatePerS, double dtS)
+bool Lattice::growBondDamage(size_t b, double equivalentStretchNowM, double crushingShorteningNowM, double strainRatePerS, double dtS)
 {
     BondHistory& history = state.bondHistory[b];
+    const bool crushing = crushingShorteningNowM > history.maxCrushingShorteningM;
+    if (crushing) history.maxCrushingShorteningM = crushingShorteningNowM;
     const double increaseM = equivalentStretchNowM - history.maxEquivalentStretchM;
     if (increaseM > 0.0) {
         const bool undamaged = history.maxEquivalentStretchM <= softeningLineM(b).first;
@@ -139,7 +198,7 @@ bool Lattice::growBondDamage(size_t b, double equivalentStretchNowM, double stra
         history.rateDamage = rateDamageAfter(b, equivalentStretchNowM, dtS);
         return true;
     }
-    return increaseM > 0.0;
+    return increaseM > 0.0 || crushing;
 }
 
 double Lattice::rateDamageAfter(size_t b, double equivalentStretchNowM, double dtS) const

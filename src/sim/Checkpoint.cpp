@@ -137,6 +137,7 @@ void transferDeformable(Archive& a, D& d)
         a.pod(h.strengthFactor, "bond strength factor");
         a.pod(h.rateWeightedStretchM, "bond rate-weighted stretch");
         a.pod(h.rateDamage, "bond damage");
+        a.pod(h.maxCrushingShorteningM, "bond crushing");
     });
 }
 

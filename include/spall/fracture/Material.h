@@ -74,6 +74,12 @@ struct Material {
     /// across it); c is the shear strength at no normal stress (unit: Pa) ...
     double shearStrengthPa = 6e6;
     double frictionCoefficient = 0.5;  ///< ... and μ = tan φ (unit: 1)
+    /// Crushing (the deformable phase): the uniaxial compressive strength (concrete's fcm,
+    /// masonry's fk, which is the assembly's, joints and units alike; wood's across the grain)
+    /// and Gc, the energy a crushed band dissipates per unit of its area (crack band in
+    /// compression). A strength of 0: it never crushes (unit: Pa, J/m^2).
+    double compressiveStrengthPa = 0.0;
+    double compressiveFractureEnergyJPerM2 = 0.0;
     StrengthRateLaw strengthRateLaw = StrengthRateLaw::None;
     /// The deformable phase's bonds scatter in strength (tension and shear together) about the
     /// values above: a lognormal of this coefficient of variation at the scale of the
@@ -111,6 +117,8 @@ struct Material {
     double alongGrainTensileStrengthPa = 0.0;        ///< (unit: Pa)
     double alongGrainFractureEnergyJPerM2 = 0.0;     ///< a crack across the fibres (unit: J/m^2)
     double alongGrainShearStrengthPa = 0.0;          ///< shear across the fibres (unit: Pa)
+    double alongGrainCompressiveStrengthPa = 0.0;    ///< crushing along the fibres (unit: Pa)
+    double alongGrainCompressiveFractureEnergyJPerM2 = 0.0;  ///< (unit: J/m^2)
     /// Where the numbers come from.
     std::string source;
 };

@@ -81,9 +81,13 @@ public:
     /// Mohr–Coulomb. The stretch is the face's most stretched corner's, the bond's bending
     /// included, so a bent member cracks when its surface reaches ft (unit: m).
     double equivalentStretchM(size_t b) const;
-    /// 0 intact … 1 broken: the secant stiffness lost in tension, shear and bending (compression
-    /// still carries, as contact).
+    /// 0 intact … 1 broken: the secant stiffness lost in tension, shear and bending, by cracking
+    /// (D_t) and crushing (D_c) together, 1 − (1 − D_t)(1 − D_c). In compression it carries
+    /// 1 − D_c of its normal spring: a crack closes and carries again, as contact; what crushing
+    /// took it does not.
     double bondDamage(size_t b) const;
+    /// D_c alone: 0 … 1 on the compressive softening line (Strength::compressiveStrengthPa).
+    double crushingDamage(size_t b) const;
     /// The particles grouped by the bonds that have not broken.
     DisjointSets intactPieces() const;
     /// A piece's fundamental angular frequency, estimated as an Euler–Bernoulli beam's of
@@ -103,6 +107,11 @@ private:
     // Per particle: tr ε and λ tr ε / (bonds along each axis).
     std::vector<double> mVolumetricStrain;
     std::vector<Eigen::Vector3d> mVolumetricStressShare;
+    /// What crushing reads (a material that crushes only): per particle, λ tr ε as its material
+    /// would carry it uncrushed; per bond, the normal stress it carried when its force was last
+    /// completed, tension positive (unit: Pa).
+    std::vector<double> mUncrushedLambdaTracePa;
+    std::vector<double> mBondNormalStressPa;
     /// What the force pass takes from each bond, measured once per substep (measureBond).
     struct BondForceTerms {
         Eigen::Vector3d armM;             ///< high − low (unit: m)
@@ -114,9 +123,12 @@ private:
         /// Its stretch (length change) as the volumetric term counts it: in tension times
         /// √(1 − D), so the bond's own share of the volumetric force falls with 1 − D as its
         /// spring's does and the traction follows the softening line (unit: m).
+        /// In compression times √(1 − D_c), as crushing takes the volumetric share too.
         double effectiveStretchM = 0.0;
+        /// The same without crushing's factor: what the material would strain uncrushed (unit: m).
+        double uncrushedStretchM = 0.0;
         /// The volumetric force on high per pascal of its particles' shares, along −arm:
-        /// h² √(1 − D in tension) / |arm| (unit: m).
+        /// h² √(1 − D in tension, 1 − D_c in compression) / |arm| (unit: m).
         double volumetricAreaPerArmM = 0.0;
     };
     std::vector<BondForceTerms> mBondTerms;
@@ -223,9 +235,9 @@ private:
     /// bond's damage.
     double equivalentStretchM(size_t b, const BondStrain& strain, double lengthM, double damage) const;
     /// Damage grows with the largest equivalent stretch (and under Davison–Stevens, over the
-    /// step's duration); what it takes away stays away. Returns whether the damage may have
-    /// changed.
-    bool growBondDamage(size_t b, double equivalentStretchNowM, double strainRatePerS, double dtS);
+    /// step's duration), crushing with the largest crushing shortening; what they take away
+    /// stays away. Returns whether the damage may have changed.
+    bool growBondDamage(size_t b, double equivalentStretchNowM, double crushingShorteningNowM, double strainRatePerS, double dtS);
     /// The rate law's strength factor follows an increase of a bond's stretch while the bond is
     /// undamaged (BondHistory::strengthFactor).
     void followStrengthRate(BondHistory& history, double increaseM, double strainRatePerS) const;
@@ -237,6 +249,18 @@ private:
     double softeningDamage(size_t b) const;
     /// Davison–Stevens: a bond's damage after dtS, at its equivalent stretch now.
     double rateDamageAfter(size_t b, double equivalentStretchNowM, double dtS) const;
+    /// D_t: cracking's damage, on the softening line or by Davison–Stevens.
+    double crackingDamage(size_t b) const;
+    /// Whether either strength class crushes (Strength::compressiveStrengthPa).
+    bool canCrush() const;
+    /// How near a bond is to crushing, as a shortening: its compression as its uncrushed
+    /// material would carry it (its own normal strain `normalM` / h times d, and its
+    /// particles' λ tr ε) over the Hoek–Brown strength at the confinement across it, times fc h
+    /// / E (1 on the strength surface; its shortening in uniaxial compression) (unit: m).
+    double crushingShorteningM(size_t b, double normalM) const;
+    /// The compression across axis `a` at a particle: of its normal stresses along the two axes
+    /// across, each its bonds' mean, the lesser; 0 in tension or at a free face (unit: Pa).
+    double confinementPa(uint32_t p, int a) const;
     /// Adds the volumetric term to the bond's force on high, once every particle's volumetric
     /// strain is known, and takes the pair's moment (so a bond's force is found once, not once
     /// from each end).

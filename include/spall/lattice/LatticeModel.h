@@ -62,6 +62,18 @@ struct LatticeStiffness {
         /// stronger than a stress cut-off in uniaxial strain at ν = 0.2.)
         double shearStrengthPa = 0.0;
         double frictionCoefficient = 0.0;
+        /// Crushing (Lattice::crushingShorteningM), 0: never. A bond's compression, as its
+        /// undamaged material would carry it, against the strength at the confinement across it,
+        /// Hoek–Brown's σ1 = σ3 + fc √(m σ3 / fc + 1) with m = fc / ft (Hoek & Brown 1997, Int.
+        /// J. Rock Mech. Min. Sci. 34(8); m ≈ fc / ft puts its uniaxial tension near ft): fc in
+        /// uniaxial compression, about 6 fc in uniaxial strain (a plane wave), never under
+        /// hydrostatic pressure. It softens linearly over its shortening, peaking at fc h / E and
+        /// carrying nothing at 2 Gc / fc, so a crushed band takes Gc per area at any h (the crack
+        /// band in compression) (unit: Pa, 1, m, m).
+        double compressiveStrengthPa = 0.0;
+        double confinementM = 0.0;
+        double crushingPeakShorteningM = 0.0;
+        double crushingEndShorteningM = 0.0;
     };
     std::array<Strength, 2> strength;
     StrengthRateLaw strengthRateLaw = StrengthRateLaw::None;
@@ -95,6 +107,9 @@ struct BondHistory {
     double rateWeightedStretchM = 0.0;
     /// Davison–Stevens damage (that law only) (unit: 1).
     double rateDamage = 0.0;
+    /// The largest equivalent shortening in compression (Lattice::crushingShorteningM): what
+    /// drives its crushing along the compressive softening line (unit: m).
+    double maxCrushingShorteningM = 0.0;
 };
 
 /// The most damage a bond still intact can carry into a body's link damage and back (Vec4s
