@@ -142,7 +142,8 @@ TEST(Scene, MaterialAndLatticeErrorsNameTheKeyAndReason)
                                   R"("fracture_energy_J_per_m2": 0)", R"("shear_strength_Pa": 0)", R"("friction_coefficient": -0.2)",
                                   R"("unit_length_m": -0.2)", R"("joint_thickness_m": 2)", R"("unit_tensile_strength_Pa": -1)",
                                   R"("unit_friction_coefficient": 20)", R"("strength_cov": 1.5)", R"("strength_correlation_length_m": 0)",
-                                  R"("damping_ratio": -0.1)", R"("damping_ratio": 0.5)"}) {
+                                  R"("damping_ratio": -0.1)", R"("damping_ratio": 0.5)", R"("compressive_strength_Pa": -1)",
+                                  R"("compressive_fracture_energy_J_per_m2": -5)"}) {
         const std::string key = bad.substr(1, bad.find('"', 1) - 1);
         EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + bad + "}}}").find("materials.stone." + key + ": must be"), std::string::npos) << bad;
     }
@@ -166,6 +167,14 @@ TEST(Scene, MaterialAndLatticeErrorsNameTheKeyAndReason)
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("grain_axis": "z"}}})").find("materials.stone.grain_axis: must be none for a material built of units"),
               std::string::npos);
+    // A material that crushes needs the energy crushing takes, and with a grain both along it.
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("compressive_strength_Pa": 5e6}}})")
+                  .find("materials.stone.compressive_fracture_energy_J_per_m2: must be above 0 when compressive_strength_Pa is"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + pine + R"("along_grain_compressive_fracture_energy_J_per_m2": 0}}})")
+                  .find("materials.pine.along_grain_compressive_fracture_energy_J_per_m2: must be above 0 when compressive_strength_Pa is"),
+              std::string::npos);
+    EXPECT_EQ(errorOf(R"({"objects": [{)" + box + pine + R"("compressive_strength_Pa": 0, "along_grain_compressive_strength_Pa": 0}}})"), "");
     // ... and values along it that a lattice can be calibrated to, against those across it
     // (refused where the scene is read, not when a body enters the deformable phase).
     EXPECT_EQ(errorOf(R"({"objects": [{)" + box + pine + R"("along_grain_shear_modulus_Pa": 1e6}}})"), "");

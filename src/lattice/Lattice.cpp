@@ -41,6 +41,11 @@ void Lattice::refreshForces()
 {
     mBondTerms.resize(bondCount());
     mSnapped.assign(bondCount(), 0);
+    // Crushing's scratch exists only for a material that crushes (which it then flags).
+    if (canCrush()) {
+        mUncrushedLambdaTracePa.resize(particleCount());
+        mBondNormalStressPa.resize(bondCount());
+    }
     state.bondForceN.resize(particleCount());
     state.bondMomentNm.resize(particleCount());
     forEach(bondCount(), [&](size_t b) { measureBond(b, 0.0, false); });

@@ -69,11 +69,7 @@ void Lattice::computeVolumetricStrain()
 {
     mVolumetricStrain.resize(particleCount());
     mVolumetricStressShare.resize(particleCount());
-    const bool crushes = canCrush();
-    if (crushes) {
-        mUncrushedLambdaTracePa.resize(particleCount());
-        mBondNormalStressPa.resize(bondCount());
-    }
+    const bool crushes = !mUncrushedLambdaTracePa.empty();
     const double inverseH = 1.0 / mModel.spacingM;
     forEach(
         particleCount(),
@@ -85,7 +81,7 @@ void Lattice::computeVolumetricStrain()
                     const int32_t b = mModel.bondAcross[p][face];
                     if (b < 0) continue;
                     sum += mBondTerms[size_t(b)].effectiveStretchM * inverseH;
-                    uncrushedSum += mBondTerms[size_t(b)].uncrushedStretchM * inverseH;
+                    if (crushes) uncrushedSum += mBondTerms[size_t(b)].uncrushedStretchM * inverseH;
                 }
                 trace += sum * mModel.inverseBondCount[p][axis];
                 uncrushedTrace += uncrushedSum * mModel.inverseBondCount[p][axis];

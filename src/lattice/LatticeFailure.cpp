@@ -75,7 +75,7 @@ double Lattice::crushingShorteningM(size_t b, double normalM) const
 {
     const LatticeBond& bond = mModel.bonds[b];
     const LatticeStiffness::Strength& strength = mModel.stiffness.strength[bond.strengthClass];
-    if (strength.compressiveStrengthPa <= 0.0 || bond.pinned || normalM >= 0.0 || mBondNormalStressPa.empty()) return 0.0;
+    if (strength.compressiveStrengthPa <= 0.0 || bond.pinned || normalM >= 0.0) return 0.0;
     const int a = bond.axis;
     const double compressionPa =
         -(mModel.stiffness.normalModulusPa[size_t(a)] * normalM / mModel.spacingM + 0.5 * (mUncrushedLambdaTracePa[bond.low] + mUncrushedLambdaTracePa[bond.high]));

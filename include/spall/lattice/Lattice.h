@@ -107,9 +107,9 @@ private:
     // Per particle: tr ε and λ tr ε / (bonds along each axis).
     std::vector<double> mVolumetricStrain;
     std::vector<Eigen::Vector3d> mVolumetricStressShare;
-    /// What crushing reads (a material that crushes only): per particle, λ tr ε as its material
-    /// would carry it uncrushed; per bond, the normal stress it carried when its force was last
-    /// completed, tension positive (unit: Pa).
+    /// What crushing reads (sized by refreshForces for a material that crushes, else empty):
+    /// per particle, λ tr ε as its material would carry it uncrushed; per bond, the normal
+    /// stress it carried when its force was last completed, tension positive (unit: Pa).
     std::vector<double> mUncrushedLambdaTracePa;
     std::vector<double> mBondNormalStressPa;
     /// What the force pass takes from each bond, measured once per substep (measureBond).
