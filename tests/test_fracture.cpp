@@ -238,7 +238,8 @@ std::pair<int64_t, int64_t> wallLinksBroken(const std::string& material, double 
     }
     const double w = std::sqrt(lo * hi);
     // No ground: the published ranges are side-on pressures, without the ground's reflection.
-    const std::string scene = R"({"voxel_size_m": 0.1, "duration_s": 1, "fracture": {"weakening": false}, "ground": {"enabled": false},
+    const std::string scene = R"({"voxel_size_m": 0.1, "duration_s": 1, "fracture": {"algorithm": "yield-limit", "weakening": false},
+        "ground": {"enabled": false},
         "objects": [{"primitive": {"shape": "box", "size_m": [2.0, 0.3, 1.5]}, "position_m": [0, 0, 0.75],
                      "material": ")" + material + R"(", "anchor": "ground"}],
         "charges": [{"position_m": [0, -60.15, 0.75], "tnt_kg": )" + std::to_string(w) + R"(, "burst": "free-air"}]})";

@@ -251,7 +251,8 @@ const char* paperWallSceneJson()
   ],
   "charges": [
     {"position_m": [0.3, -4.0, 0.0], "tnt_kg": 20.0, "detonation_time_s": 0.0, "burst": "surface"}
-  ]
+  ],
+  "fracture": {"algorithm": "yield-limit"}
 }
 )";
 }

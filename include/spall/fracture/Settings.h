@@ -34,7 +34,7 @@ struct EnumNames<SmallFragmentPolicy> {
 };
 
 struct FractureSettings {
-    FractureAlgorithm algorithm = FractureAlgorithm::YieldLimit;
+    FractureAlgorithm algorithm = FractureAlgorithm::Lattice;  ///< from stress; the paper's rules are baselines
     bool weakening = true;    ///< algorithm 2 on top of 1
     bool orientation = true;  ///< algorithm 3 on top of 1
     int64_t minFragmentVoxels = 1;  ///< smaller pieces follow smallFragments (unit: voxels)
