@@ -365,6 +365,17 @@ TEST(Scene, FractureSettingsSayWhatTheyCannotSee)
     EXPECT_TRUE(said(coarse, "objects[0] ('wall', brick-masonry): its lattice's particles (0.1 m")) << (coarse.empty() ? "" : coarse.front());
     EXPECT_TRUE(said(coarse, "particles of at most 0.075 m resolve its units"));
     EXPECT_FALSE(said(notesOf(defaultSceneJson()), "taller than a course"));
+    // The same wall is two particles thick at 0.1 m; a concrete block 0.5 m thick a few
+    // centimetres from a gram of TNT would spall to under its particles' 0.1 m.
+    EXPECT_TRUE(said(coarse, "objects[0] ('wall') is 2 particles across its thinnest side (0.2 m)"));
+    EXPECT_TRUE(said(coarse, "of at most 0.05 m puts four particles across"));
+    const std::string block = R"("objects": [{"name": "block", "primitive": {"shape": "box", "size_m": [1.0, 0.5, 0.6]},
+                                 "position_m": [0, 0, 0.3], "material": "concrete"}], "voxel_size_m": 0.1)";
+    const std::vector<std::string> spalled =
+        notesOf("{" + block + R"(, "charges": [{"position_m": [0, -0.3, 0.3], "tnt_kg": 0.001, "burst": "free-air"}]})");
+    EXPECT_TRUE(said(spalled, "objects[0] ('block'): the nearest charge's reflected pulse would spall its far face to about"));
+    EXPECT_FALSE(said(notesOf("{" + block + R"(, "charges": [{"position_m": [0, -3, 0.3], "tnt_kg": 10, "burst": "free-air"}]})"), "spall"));
+    for (const std::string& note : notesOf(defaultSceneJson())) EXPECT_EQ(note.find("particles across"), std::string::npos) << note;
     // A charge 2 cm from the wall's face (Z = 0.02 m/kg^(1/3) for 1 kg) is nearer than the blast
     // data reach (issue 50); the default scene's is not.
     const std::string near = R"(, "voxel_size_m": 0.1, "charges": [{"position_m": [0, -0.12, 0.3], "tnt_kg": 1.0, "burst": "free-air"}])";

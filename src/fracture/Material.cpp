@@ -395,6 +395,20 @@ void validateMaterial(const Material& m)
         throw InputError("material '" + m.name + "': " + problem.key + " " + problem.reason);
 }
 
+double acrossCoursesStrengthRatio(const Material& m)
+{
+    const double courseM = m.unitHeightM + m.jointThicknessM, lengthPitchM = m.unitLengthM + m.jointThicknessM;
+    // The units' overlap from course to course: half a unit in running bond, a quarter in
+    // English and Flemish bonds (masonryUnitOf's layouts).
+    const double overlapM = m.bondPattern == BondPattern::Running ? 0.5 * lengthPitchM : 0.25 * lengthPitchM;
+    // Per course: a head joint in tension over the unit's height and a bed joint sliding over
+    // the overlap (cohesion alone: no precompression assumed) ...
+    const double steppedPa = (m.tensileStrengthPa * m.unitHeightM + m.shearStrengthPa * overlapM) / courseM;
+    // ... or, over two courses, a unit and a head joint in tension.
+    const double straightPa = (m.unitTensileStrengthPa + m.tensileStrengthPa) * m.unitHeightM / (2.0 * courseM);
+    return std::min(steppedPa, straightPa) / m.tensileStrengthPa;
+}
+
 std::array<int64_t, 3> masonryUnitOf(const Material& m, double xM, double yM, double zM)
 {
     // A point exactly on a joint (common: voxel centres fall on it when h divides the pitch)

@@ -86,7 +86,13 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
     const double gc = m.compressiveFractureEnergyJPerM2;
     k.strength[0] = strengthOf(eAcross, m.tensileStrengthPa, m.fractureEnergyJPerM2, m.shearStrengthPa, m.frictionCoefficient, m.compressiveStrengthPa, gc);
     k.strength[1] = k.strength[0];
-    if (hasUnits(m))  // masonry crushes as an assembly: its units as its joints
+    if (hasUnits(m) && h > m.unitHeightM + m.jointThicknessM) {
+        // Particles taller than a course: bonds across the courses are homogenised masonry's
+        // (classifyUnitBonds), their energy in proportion, so the softening keeps its length.
+        const double ratio = acrossCoursesStrengthRatio(m);
+        k.strength[1] = strengthOf(eAcross, ratio * m.tensileStrengthPa, ratio * m.fractureEnergyJPerM2, ratio * m.shearStrengthPa, m.frictionCoefficient,
+                                   m.compressiveStrengthPa, gc);
+    } else if (hasUnits(m))  // masonry crushes as an assembly: its units as its joints
         k.strength[1] = strengthOf(eAcross, m.unitTensileStrengthPa, m.unitFractureEnergyJPerM2, m.unitShearStrengthPa, m.unitFrictionCoefficient,
                                    m.compressiveStrengthPa, gc);
     else if (grained)
@@ -227,9 +233,13 @@ FaceInBox Lattice::supportedFace(const Body& body, uint32_t p, int groundFace, c
 
 void Lattice::classifyUnitBonds(const Material& material)
 {
-    // Voxels taller than a course do not resolve the units: every bond then spans a bed joint,
-    // and the material stays what its own (the joints') values make it, homogenised.
-    if (mModel.spacingM > material.unitHeightM + material.jointThicknessM) return;
+    // Particles taller than a course do not resolve the units: a bond across the bed joints
+    // (along z) is the joints', one across the courses homogenised masonry's (calibrateLattice).
+    if (mModel.spacingM > material.unitHeightM + material.jointThicknessM) {
+        for (LatticeBond& bond : mModel.bonds)
+            if (bond.axis != 2 && bond.low < mModel.voxelParticleCount && bond.high < mModel.voxelParticleCount) bond.strengthClass = 1;
+        return;
+    }
     // A voxel's centre where the object was voxelised: its index times h (Voxelise.cpp's transform).
     const auto unitOf = [&](const openvdb::Coord& v) {
         return masonryUnitOf(material, mModel.spacingM * v.x(), mModel.spacingM * v.y(), mModel.spacingM * v.z());

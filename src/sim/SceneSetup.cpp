@@ -131,6 +131,7 @@ Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(sc
     }
     noteFragmentMemory();
     noteFractureLimits();
+    noteUnresolvedThickness();
     noteChargesNearerThanTheBlastData();
     mState.stepStats.minDtS = scene.timeStep.maxTimeStepS;
 }
@@ -231,16 +232,66 @@ void Simulation::noteFractureLimits()
     for (size_t i = 0; i < mScene.objects.size(); ++i) {
         const Material& material = mScene.material(mScene.objects[i].material);
         const double courseM = material.unitHeightM + material.jointThicknessM;
-        // Lattice::classifyUnitBonds: a particle taller than a course makes every bond a joint's.
+        // Lattice::classifyUnitBonds: particles taller than a course make the material homogenised masonry.
         if (!hasUnits(material) || particleM <= courseM) continue;
         std::ostringstream note;
         note.precision(3);
         note << "objects[" << i << "] ('" << mScene.objects[i].name << "', " << material.name << "): its lattice's particles (" << particleM
              << " m: voxel_size_m x lattice.particle_voxels) are taller than a course (" << courseM
-             << " m), so no bond lies inside a unit and the whole object breaks at its joints' strength; particles of at most "
+             << " m), so it breaks as homogenised masonry, along its bed joints at their strength and across its courses at "
+             << acrossCoursesStrengthRatio(material) << " times it, into pieces no smaller than a particle; particles of at most "
              << courseM << " m resolve its units";
         mNotes.push_back(note.str());
     }
+}
+
+void Simulation::noteUnresolvedThickness()
+{
+    if (mScene.fracture.algorithm != FractureAlgorithm::Lattice) return;
+    const double particleM = mScene.voxelSizeM * mScene.lattice.particleVoxels;
+    for (size_t i = 0; i < mState.bodies.size(); ++i) {
+        const std::string object = "objects[" + std::to_string(i) + "] ('" + mScene.objects[i].name + "')";
+        const openvdb::Coord extent = mState.bodies[i].grid->evalActiveVoxelBoundingBox().dim();
+        const double thinnestM = mScene.voxelSizeM * std::min({extent.x(), extent.y(), extent.z()});
+        std::ostringstream note;
+        note.precision(3);
+        if (thinnestM <= 2.0 * particleM) {
+            note << object << " is " << thinnestM / particleM << " particles across its thinnest side (" << thinnestM
+                 << " m): the stress across it, which bends and spalls it, is not resolved; voxel_size_m x lattice.particle_voxels of at most "
+                 << thinnestM / 4.0 << " m puts four particles across";
+            mNotes.push_back(note.str());
+            continue;
+        }
+        const double spallM = shallowestSpallZoneM(i);
+        if (spallM > 0.0 && spallM < particleM) {
+            note << object << ": the nearest charge's reflected pulse would spall its far face to about " << spallM
+                 << " m deep (half the pulse's length in the material: Rinehart 1960), less than its particles (" << particleM
+                 << " m), which cannot resolve it; particles of at most " << spallM / 2.0 << " m put two across it";
+            mNotes.push_back(note.str());
+        }
+    }
+}
+
+double Simulation::shallowestSpallZoneM(size_t bodyIndex) const
+{
+    // A compressive pulse of peak σ0 and length L = c t (UFC 3-340-02's fictitious triangular
+    // duration t = 2 Ir / Pr, c the P-wave speed) reflects from the far face as tension, which
+    // exceeds ft from L ft / (2 σ0) to L / 2 from the face (Rinehart 1960, a sawtooth pulse):
+    // the spalled zone, about L / 2 deep once σ0 is well above ft. None when σ0 stays below ft.
+    const Body& body = mState.bodies[bodyIndex];
+    const Material& m = mScene.materials[body.materialIndex];
+    const double nu = m.poissonRatio;
+    const double waveSpeedMS = std::sqrt(m.youngsModulusPa * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu) * m.densityKgM3));
+    double shallowestM = 0.0;
+    for (const Charge& charge : mScene.charges) {
+        const double distanceM = nearestVoxelDistanceM(body, charge.positionM);
+        if (!(distanceM > 0.0)) continue;
+        const BlastParameters p = blastParameters(mScene.blast.dataset, charge.burst, charge.tntKg, distanceM, mScene.blast.atmosphere);
+        if (p.reflectedPressurePa <= m.tensileStrengthPa) continue;
+        const double depthM = 0.5 * waveSpeedMS * 2.0 * p.reflectedImpulsePaS / p.reflectedPressurePa;
+        shallowestM = shallowestM > 0.0 ? std::min(shallowestM, depthM) : depthM;
+    }
+    return shallowestM;
 }
 
 Simulation::Simulation(const Scene& scene, SimulationState state) : mScene(scene), mState(std::move(state))

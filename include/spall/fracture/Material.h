@@ -143,6 +143,15 @@ FieldProblem structureProblem(const Material& m);
 /// material built of units; the point in the object's world frame at voxelisation (unit: m).
 std::array<int64_t, 3> masonryUnitOf(const Material& material, double xM, double yM, double zM);
 
+/// Masonry seen at a scale coarser than a course (a homogenised material): how many times its
+/// joints' tensile strength it takes to open a crack across the courses (a plane perpendicular
+/// to the bed joints). Such a crack either steps, through the head joints in tension and along
+/// the bed joints in shear over the units' overlap, or runs straight, through head joints and
+/// units in alternate courses (the two failures of Backes' 1985 tests, as Lourenço 1996 ch. 3
+/// describes them); the lesser of the two, per course height. A crack along the bed joints
+/// stays the joints'.
+double acrossCoursesStrengthRatio(const Material& material);
+
 /// The named presets: glass, wood, brick-masonry, concrete, reinforced-concrete.
 const std::vector<Material>& materialPresets();
 

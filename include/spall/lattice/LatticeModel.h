@@ -41,7 +41,8 @@ struct LatticeStiffness {
     double lameLambdaPa = 0.0;
     /// What a bond fails at; a material built of units (masonry) or with a grain (wood) has
     /// two: [0] the material's own, which for masonry is its joints' and for wood across the
-    /// grain, and [1] inside a unit, or along the grain.
+    /// grain, and [1] inside a unit (across the courses when particles are taller than a
+    /// course: acrossCoursesStrengthRatio), or along the grain.
     struct Strength {
         /// E along the bond, which turns its stretch into stress in uniaxial tension (unit: Pa).
         double youngsModulusPa = 0.0;

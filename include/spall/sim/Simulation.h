@@ -133,9 +133,15 @@ private:
     /// A note when the memory available could not hold every voxel as a fragment of its own.
     void noteFragmentMemory();
     /// What the scene's fracture settings cannot see, as notes naming the key and what would:
-    /// the paper's rules ignore impulse and shielding; masonry in voxels coarser than a course
-    /// has no bricks, only joints.
+    /// the paper's rules ignore impulse and shielding; masonry in particles taller than a course
+    /// is homogenised.
     void noteFractureLimits();
+    /// What the lattice's particles are too large to resolve, each a note naming the voxel size
+    /// that would: an object two particles thick or less, a spalled zone shallower than a particle.
+    void noteUnresolvedThickness();
+    /// The shallowest spalled zone any charge's reflected pulse would open at a body's far face,
+    /// 0 when none would spall it (unit: m).
+    double shallowestSpallZoneM(size_t bodyIndex) const;
     /// A note for each charge nearer to an object than its blast data's fits reach (the
     /// pressures are held at the fits' near end there).
     void noteChargesNearerThanTheBlastData();
