@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -227,9 +228,9 @@ const char* kEveryKeyScene = R"({
                         "along_grain_fracture_energy_J_per_m2": 12000, "along_grain_shear_strength_Pa": 2e7,
                         "along_grain_compressive_strength_Pa": 4e7, "along_grain_compressive_fracture_energy_J_per_m2": 60000}},
   "objects": [{"name": "block", "primitive": {"shape": "box", "size_m": [1, 1, 1]}, "position_m": [0, 0, 0.5],
-               "rotation_deg": [0, 0, 5], "material": "stone", "anchor": "ground"},
+               "rotation_deg": [0, 0, 5], "material": "stone", "anchor": "ground", "scale": 1.5},
               {"name": "sheet", "mesh": "/meshes/sheet.obj", "position_m": [0, 0, 2], "rotation_deg": [0, 0, 0],
-               "material": "stone", "anchor": "none", "inside": "winding-number", "shell_thickness_m": 0.2}],
+               "material": "stone", "anchor": "none", "inside": "winding-number", "shell_thickness_m": 0.2, "mesh_unit": "in"}],
   "charges": [{"position_m": [0, -3, 0], "tnt_kg": 2, "detonation_time_s": 0.01, "burst": "free-air"}],
   "blast": {"dataset": "kinney-graham", "table_nodes_per_decade": 64},
   "fracture": {"algorithm": "davison-stevens", "weakening": false, "orientation": false, "min_fragment_voxels": 3,
@@ -283,6 +284,42 @@ TEST(Scene, ResolvedSceneHoldsEveryKeyWithItsValue)
     for (const auto& [path, value] : known) EXPECT_TRUE(listed.count(path)) << path << " is missing from kEveryKeyScene";
     // Reading the resolved scene gives it back unchanged.
     EXPECT_EQ(sceneToJson(parseScene(resolved.dump(), "resolved", ".")), resolved);
+}
+
+TEST(Scene, AMeshInOtherUnitsTakesItsUnitAndAnObjectItsScale)
+{
+    // A cube 100 units on a side, modelled in centimetres: in metres it would be 100 m, far past
+    // max_voxels at 0.1 m, and the error says how large it is and which key fixes it. (Its faces
+    // are off the voxel centres: issue 50's round coordinates are another matter.)
+    const std::filesystem::path dir = std::filesystem::path(testing::TempDir()) / "spall-mesh-unit";
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir / "cube.obj") << "v 0.5 0.5 0.5\nv 100.5 0.5 0.5\nv 100.5 100.5 0.5\nv 0.5 100.5 0.5\nv 0.5 0.5 100.5\nv 100.5 0.5 100.5\n"
+                                       "v 100.5 100.5 100.5\nv 0.5 100.5 100.5\n"
+                                       "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+    const auto sceneWith = [&](const std::string& objectKeys) {
+        return parseScene(R"({"voxel_size_m": 0.1, "max_voxels": 100000, "objects": [{"name": "cube", "mesh": "cube.obj")" + objectKeys + "}]}", "cube.json",
+                          dir.string());
+    };
+    try {
+        Simulation tooLarge(sceneWith(""));
+        ADD_FAILURE() << "a 100 m cube at 0.1 m voxels ran";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("objects[0] ('cube') spans 100 x 100 x 100 m (mesh_unit \"m\", scale 1)"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("takes mesh_unit (cm, mm, in, ft) or scale"), std::string::npos) << e.what();
+    }
+    const auto volumeM3 = [](const Simulation& sim) { return sim.bodies().front().mass.voxelCount * std::pow(sim.scene().voxelSizeM, 3); };
+    const Simulation centimetres(sceneWith(R"(, "mesh_unit": "cm")"));
+    EXPECT_NEAR(volumeM3(centimetres), 1.0, 1e-9);
+    const Simulation halved(sceneWith(R"(, "mesh_unit": "cm", "scale": 0.5)"));
+    EXPECT_NEAR(volumeM3(halved), 0.125, 1e-9);
+    // A primitive's sizes are metres: its scale applies, a mesh unit does not.
+    const Scene box = parseScene(R"({"voxel_size_m": 0.1, "objects": [{"primitive": {"shape": "box", "size_m": [1, 1, 1]}, "scale": 2}]})", "box", ".");
+    EXPECT_NEAR(volumeM3(Simulation(box)), 8.0, 0.01);
+    EXPECT_THROW(parseScene(R"({"objects": [{"primitive": {"shape": "box", "size_m": [1, 1, 1]}, "mesh_unit": "cm"}]})", "box", "."), InputError);
+    // An object larger than 100 m or smaller than a centimetre is noted with its extent.
+    const Scene tiny = parseScene(R"({"voxel_size_m": 0.001, "objects": [{"mesh": "cube.obj", "mesh_unit": "mm", "scale": 0.05}]})", "tiny", dir.string());
+    const std::vector<std::string> notes = Simulation(tiny).notes();
+    EXPECT_TRUE(std::any_of(notes.begin(), notes.end(), [](const std::string& n) { return n.find("spans 0.005 x 0.005 x 0.005 m") != std::string::npos; }));
 }
 
 TEST(Scene, BurstFollowsTheChargesHeightAboveTheGround)

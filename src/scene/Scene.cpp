@@ -26,8 +26,17 @@ const std::vector<Field<ObjectSpec>>& fieldTable<ObjectSpec>()
         {"anchor", choice(&ObjectSpec::anchor)},
         {"inside", choice(&ObjectSpec::inside)},
         {"shell_thickness_m", &ObjectSpec::shellThicknessM, closed(0, 1e3)},
+        {"mesh_unit", choice(&ObjectSpec::meshUnit)},
+        {"scale", &ObjectSpec::scale, closed(1e-6, 1e6)},
     };
     return table;
+}
+
+double objectUnitM(const ObjectSpec& spec)
+{
+    // Exact by definition: 1 in = 25.4 mm, 1 ft = 12 in (international yard and pound, 1959).
+    static constexpr double kMetresPer[] = {1.0, 0.01, 0.001, 0.0254, 0.3048};
+    return kMetresPer[int(spec.meshUnit)] * spec.scale;
 }
 
 template <>
@@ -139,6 +148,7 @@ ObjectSpec readObject(ObjectReader& o, size_t index, const Scene& scene, const s
         spec.primitive = readPrimitive(*o.child("primitive"));
         if (spec.inside != InsideTest::Auto) o.fail(o.keyPath("inside"), "applies to meshes only; a primitive's inside is exact");
         if (spec.shellThicknessM > 0) o.fail(o.keyPath("shell_thickness_m"), "applies to meshes only");
+        if (spec.meshUnit != MeshUnit::Metre) o.fail(o.keyPath("mesh_unit"), "applies to meshes only; a primitive's sizes are in metres");
     }
     return spec;
 }

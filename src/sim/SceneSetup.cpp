@@ -31,19 +31,52 @@ void anchorToColliders(Body& body, const std::vector<ObstacleBox>& boxes)
         if (freeFaceDeepestInBoxes(body, it.getCoord(), boxes).depthM >= 0.25 * body.voxelSizeM) it.setValue(*it | kAnchorBit);
 }
 
+/// An object's primitive at its scale.
+Primitive scaledPrimitive(const ObjectSpec& spec)
+{
+    Primitive primitive = *spec.primitive;
+    primitive.sizeM *= spec.scale;
+    return primitive;
+}
+
+/// An object's extent along its own axes, its mesh already in metres (unit: m).
+Eigen::Vector3d objectExtentM(const ObjectSpec& spec, const TriangleMesh& mesh)
+{
+    if (spec.primitive) return 2.0 * primitiveHalfExtentM(scaledPrimitive(spec));
+    Eigen::AlignedBox3f box;
+    for (const Eigen::Vector3f& x : mesh.positionsM) box.extend(x);
+    return box.isEmpty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(box.sizes().cast<double>());
+}
+
+/// "objects[i] ('name') spans X x Y x Z m (mesh_unit u, scale s)", for messages about its size.
+std::string describeExtent(const Scene& scene, size_t i, const Eigen::Vector3d& extentM)
+{
+    const ObjectSpec& spec = scene.objects[i];
+    std::ostringstream text;
+    text.precision(3);
+    text << "objects[" << i << "] ('" << spec.name << "') spans " << extentM.x() << " x " << extentM.y() << " x " << extentM.z() << " m";
+    if (!spec.primitive) text << " (mesh_unit \"" << enumName(spec.meshUnit) << "\", scale " << spec.scale << ")";
+    return text.str();
+}
+
 /// Refuses, before anything is allocated, a scene whose objects' bounding boxes hold more voxels
 /// than max_voxels, or whose whole objects would not fit in the memory available.
 void checkSceneFits(const Scene& scene, const std::vector<TriangleMesh>& meshes)
 {
     const double h = scene.voxelSizeM;
     double upperBound = 0.0;
-    for (size_t i = 0; i < scene.objects.size(); ++i)
-        upperBound += scene.objects[i].primitive ? boundingBoxVoxels(*scene.objects[i].primitive, h) : boundingBoxVoxels(meshes[i], h);
+    size_t largest = 0;
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+        upperBound += scene.objects[i].primitive ? boundingBoxVoxels(scaledPrimitive(scene.objects[i]), h) : boundingBoxVoxels(meshes[i], h);
+        if (objectExtentM(scene.objects[i], meshes[i]).maxCoeff() > objectExtentM(scene.objects[largest], meshes[largest]).maxCoeff()) largest = i;
+    }
     std::ostringstream problem;
     problem.precision(3);
     if (upperBound > static_cast<double>(scene.maxVoxels)) {
         problem << scene.sourceName << ": max_voxels: the objects' bounding boxes hold up to " << upperBound << " voxels at voxel_size_m "
-                << h << ", above max_voxels " << scene.maxVoxels << " (use a larger voxel_size_m: the count falls with its cube)";
+                << h << ", above max_voxels " << scene.maxVoxels << " (use a larger voxel_size_m: the count falls with its cube); the largest, "
+                << describeExtent(scene, largest, objectExtentM(scene.objects[largest], meshes[largest]))
+                << ": a mesh modelled in other units takes mesh_unit (cm, mm, in, ft) or scale";
         throw InputError(problem.str());
     }
     const double needed = estimateMemory(upperBound).intactBytes, available = availableMemoryBytes();
@@ -144,8 +177,21 @@ std::vector<TriangleMesh> Simulation::loadMeshes()
         std::vector<std::string> notes;
         meshes[i] = loadMesh(mScene.objects[i].meshPath, &notes);
         for (const std::string& note : notes) mNotes.push_back(mScene.objects[i].meshPath + ": " + note);
+        const float unitM = float(objectUnitM(mScene.objects[i]));
+        if (unitM != 1.0f)
+            for (Eigen::Vector3f& x : meshes[i].positionsM) x *= unitM;
+        noteImplausibleSize(i, objectExtentM(mScene.objects[i], meshes[i]));
     }
     return meshes;
+}
+
+void Simulation::noteImplausibleSize(size_t index, const Eigen::Vector3d& extentM)
+{
+    // Larger than any building's wall or smaller than a brick's joint: likely the wrong unit.
+    constexpr double kLargestM = 100.0, kSmallestM = 0.01;
+    if (extentM.maxCoeff() <= kLargestM && extentM.maxCoeff() >= kSmallestM) return;
+    mNotes.push_back(describeExtent(mScene, index, extentM) + ", " + (extentM.maxCoeff() > kLargestM ? "larger" : "smaller") +
+                     " than a structure spall is made for: a mesh modelled in other units takes mesh_unit (cm, mm, in, ft) or scale");
 }
 
 VoxeliseResult Simulation::voxeliseObject(const ObjectSpec& spec, const TriangleMesh& mesh, Interrupter* interrupter)
@@ -155,7 +201,7 @@ VoxeliseResult Simulation::voxeliseObject(const ObjectSpec& spec, const Triangle
     vs.maxVoxels = mScene.maxVoxels - mState.initialVoxels;  // the limit is the scene's, over all objects
     vs.insideTest = spec.inside;
     vs.shellThicknessM = spec.shellThicknessM;
-    VoxeliseResult vox = spec.primitive ? voxelisePrimitive(*spec.primitive, vs) : voxeliseMesh(mesh, vs, spec.meshPath, interrupter);
+    VoxeliseResult vox = spec.primitive ? voxelisePrimitive(scaledPrimitive(spec), vs) : voxeliseMesh(mesh, vs, spec.meshPath, interrupter);
     for (const std::string& note : vox.notes) mNotes.push_back(spec.meshPath + ": " + note);
     return vox;
 }

@@ -34,17 +34,6 @@ double boxVoxels(const Eigen::Vector3d& extentM, double h)
     return std::ceil(extentM.x() / h + 1) * std::ceil(extentM.y() / h + 1) * std::ceil(extentM.z() / h + 1);
 }
 
-Eigen::Vector3d primitiveHalfExtentM(const Primitive& primitive)
-{
-    const Eigen::Vector3d& s = primitive.sizeM;
-    switch (primitive.shape) {
-    case PrimitiveShape::Box: return 0.5 * s;
-    case PrimitiveShape::Sphere: return Eigen::Vector3d::Constant(s.x());
-    case PrimitiveShape::Cylinder: return Eigen::Vector3d(s.x(), s.x(), 0.5 * s.z());
-    }
-    return 0.5 * s;
-}
-
 void checkVoxelBudget(double estimate, double h, int64_t maxVoxels, const std::string& what)
 {
     if (estimate > static_cast<double>(maxVoxels)) {
@@ -215,6 +204,17 @@ double boundingBoxVoxels(const TriangleMesh& mesh, double h)
     Eigen::AlignedBox3f bounds;
     for (const auto& p : mesh.positionsM) bounds.extend(p);
     return mesh.positionsM.empty() ? 0.0 : boxVoxels(bounds.sizes().cast<double>(), h);
+}
+
+Eigen::Vector3d primitiveHalfExtentM(const Primitive& primitive)
+{
+    const Eigen::Vector3d& s = primitive.sizeM;
+    switch (primitive.shape) {
+    case PrimitiveShape::Box: return 0.5 * s;
+    case PrimitiveShape::Sphere: return Eigen::Vector3d::Constant(s.x());
+    case PrimitiveShape::Cylinder: return Eigen::Vector3d(s.x(), s.x(), 0.5 * s.z());
+    }
+    return 0.5 * s;
 }
 
 double boundingBoxVoxels(const Primitive& primitive, double h) { return boxVoxels(2.0 * primitiveHalfExtentM(primitive), h); }

@@ -28,6 +28,15 @@ struct EnumNames<AnchorMode> {
         {AnchorMode::None, "none"}, {AnchorMode::Ground, "ground"}, {AnchorMode::Supports, "supports"}};
 };
 
+/// The length unit a mesh file's coordinates are in (glTF's is the metre; CAD and modelling
+/// tools often write millimetres, centimetres or inches).
+enum class MeshUnit { Metre, Centimetre, Millimetre, Inch, Foot };
+template <>
+struct EnumNames<MeshUnit> {
+    static constexpr std::pair<MeshUnit, const char*> kNames[] = {
+        {MeshUnit::Metre, "m"}, {MeshUnit::Centimetre, "cm"}, {MeshUnit::Millimetre, "mm"}, {MeshUnit::Inch, "in"}, {MeshUnit::Foot, "ft"}};
+};
+
 struct ObjectSpec {
     std::string name;
     std::string meshPath;                 ///< resolved against the scene file; empty for primitives
@@ -38,7 +47,14 @@ struct ObjectSpec {
     AnchorMode anchor = AnchorMode::None;
     InsideTest inside = InsideTest::Auto;  ///< meshes only (docs/voxelisation.md)
     double shellThicknessM = 0.0;          ///< meshes only: > 0 makes a shell of the surface (unit: m)
+    MeshUnit meshUnit = MeshUnit::Metre;   ///< meshes only: what the file's coordinates are in
+    /// Every length of the object times this, about its local origin (mesh or primitive) (unit: 1).
+    double scale = 1.0;
 };
+
+/// What one unit of an object's own coordinates is in the world: its mesh unit times its scale
+/// (unit: m).
+double objectUnitM(const ObjectSpec& spec);
 
 /// What each fragment_<id> grid in a frame holds (docs/file-formats.md).
 enum class FragmentGrids {

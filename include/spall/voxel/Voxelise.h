@@ -57,4 +57,7 @@ VoxeliseResult voxelisePrimitive(const Primitive& primitive, const VoxeliseSetti
 double boundingBoxVoxels(const TriangleMesh& mesh, double h);
 double boundingBoxVoxels(const Primitive& primitive, double h);
 
+/// Half the extent of a primitive's bounding box along its axes (unit: m).
+Eigen::Vector3d primitiveHalfExtentM(const Primitive& primitive);
+
 }  // namespace spall
