@@ -29,6 +29,10 @@ void checkVoxelSize(double h)
     }
 }
 
+/// How far past a half-multiple of h a mesh is shifted so that no face lies on a voxel centre
+/// (unit: voxels): far above float rounding at any coordinate a scene holds, far below a voxel.
+constexpr double kTieBreakVoxels = 0.01;
+
 double boxVoxels(const Eigen::Vector3d& extentM, double h)
 {
     return std::ceil(extentM.x() / h + 1) * std::ceil(extentM.y() / h + 1) * std::ceil(extentM.z() / h + 1);
@@ -227,7 +231,14 @@ VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& se
     if (mesh.triangles.empty()) throw InputError(sourceName + ": mesh has no faces");
     checkVoxelBudget(boundingBoxVoxels(mesh, h), h, settings.maxVoxels, sourceName);
 
+    // Voxel cubes tile the object's frame from its origin, centres at (i + 1/2) h: faces modelled
+    // at round coordinates (CAD's habit) then lie between centres, where the level set and the
+    // winding number agree, and the cubes end on them. A hundredth of a voxel more breaks ties
+    // for faces at half-multiples of h (coordinates h does not divide) half-open, the same way
+    // by either test. The grid indexes the shifted mesh; localOffsetM shifts it back.
+    const float shiftM = static_cast<float>(kTieBreakVoxels * h - 0.5 * h);
     TriangleMesh outward = mesh;
+    for (Eigen::Vector3f& x : outward.positionsM) x.array() += shiftM;
     const MeshTopology topology = orientOutward(outward);
     InsideTest test = settings.insideTest;
     // OpenVDB's level set finds its sign by flood fill from outside, which fills sealed hollows;
@@ -235,6 +246,7 @@ VoxeliseResult voxeliseMesh(const TriangleMesh& mesh, const VoxeliseSettings& se
     if (test == InsideTest::Auto)
         test = topology.openEdges == 0 && topology.hollows == 0 ? InsideTest::LevelSet : InsideTest::WindingNumber;
     VoxeliseResult result;
+    result.localOffsetM = Eigen::Vector3d::Constant(-double(shiftM));
     result.enclosedVolumeM3 = topology.enclosedVolumeM3;
     if (settings.shellThicknessM == 0.0) noteRepairs(result, topology, test);
     result.grid = newLinkGrid(h);

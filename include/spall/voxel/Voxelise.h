@@ -20,7 +20,8 @@ struct VoxeliseResult {
     LinkGrid::Ptr grid;  ///< solid voxels, all links intact, index space at voxel size
     int64_t voxelCount = 0;
     /// Object-local position of index (0,0,0): local = index * h + offset (unit: m). Boxes use 0 or
-    /// h/2 per axis so that their voxel cubes tile the box exactly; meshes use 0.
+    /// h/2 per axis so that their voxel cubes tile the box exactly; meshes about h/2, so that their
+    /// cubes tile the object's frame from its origin (voxeliseMesh).
     Eigen::Vector3d localOffsetM = Eigen::Vector3d::Zero();
     /// Volume the mesh encloses, for comparison with the voxels' (unit: m^3; 0 for primitives).
     double enclosedVolumeM3 = 0.0;
