@@ -99,6 +99,10 @@ int runVoxelise(const std::string& input, const std::string& primitiveSpec, cons
         result.notes.insert(result.notes.begin(), notes.begin(), notes.end());
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    // The file places each voxel where it lies in the mesh's (or primitive's) own frame.
+    openvdb::math::Transform::Ptr placed = openvdb::math::Transform::createLinearTransform(voxelSize);
+    placed->postTranslate(openvdb::Vec3d(result.localOffsetM.x(), result.localOffsetM.y(), result.localOffsetM.z()));
+    result.grid->setTransform(placed);
     spall::writeVoxelisedBody(output, *result.grid, voxelSize, source);
 
     const spall::MassProperties mp = spall::computeMassProperties(*result.grid, voxelSize, 1000.0);
