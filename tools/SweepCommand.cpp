@@ -62,8 +62,14 @@ int summarise(const std::string& dir, const spall::SweepPlan& plan)
         for (int i : group)
             if (summary.status[i].state == spall::VariantState::Done) hfd.push_back(summary.figures[i].hazardousFragmentDistanceM);
         const spall::MeanInterval m = spall::meanInterval(hfd);
-        std::printf("group %s: hazardous fragment distance %.2f m +- %.2f m (95 %%, %lld seeds; %.2f to %.2f m)\n",
-                    plan.variants[group.front()].overridesText().c_str(), m.mean, m.halfWidth, static_cast<long long>(m.n), m.min, m.max);
+        const std::string overrides = plan.variants[group.front()].overridesText();
+        if (!spall::seedsChangedAnything(summary, group))
+            std::printf("group %s: hazardous fragment distance %.2f m, every figure the same for all %lld seeds: nothing in this scene "
+                        "draws on the seed (no material scatters), so they say nothing about spread\n",
+                        overrides.c_str(), m.mean, static_cast<long long>(m.n));
+        else
+            std::printf("group %s: hazardous fragment distance %.2f m +- %.2f m (95 %%, %lld seeds; %.2f to %.2f m)\n", overrides.c_str(), m.mean,
+                        m.halfWidth, static_cast<long long>(m.n), m.min, m.max);
     }
     std::printf("summary: %s/summary.csv, summary_groups.csv, summary.h5, summary_hfd.png\n", dir.c_str());
     if (unfinished) std::fprintf(stderr, "spall sweep: %d of %zu variants failed or did not finish (see above and %s/logs)\n", unfinished, plan.variants.size(), dir.c_str());

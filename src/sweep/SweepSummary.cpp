@@ -58,6 +58,21 @@ std::vector<double> doneValues(const SweepSummary& s, const std::vector<int>& gr
     return values;
 }
 
+}  // namespace
+
+bool seedsChangedAnything(const SweepSummary& summary, const std::vector<int>& group)
+{
+    for (const Figure& figure : kFigures) {
+        const std::vector<double> values = doneValues(summary, group, figure);
+        if (values.size() < 2) return true;  // nothing to compare: no claim that seeds do nothing
+        const auto differs = [&](double v) { return v != values.front() && !(std::isnan(v) && std::isnan(values.front())); };
+        if (std::any_of(values.begin(), values.end(), differs)) return true;
+    }
+    return false;
+}
+
+namespace {
+
 void writeVariantsCsv(std::ostream& out, const SweepPlan& plan, const SweepSummary& s)
 {
     out << "index,name,seed,overrides,state,message";
@@ -77,12 +92,12 @@ void writeVariantsCsv(std::ostream& out, const SweepPlan& plan, const SweepSumma
 
 void writeGroupsCsv(std::ostream& out, const SweepPlan& plan, const SweepSummary& s)
 {
-    out << "group,overrides,variants,done";
+    out << "group,overrides,variants,done,seeds_changed_anything";
     for (const Figure& f : kFigures) out << "," << f.key << "_mean," << f.key << "_ci95_half_width," << f.key << "_min," << f.key << "_max";
     out << "\n";
     for (size_t g = 0; g < s.groups.size(); ++g) {
         out << g << "," << csvQuoted(plan.variants[s.groups[g].front()].overridesText()) << "," << s.groups[g].size() << ","
-            << doneValues(s, s.groups[g], kFigures[0]).size();
+            << doneValues(s, s.groups[g], kFigures[0]).size() << "," << int(seedsChangedAnything(s, s.groups[g]));
         for (const Figure& f : kFigures) {
             const MeanInterval m = meanInterval(doneValues(s, s.groups[g], f));
             char line[160];

@@ -101,6 +101,10 @@ struct SweepSummary {
     std::vector<std::vector<int>> groups;
 };
 
+/// Whether a group's seeds changed any figure: false when two or more of its variants finished
+/// and all gave the same figures (nothing in the scene draws on the seed, e.g. no material scatters).
+bool seedsChangedAnything(const SweepSummary& summary, const std::vector<int>& group);
+
 /// Reads every variant's status and history (DIR/variants/...); a failed or unfinished variant
 /// is reported as such and leaves the others' figures alone.
 SweepSummary collectSweep(const std::string& sweepDir, const SweepPlan& plan);
