@@ -37,6 +37,55 @@ std::array<double, 3> normalModuli(double acrossPa, double poissonRatio, double 
     return {across, along, kappa / denominator};
 }
 
+/// What a bond of a strength class fails at (Material's values for that class).
+struct FailureValues {
+    double tensilePa, fractureEnergyJPerM2, shearPa, friction, compressivePa, compressiveFractureEnergyJPerM2;
+};
+
+LatticeStiffness::Strength strengthOf(double youngsPa, const FailureValues& f, double h)
+{
+    LatticeStiffness::Strength s;
+    s.youngsModulusPa = youngsPa;
+    s.peakStretchM = f.tensilePa * h / youngsPa;
+    // Voxels too large to soften (snap-back) break at the peak: the strength, which decides
+    // whether a body breaks, is kept, and what the bond held beyond Gf goes back to its
+    // particles (Lattice::releaseSnapEnergies).
+    s.zeroTractionStretchM = std::max(2.0 * f.fractureEnergyJPerM2 / f.tensilePa, s.peakStretchM);
+    s.fractureEnergyJPerM2 = f.fractureEnergyJPerM2;
+    s.shearStrengthPa = f.shearPa;
+    s.frictionCoefficient = f.friction;
+    if (f.compressivePa > 0.0) {
+        s.compressiveStrengthPa = f.compressivePa;
+        s.confinementM = f.compressivePa / f.tensilePa;
+        s.crushingPeakShorteningM = f.compressivePa * h / youngsPa;
+        s.crushingEndShorteningM = std::max(2.0 * f.compressiveFractureEnergyJPerM2 / f.compressivePa, s.crushingPeakShorteningM);
+    }
+    return s;
+}
+
+/// The two strength classes (LatticeStiffness::strength) at particle size h.
+std::array<LatticeStiffness::Strength, 2> strengthClasses(const Material& m, double h, double eAcross, double eAlong)
+{
+    SPALL_CHECK(m.tensileStrengthPa > 0.0 && m.fractureEnergyJPerM2 > 0.0 && m.shearStrengthPa > 0.0 && m.frictionCoefficient >= 0.0);
+    const double fc = m.compressiveStrengthPa, gc = m.compressiveFractureEnergyJPerM2;
+    const LatticeStiffness::Strength own =
+        strengthOf(eAcross, {m.tensileStrengthPa, m.fractureEnergyJPerM2, m.shearStrengthPa, m.frictionCoefficient, fc, gc}, h);
+    if (hasUnits(m) && !unitsResolvedBy(m, h)) {
+        // Particles taller than a course: bonds across the courses are homogenised masonry's
+        // (classifyUnitBonds), their energy in proportion, so the softening keeps its length.
+        const double r = acrossCoursesStrengthRatio(m);
+        return {own, strengthOf(eAcross, {r * m.tensileStrengthPa, r * m.fractureEnergyJPerM2, r * m.shearStrengthPa, m.frictionCoefficient, fc, gc}, h)};
+    }
+    if (hasUnits(m))  // masonry crushes as an assembly: its units as its joints
+        return {own, strengthOf(eAcross, {m.unitTensileStrengthPa, m.unitFractureEnergyJPerM2, m.unitShearStrengthPa, m.unitFrictionCoefficient, fc, gc}, h)};
+    if (hasGrain(m))
+        return {own, strengthOf(eAlong,
+                                {m.alongGrainTensileStrengthPa, m.alongGrainFractureEnergyJPerM2, m.alongGrainShearStrengthPa, m.frictionCoefficient,
+                                 fc > 0.0 ? m.alongGrainCompressiveStrengthPa : 0.0, m.alongGrainCompressiveFractureEnergyJPerM2},
+                                h)};
+    return {own, own};
+}
+
 }  // namespace
 
 LatticeStiffness calibrateLattice(const Material& m, double h)
@@ -62,43 +111,7 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
         // Twisting about the axis shears the two planes that hold it.
         k.twistingNmPerRad[axis] = kSquareTorsionConstant * (along ? gAlong : 0.5 * (gAlong + gAcross)) * h * h * h;
     }
-    SPALL_CHECK(m.tensileStrengthPa > 0.0 && m.fractureEnergyJPerM2 > 0.0 && m.shearStrengthPa > 0.0 && m.frictionCoefficient >= 0.0);
-    const auto strengthOf = [&](double youngsPa, double tensilePa, double fractureEnergyJPerM2, double shearPa, double friction,
-                                double compressivePa, double compressiveFractureEnergyJPerM2) {
-        LatticeStiffness::Strength s;
-        s.youngsModulusPa = youngsPa;
-        s.peakStretchM = tensilePa * h / youngsPa;
-        // Voxels too large to soften (snap-back) break at the peak: the strength, which decides
-        // whether a body breaks, is kept, and what the bond held beyond Gf goes back to its
-        // particles (Lattice::releaseSnapEnergies).
-        s.zeroTractionStretchM = std::max(2.0 * fractureEnergyJPerM2 / tensilePa, s.peakStretchM);
-        s.fractureEnergyJPerM2 = fractureEnergyJPerM2;
-        s.shearStrengthPa = shearPa;
-        s.frictionCoefficient = friction;
-        if (compressivePa > 0.0) {
-            s.compressiveStrengthPa = compressivePa;
-            s.confinementM = compressivePa / tensilePa;
-            s.crushingPeakShorteningM = compressivePa * h / youngsPa;
-            s.crushingEndShorteningM = std::max(2.0 * compressiveFractureEnergyJPerM2 / compressivePa, s.crushingPeakShorteningM);
-        }
-        return s;
-    };
-    const double gc = m.compressiveFractureEnergyJPerM2;
-    k.strength[0] = strengthOf(eAcross, m.tensileStrengthPa, m.fractureEnergyJPerM2, m.shearStrengthPa, m.frictionCoefficient, m.compressiveStrengthPa, gc);
-    k.strength[1] = k.strength[0];
-    if (hasUnits(m) && h > m.unitHeightM + m.jointThicknessM) {
-        // Particles taller than a course: bonds across the courses are homogenised masonry's
-        // (classifyUnitBonds), their energy in proportion, so the softening keeps its length.
-        const double ratio = acrossCoursesStrengthRatio(m);
-        k.strength[1] = strengthOf(eAcross, ratio * m.tensileStrengthPa, ratio * m.fractureEnergyJPerM2, ratio * m.shearStrengthPa, m.frictionCoefficient,
-                                   m.compressiveStrengthPa, gc);
-    } else if (hasUnits(m))  // masonry crushes as an assembly: its units as its joints
-        k.strength[1] = strengthOf(eAcross, m.unitTensileStrengthPa, m.unitFractureEnergyJPerM2, m.unitShearStrengthPa, m.unitFrictionCoefficient,
-                                   m.compressiveStrengthPa, gc);
-    else if (grained)
-        k.strength[1] = strengthOf(eAlong, m.alongGrainTensileStrengthPa, m.alongGrainFractureEnergyJPerM2, m.alongGrainShearStrengthPa,
-                                   m.frictionCoefficient, m.compressiveStrengthPa > 0.0 ? m.alongGrainCompressiveStrengthPa : 0.0,
-                                   m.alongGrainCompressiveFractureEnergyJPerM2);
+    k.strength = strengthClasses(m, h, eAcross, eAlong);
     k.strengthRateLaw = m.strengthRateLaw;
     k.damageRatePerS = m.damageRatePerS;
     k.damageStressScalePerPa = m.damageStressScalePerPa > 0.0 ? m.damageStressScalePerPa : 1.0 / m.tensileStrengthPa;
@@ -235,7 +248,7 @@ void Lattice::classifyUnitBonds(const Material& material)
 {
     // Particles taller than a course do not resolve the units: a bond across the bed joints
     // (along z) is the joints', one across the courses homogenised masonry's (calibrateLattice).
-    if (mModel.spacingM > material.unitHeightM + material.jointThicknessM) {
+    if (!unitsResolvedBy(material, mModel.spacingM)) {
         for (LatticeBond& bond : mModel.bonds)
             if (bond.axis != 2 && bond.low < mModel.voxelParticleCount && bond.high < mModel.voxelParticleCount) bond.strengthClass = 1;
         return;

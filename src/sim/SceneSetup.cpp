@@ -60,23 +60,23 @@ std::string describeExtent(const Scene& scene, size_t i, const Eigen::Vector3d& 
 }
 
 /// Refuses, before anything is allocated, a scene whose objects' bounding boxes hold more voxels
-/// than max_voxels, or whose whole objects would not fit in the memory available.
-void checkSceneFits(const Scene& scene, const std::vector<TriangleMesh>& meshes)
+/// than max_voxels, or whose whole objects would not fit in the memory available; `extentsM` are
+/// the objects' (objectExtentM).
+void checkSceneFits(const Scene& scene, const std::vector<TriangleMesh>& meshes, const std::vector<Eigen::Vector3d>& extentsM)
 {
     const double h = scene.voxelSizeM;
     double upperBound = 0.0;
     size_t largest = 0;
     for (size_t i = 0; i < scene.objects.size(); ++i) {
         upperBound += scene.objects[i].primitive ? boundingBoxVoxels(scaledPrimitive(scene.objects[i]), h) : boundingBoxVoxels(meshes[i], h);
-        if (objectExtentM(scene.objects[i], meshes[i]).maxCoeff() > objectExtentM(scene.objects[largest], meshes[largest]).maxCoeff()) largest = i;
+        if (extentsM[i].maxCoeff() > extentsM[largest].maxCoeff()) largest = i;
     }
     std::ostringstream problem;
     problem.precision(3);
     if (upperBound > static_cast<double>(scene.maxVoxels)) {
         problem << scene.sourceName << ": max_voxels: the objects' bounding boxes hold up to " << upperBound << " voxels at voxel_size_m "
                 << h << ", above max_voxels " << scene.maxVoxels << " (use a larger voxel_size_m: the count falls with its cube); the largest, "
-                << describeExtent(scene, largest, objectExtentM(scene.objects[largest], meshes[largest]))
-                << ": a mesh modelled in other units takes mesh_unit (cm, mm, in, ft) or scale";
+                << describeExtent(scene, largest, extentsM[largest]) << ": a mesh modelled in other units takes mesh_unit (cm, mm, in, ft) or scale";
         throw InputError(problem.str());
     }
     const double needed = estimateMemory(upperBound).intactBytes, available = availableMemoryBytes();
@@ -155,7 +155,10 @@ Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(sc
     mStaticWorld = buildStaticWorld(scene.world.ground, scene.world.colliders, scene.world.gravityMS2);
     refuseBuriedCharges(scene, mStaticWorld);
     const std::vector<TriangleMesh> meshes = loadMeshes();
-    checkSceneFits(scene, meshes);
+    std::vector<Eigen::Vector3d> extentsM;
+    for (size_t i = 0; i < scene.objects.size(); ++i) extentsM.push_back(objectExtentM(scene.objects[i], meshes[i]));
+    noteImplausibleMeshSizes(extentsM);
+    checkSceneFits(scene, meshes, extentsM);
     for (size_t i = 0; i < scene.objects.size(); ++i) {
         Body body = placeObject(i, voxeliseObject(scene.objects[i], meshes[i], interrupter));
         mState.initialVoxels += body.mass.voxelCount;
@@ -180,18 +183,20 @@ std::vector<TriangleMesh> Simulation::loadMeshes()
         const float unitM = float(objectUnitM(mScene.objects[i]));
         if (unitM != 1.0f)
             for (Eigen::Vector3f& x : meshes[i].positionsM) x *= unitM;
-        noteImplausibleSize(i, objectExtentM(mScene.objects[i], meshes[i]));
     }
     return meshes;
 }
 
-void Simulation::noteImplausibleSize(size_t index, const Eigen::Vector3d& extentM)
+void Simulation::noteImplausibleMeshSizes(const std::vector<Eigen::Vector3d>& extentsM)
 {
     // Larger than any building's wall or smaller than a brick's joint: likely the wrong unit.
     constexpr double kLargestM = 100.0, kSmallestM = 0.01;
-    if (extentM.maxCoeff() <= kLargestM && extentM.maxCoeff() >= kSmallestM) return;
-    mNotes.push_back(describeExtent(mScene, index, extentM) + ", " + (extentM.maxCoeff() > kLargestM ? "larger" : "smaller") +
-                     " than a structure spall is made for: a mesh modelled in other units takes mesh_unit (cm, mm, in, ft) or scale");
+    for (size_t i = 0; i < extentsM.size(); ++i) {
+        const double largestM = extentsM[i].maxCoeff();
+        if (mScene.objects[i].primitive || (largestM <= kLargestM && largestM >= kSmallestM)) continue;
+        mNotes.push_back(describeExtent(mScene, i, extentsM[i]) + ", " + (largestM > kLargestM ? "larger" : "smaller") +
+                         " than a structure spall is made for: a mesh modelled in other units takes mesh_unit (cm, mm, in, ft) or scale");
+    }
 }
 
 VoxeliseResult Simulation::voxeliseObject(const ObjectSpec& spec, const TriangleMesh& mesh, Interrupter* interrupter)
@@ -277,9 +282,8 @@ void Simulation::noteFractureLimits()
     const double particleM = mScene.voxelSizeM * mScene.lattice.particleVoxels;
     for (size_t i = 0; i < mScene.objects.size(); ++i) {
         const Material& material = mScene.material(mScene.objects[i].material);
+        if (!hasUnits(material) || unitsResolvedBy(material, particleM)) continue;
         const double courseM = material.unitHeightM + material.jointThicknessM;
-        // Lattice::classifyUnitBonds: particles taller than a course make the material homogenised masonry.
-        if (!hasUnits(material) || particleM <= courseM) continue;
         std::ostringstream note;
         note.precision(3);
         note << "objects[" << i << "] ('" << mScene.objects[i].name << "', " << material.name << "): its lattice's particles (" << particleM
@@ -334,7 +338,7 @@ double Simulation::shallowestSpallZoneM(size_t bodyIndex) const
         if (!(distanceM > 0.0)) continue;
         const BlastParameters p = blastParameters(mScene.blast.dataset, charge.burst, charge.tntKg, distanceM, mScene.blast.atmosphere);
         if (p.reflectedPressurePa <= m.tensileStrengthPa) continue;
-        const double depthM = 0.5 * waveSpeedMS * 2.0 * p.reflectedImpulsePaS / p.reflectedPressurePa;
+        const double depthM = waveSpeedMS * p.reflectedImpulsePaS / p.reflectedPressurePa;  // L / 2
         shallowestM = shallowestM > 0.0 ? std::min(shallowestM, depthM) : depthM;
     }
     return shallowestM;

@@ -143,6 +143,10 @@ FieldProblem structureProblem(const Material& m);
 /// material built of units; the point in the object's world frame at voxelisation (unit: m).
 std::array<int64_t, 3> masonryUnitOf(const Material& material, double xM, double yM, double zM);
 
+/// Whether particles of this size resolve a masonry material's units: no taller than a course
+/// (else it is homogenised masonry: acrossCoursesStrengthRatio).
+inline bool unitsResolvedBy(const Material& m, double particleM) { return particleM <= m.unitHeightM + m.jointThicknessM; }
+
 /// Masonry seen at a scale coarser than a course (a homogenised material): how many times its
 /// joints' tensile strength it takes to open a crack across the courses (a plane perpendicular
 /// to the bed joints). Such a crack either steps, through the head joints in tension and along

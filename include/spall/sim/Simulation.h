@@ -145,9 +145,9 @@ private:
     /// A note for each charge nearer to an object than its blast data's fits reach (the
     /// pressures are held at the fits' near end there).
     void noteChargesNearerThanTheBlastData();
-    /// A note for an object larger than 100 m or smaller than 1 cm, naming its extent and the
-    /// keys that set its unit.
-    void noteImplausibleSize(size_t index, const Eigen::Vector3d& extentM);
+    /// A note for each mesh object larger than 100 m or smaller than 1 cm (`extentsM` per object),
+    /// naming its extent and the keys that set its unit.
+    void noteImplausibleMeshSizes(const std::vector<Eigen::Vector3d>& extentsM);
     /// Setting up: each object's mesh (empty for primitives, in metres), its voxels, its body in place.
     std::vector<TriangleMesh> loadMeshes();
     VoxeliseResult voxeliseObject(const ObjectSpec& spec, const TriangleMesh& mesh, Interrupter* interrupter);
