@@ -7,6 +7,7 @@
 
 #include <spall/fracture/Material.h>
 #include <spall/lattice/Lattice.h>
+#include <spall/lattice/RateDamage.h>
 
 #include <gtest/gtest.h>
 
@@ -176,32 +177,78 @@ TEST(Lattice, BondsTooLargeToSoftenStillDissipateTheFractureEnergy)
     }
 }
 
-TEST(Lattice, DavisonStevensDissipatesTheFractureEnergyWhenSlowAndHoldsMoreWhenFast)
+TEST(Lattice, DavisonStevensHeldAtAStretchDamagesAsItsClosedFormSays)
 {
-    // Davison–Stevens on the bonds' stresses (B = 300 1/s, C = 1/ft). Pulled slowly (0.5 mm/s)
-    // the crack opens over about 0.2 s, slowly for B, so the energy it takes is Gf (the peak
-    // is higher than the softening line's all the same: before the crack localises every bond
-    // must soften within the 6 ms the bar takes to reach its strength). Pulled at 5 cm/s damage
-    // lags far behind: the bar carries more, and the crack takes more energy than Gf.
-    const double expectedJ = kConcrete.fractureEnergyJPerM2 * 0.02 * 0.02, h = 0.01;
-    BarSpec spec;
-    spec.h = h;
-    spec.law = LatticeDamageLaw::DavisonStevens;
-    spec.pullMS = 5e-4;
-    const BarPull slow = pullBarApart(spec);
-    spec.pullMS = 0.05;
-    const BarPull fast = pullBarApart(spec);
-    spec.law = LatticeDamageLaw::Softening;
-    const BarPull softening = pullBarApart(spec);
-    std::printf("Davison-Stevens, 0.5 mm/s: dissipated %.4f J, Gf x area %.4f J (%+.1f %%), peak %.2f MPa; 5 cm/s: %.4f J, peak %.2f MPa "
-                "(softening line: %.2f MPa)\n",
-                slow.dissipatedJ, expectedJ, 100 * (slow.dissipatedJ / expectedJ - 1), slow.peakStressPa / 1e6, fast.dissipatedJ,
-                fast.peakStressPa / 1e6, softening.peakStressPa / 1e6);
-    EXPECT_EQ(slow.broken, slow.across);
-    EXPECT_EQ(slow.damagedElsewhere, 0);
-    EXPECT_NEAR(slow.dissipatedJ, expectedJ, 0.10 * expectedJ);
-    EXPECT_GT(fast.peakStressPa, 1.2 * softening.peakStressPa);
-    EXPECT_GT(fast.dissipatedJ, 1.2 * slow.dissipatedJ);
+    // One bond, both its particles held, stretched at once to e = 1.08 times its peak stretch
+    // and held there (a longer bar would localise: its softening is unstable). The softening line allows (1 − d) e of ft there, d its
+    // damage at e; the bond carries (1 − D) e, so the excess is e (d − D) and with u = d − D,
+    // du/dt = −B [exp(a u) − 1], a = (C ft) e. Separating variables,
+    // u(t) = −ln(1 − (1 − exp(−a d)) exp(−a B t)) / a: the damage must follow it.
+    Material material = kConcrete;
+    material.strengthRateLaw = StrengthRateLaw::FibModelCode2010;
+    const int nx = 2;
+    Body body = test::boxBody(nx, 1, 1, kH, material.densityKgM3);
+    for (auto it = body.grid->tree().beginValueOn(); it; ++it)
+        if (it.getCoord().x() == 0 || it.getCoord().x() == nx - 1) it.setValue(*it | kAnchorBit);
+    LatticeSettings settings;
+    settings.damageLaw = LatticeDamageLaw::DavisonStevens;
+    Lattice lattice = Lattice::fromBody(body, material, StaticWorld(), settings);
+    const LatticeStiffness::Strength& strength = lattice.model().stiffness.strength[0];
+    const double e = 1.08, u0 = strength.peakStretchM, uf = strength.zeroTractionStretchM;
+    const double lineDamage = 1.0 - (1.0 / e) * (uf - e * u0) / (uf - u0);
+    const double x0 = lattice.state.positionM[0].x();
+    for (Eigen::Vector3d& x : lattice.state.positionM) x.x() = x0 + (x.x() - x0) * (1.0 + e * u0 / kH);
+    const DavisonStevensConstants& law = lattice.model().stiffness.davisonStevens;
+    const double a = law.excessExponent * e, rateB = law.rateTimesPeakStrainPerS / (u0 / kH);
+    auto closedForm = [&](double t) { return lineDamage + std::log1p(-(-std::expm1(-a * lineDamage)) * std::exp(-a * rateB * t)) / a; };
+    const double dt = lattice.stableTimeStepS();
+    double t = 0.0, worst = 0.0;
+    for (const double checkS : {0.1 / (a * rateB), 0.5 / (a * rateB), 2.0 / (a * rateB)}) {
+        for (; t < checkS; t += dt) lattice.step(dt);
+        double damage = 0.0;
+        for (size_t b = 0; b < lattice.bondCount(); ++b) damage = std::max(damage, lattice.bondDamage(b));
+        std::printf("held at %.2f x its peak stretch (line's damage %.4f): after %.3f s damage %.6f, closed form %.6f\n", e, lineDamage, t,
+                    damage, closedForm(t));
+        worst = std::max(worst, std::abs(damage - closedForm(t)) / closedForm(t));
+    }
+    // Explicit steps of a microsecond on a time scale of 1 / (a B), a fraction of a second.
+    EXPECT_LT(worst, 1e-3);
+}
+
+TEST(Lattice, DavisonStevensPeaksAsTheModelCodeSaysBetweenItsFitRatesAndKeepsTheCrackBandsEnergy)
+{
+    // Davison–Stevens fitted to fib MC2010's tension law at 1e-3 and 10 1/s (RateDamage.h), in
+    // a lattice bar pulled at rates it was not fitted at: 0.5 mm/s and 5 cm/s over its 4 cm
+    // (0.0125 and 1.25 1/s), where MC2010 gives 1.185 and 1.288. The peak must be within 10 %
+    // of those (the grips' concentration, the bar's inertia and the softening line falling
+    // under the overstress are the differences). The crack's energy per area must not depend on
+    // the voxel size: within 10 % of each other at h and h/2, as with the strength law
+    // (RateLawRaisesTheStrengthButNotTheFractureEnergyAtAnyVoxelSize).
+    Material material = kConcrete;
+    material.strengthRateLaw = StrengthRateLaw::FibModelCode2010;
+    const double expectedJ = material.fractureEnergyJPerM2 * 0.02 * 0.02;
+    const std::pair<double, double> pullAndFactor[] = {{5e-4, 1.185}, {0.05, 1.288}};
+    for (const auto& [pullMS, factor] : pullAndFactor) {
+        std::vector<double> perGf;
+        for (const int perCm : {1, 2}) {
+            BarSpec spec;
+            spec.material = material;
+            spec.law = LatticeDamageLaw::DavisonStevens;
+            spec.h = 0.01 / perCm;
+            spec.pullMS = pullMS;
+            const BarPull pull = pullBarApart(spec);
+            spec.law = LatticeDamageLaw::Softening;
+            spec.material.strengthRateLaw = StrengthRateLaw::None;
+            const double rateFreePeakPa = pullBarApart(spec).peakStressPa;
+            perGf.push_back(pull.dissipatedJ / expectedJ);
+            std::printf("Davison-Stevens, %.4f m/s, h = %.4f m: dissipated %.3f x Gf x area; peak %.3f x the rate-free bar's (MC2010 %.3f); %d of %d "
+                        "bonds across broken\n",
+                        pullMS, spec.h, perGf.back(), pull.peakStressPa / rateFreePeakPa, factor, pull.broken, pull.across);
+            EXPECT_EQ(pull.broken, pull.across) << pullMS << " m/s, h = " << spec.h;
+            EXPECT_NEAR(pull.peakStressPa / rateFreePeakPa, factor, 0.10 * factor) << pullMS << " m/s, h = " << spec.h;
+        }
+        EXPECT_NEAR(perGf[1], perGf[0], 0.10 * perGf[0]) << pullMS << " m/s";
+    }
 }
 
 TEST(Lattice, SpallStartsWhereOneDimensionalWaveTheoryPutsIt)

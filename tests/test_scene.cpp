@@ -420,4 +420,8 @@ TEST(Scene, FractureSettingsSayWhatTheyCannotSee)
     EXPECT_TRUE(said(nearNotes, "m from objects[0] ('wall'), scaled distance")) << (nearNotes.empty() ? "" : nearNotes.back());
     EXPECT_TRUE(said(nearNotes, "nearer than the blast data's fits reach"));
     EXPECT_FALSE(said(notesOf(defaultSceneJson()), "nearer than the blast data"));
+    // Davison–Stevens is fitted to a material's strain-rate law: brick masonry has none, concrete has.
+    const std::string rateDamage = R"(, "lattice": {"damage_law": "davison-stevens"}})";
+    EXPECT_TRUE(said(notesOf("{" + wall + R"(, "voxel_size_m": 0.1)" + rateDamage), "objects[0] ('wall', brick-masonry): lattice.damage_law \"davison-stevens\" is fitted"));
+    EXPECT_FALSE(said(notesOf("{" + block + rateDamage), "damage_law"));
 }

@@ -113,8 +113,6 @@ LatticeStiffness calibrateLattice(const Material& m, double h)
     }
     k.strength = strengthClasses(m, h, eAcross, eAlong);
     k.strengthRateLaw = m.strengthRateLaw;
-    k.damageRatePerS = m.damageRatePerS;
-    k.damageStressScalePerPa = m.damageStressScalePerPa > 0.0 ? m.damageStressScalePerPa : 1.0 / m.tensileStrengthPa;
     return k;
 }
 
@@ -126,13 +124,20 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
     Lattice lattice;
     lattice.mModel.blocks = blocks;
     lattice.mModel.bulkViscosity = settings.bulkViscosity;
-    lattice.mModel.damageLaw = settings.damageLaw;
+    // Davison–Stevens is the material's rate law in damage's terms; without one it has nothing
+    // to add to the softening line (SceneSetup notes it).
+    const bool rateDamage = settings.damageLaw == LatticeDamageLaw::DavisonStevens && material.strengthRateLaw != StrengthRateLaw::None;
+    lattice.mModel.damageLaw = rateDamage ? LatticeDamageLaw::DavisonStevens : LatticeDamageLaw::Softening;
     lattice.mModel.dampingRatio = material.dampingRatio;
     const double h = body.voxelSizeM;
     lattice.mModel.spacingM = h;
     lattice.mModel.particleMassKg = material.densityKgM3 * h * h * h;
     lattice.mModel.particleInertiaKgM2 = lattice.mModel.particleMassKg * h * h / 6.0;
     lattice.mModel.stiffness = calibrateLattice(material, h);
+    if (rateDamage) {
+        lattice.mModel.stiffness.davisonStevens = davisonStevensFitTo(material.strengthRateLaw);
+        lattice.mModel.stiffness.strengthRateLaw = StrengthRateLaw::None;
+    }
     lattice.computeFailureTerms();
     lattice.mModel.ground = supports.ground;
     lattice.keepOutOf(supports);

@@ -207,19 +207,21 @@ double Lattice::rateDamageAfter(size_t b, double equivalentStretchNowM, double d
     const double onLine = softeningDamage(b);
     // Past the softening line's end the crack is open: broken, as in the crack band.
     if (onLine >= 1.0) return 1.0;
-    const LatticeStiffness& k = mModel.stiffness;
-    // Stresses in tension's terms: the bond's (its equivalent stretch on its damaged spring) and
-    // what the softening line allows at its damage driver.
-    const LatticeStiffness::Strength& strength = k.strength[mModel.bonds[b].strengthClass];
-    const double toStressPa = strength.youngsModulusPa / mModel.spacingM, peakM = softeningLineM(b).first;
-    const double kappa = history.maxEquivalentStretchM;
-    const double stressPa = (1.0 - history.rateDamage) * toStressPa * equivalentStretchNowM;
-    const double allowedPa = toStressPa * (kappa <= peakM ? peakM : (1.0 - onLine) * kappa);
-    const double excessPa = stressPa - allowedPa;
-    if (excessPa <= 0.0) return history.rateDamage;
-    // exp(C σx) − 1 by expm1; past exp(50) the step breaks the bond anyway.
-    const double rate = k.damageRatePerS * std::expm1(std::min(k.damageStressScalePerPa * excessPa, 50.0));
-    return std::min(1.0, history.rateDamage + rate * dtS);
+    // Stretches as stresses in units of the bond's strength: its own (its equivalent stretch on
+    // its damaged spring) and what the softening line allows at its damage driver.
+    const double peakM = softeningLineM(b).first, kappa = history.maxEquivalentStretchM;
+    const double stress = (1.0 - history.rateDamage) * equivalentStretchNowM / peakM;
+    const double allowed = kappa <= peakM ? 1.0 : (1.0 - onLine) * kappa / peakM;
+    const double excess = stress - allowed;
+    if (excess <= 0.0) return history.rateDamage;
+    // dD/dt = B [exp(C σx) − 1] with B = (B ε0) / ε0 at the bond's own peak strain (RateDamage.h);
+    // past exp(50) the step breaks the bond anyway. A step never takes the bond below what
+    // the line allows: the excess is what the law relaxes, not a target to overshoot.
+    const DavisonStevensConstants& law = mModel.stiffness.davisonStevens;
+    const double peakStrain = peakM / mModel.spacingM;
+    const double rate = law.rateTimesPeakStrainPerS / peakStrain * std::expm1(std::min(law.excessExponent * excess, 50.0));
+    const double relaxed = 1.0 - allowed * peakM / equivalentStretchNowM;
+    return std::min({1.0, relaxed, history.rateDamage + rate * dtS});
 }
 
 }  // namespace spall

@@ -279,6 +279,7 @@ void Simulation::noteFractureLimits()
                          "where they are, whatever its impulse and whatever shields them; \"lattice\" breaks them by the stress the loads "
                          "put into the material");
     if (algorithm != FractureAlgorithm::Lattice) return;
+    noteRateDamageWithoutRateLaw();
     const double particleM = mScene.voxelSizeM * mScene.lattice.particleVoxels;
     for (size_t i = 0; i < mScene.objects.size(); ++i) {
         const Material& material = mScene.material(mScene.objects[i].material);
@@ -292,6 +293,18 @@ void Simulation::noteFractureLimits()
              << acrossCoursesStrengthRatio(material) << " times it, into pieces no smaller than a particle; particles of at most "
              << courseM << " m resolve its units";
         mNotes.push_back(note.str());
+    }
+}
+
+void Simulation::noteRateDamageWithoutRateLaw()
+{
+    if (mScene.lattice.damageLaw != LatticeDamageLaw::DavisonStevens) return;
+    for (size_t i = 0; i < mScene.objects.size(); ++i) {
+        const Material& material = mScene.material(mScene.objects[i].material);
+        if (material.strengthRateLaw != StrengthRateLaw::None) continue;
+        mNotes.push_back("objects[" + std::to_string(i) + "] ('" + mScene.objects[i].name + "', " + material.name +
+                         "): lattice.damage_law \"davison-stevens\" is fitted to a material's strain-rate law, and this material has "
+                         "none (its strength_rate_law is \"none\"), so its bonds soften on the crack band's line, rate-free");
     }
 }
 

@@ -5,6 +5,7 @@
 
 #include <spall/fracture/Material.h>
 #include <spall/lattice/ParticleBlocks.h>
+#include <spall/lattice/RateDamage.h>
 #include <spall/lattice/Settings.h>
 #include <spall/world/StaticWorld.h>
 #include <spall/voxel/Body.h>
@@ -78,9 +79,9 @@ struct LatticeStiffness {
     };
     std::array<Strength, 2> strength;
     StrengthRateLaw strengthRateLaw = StrengthRateLaw::None;
-    /// Davison–Stevens B (unit: 1/s) and C (unit: 1/Pa; the material's 0 becomes 1/ft).
-    double damageRatePerS = 0.0;
-    double damageStressScalePerPa = 0.0;
+    /// Davison–Stevens (that damage law only), fitted to the material's strain-rate law, which
+    /// the law then replaces: strengthRateLaw is None.
+    DavisonStevensConstants davisonStevens;
 };
 /// From the material's density, E, ν, tensile strength and Gf (fracture/Material.h), and for
 /// wood its values along the grain.

@@ -136,6 +136,7 @@ private:
     /// the paper's rules ignore impulse and shielding; masonry in particles taller than a course
     /// is homogenised.
     void noteFractureLimits();
+    void noteRateDamageWithoutRateLaw();
     /// What the lattice's particles are too large to resolve, each a note naming the voxel size
     /// that would: an object two particles thick or less, a spalled zone shallower than a particle.
     void noteUnresolvedThickness();
