@@ -14,7 +14,8 @@ enum class LatticeDamageLaw {
     /// Davison–Stevens in rate form, on real stresses: dD/dt = B [exp(C σx) − 1] with σx the
     /// bond's stress in excess of what the softening line allows at its largest failure index,
     /// so loaded slowly it follows the softening line (and dissipates Gf); loaded fast it
-    /// carries more for a while (paper eq. 2.2 and 3.2, D* = 1 per bond).
+    /// carries more for a while (paper eq. 2.2 and 3.2, D* = 1 per bond; B and C fitted to the
+    /// material's strain-rate law, which it replaces).
     DavisonStevens,
 };
 template <>
@@ -43,7 +44,7 @@ struct LatticeSettings {
     /// leaves a millisecond late has moved millimetres as a lattice instead (unit: s).
     double handoffCheckIntervalS = 0.001;
     /// How bonds' damage grows: the crack band's softening line, or Davison–Stevens in rate form
-    /// above it, with the material's B and C.
+    /// above it, its B and C fitted to the material's strain-rate law (lattice/RateDamage.h).
     LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;
     /// The edge of a lattice particle, in voxels (lattice/ParticleBlocks.h): 1, a particle per
     /// voxel; k > 1, blocks of k³ voxels, k⁴ times less work, cracks and fragments as a lattice of
