@@ -286,6 +286,7 @@ for signal in KILL INT; do
   if [[ $signal == INT ]]; then
     [[ $status -eq 130 ]] || fail "SIGINT: exit status $status, expected 130"
     grep -q -- "--resume $out" "$dir/err.txt" || fail "SIGINT: no hint to resume: $(cat "$dir/err.txt")"
+    grep -q "spall: stopping: the current step finishes" "$dir/err.txt" || fail "SIGINT: not acknowledged: $(cat "$dir/err.txt")"
   fi
   "$spall" run --resume "$out" --quiet > /dev/null || fail "SIG$signal: --resume failed"
   [[ -s "$out/preview.png" ]] || fail "SIG$signal: the resumed run wrote no preview"

@@ -424,4 +424,14 @@ TEST(Scene, FractureSettingsSayWhatTheyCannotSee)
     const std::string rateDamage = R"(, "lattice": {"damage_law": "davison-stevens"}})";
     EXPECT_TRUE(said(notesOf("{" + wall + R"(, "voxel_size_m": 0.1)" + rateDamage), "objects[0] ('wall', brick-masonry): lattice.damage_law \"davison-stevens\" is fitted"));
     EXPECT_FALSE(said(notesOf("{" + block + rateDamage), "damage_law"));
+    // Issue 50: a run whose deformable phase could take long says so first, with the keys that
+    // change it. A concrete wall 1 × 0.2 × 1 m at 1 cm is 200 000 particles and about 70 000
+    // steps of 1.4 µs in 0.1 s; the default scene is cheap.
+    const std::string wide = R"("objects": [{"name": "wall", "primitive": {"shape": "box", "size_m": [1.0, 0.2, 1.0]},
+                                "position_m": [0, 0, 0.5], "material": "concrete"}], "voxel_size_m": 0.01,
+                                "charges": [{"position_m": [0, -2, 0.5], "tnt_kg": 1}])";
+    const std::vector<std::string> costly = notesOf("{" + wide + "}");
+    EXPECT_TRUE(said(costly, "the deformable phase may take up to")) << (costly.empty() ? "" : costly.back());
+    EXPECT_TRUE(said(costly, "lattice.max_vibration_s (0.1 s)"));
+    EXPECT_FALSE(said(notesOf(defaultSceneJson()), "the deformable phase may take"));
 }

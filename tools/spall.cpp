@@ -12,11 +12,21 @@
 #include <iostream>
 #include <memory>
 
+#include <unistd.h>
+
 namespace {
 
 std::atomic<bool> gStopRequested{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "a signal handler may touch only lock-free atomics");
 
-extern "C" void requestStop(int) { gStopRequested = true; }
+/// Says at once that the stop is heard (write(2) is async-signal-safe where stdio is not; the
+/// flag is a lock-free atomic), once however often it is asked.
+extern "C" void requestStop(int)
+{
+    if (gStopRequested.exchange(true)) return;
+    static const char kHeard[] = "\nspall: stopping: the current step finishes and what is written stays readable\n";
+    [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, kHeard, sizeof kHeard - 1);
+}
 
 }  // namespace
 

@@ -169,6 +169,7 @@ Simulation::Simulation(const Scene& scene, Interrupter* interrupter) : mScene(sc
     noteFractureLimits();
     noteUnresolvedThickness();
     noteChargesNearerThanTheBlastData();
+    noteDeformablePhaseCost();
     mState.stepStats.minDtS = scene.timeStep.maxTimeStepS;
 }
 
@@ -247,6 +248,51 @@ void Simulation::noteFragmentMemory()
     note << "if all " << mState.initialVoxels << " voxels broke free (the fracture rules can do that under a strong blast) "
          << "the run would need about " << allBroken / 1e9 << " GB, and " << available / 1e9
          << " GB is available: a larger voxel_size_m needs fewer (memory falls with its cube)";
+    mNotes.push_back(note.str());
+}
+
+namespace {
+
+/// The lattice's cost and size on 2 cores, measured on the 3 M-voxel brick wall at 1 cm
+/// (docs/performance.md, "A 3 M-voxel wall"): 4.6–5.8 M particle-steps a second in a run, and
+/// 277 B a particle plus 136 B for each of its three bonds.
+constexpr double kLatticeParticleStepsPerS = 5e6;
+constexpr double kLatticeBytesPerParticle = 277.0 + 3.0 * 136.0;
+/// A run whose deformable phase could take longer than this, or more memory, is told so first.
+constexpr double kLatticeCostWorthANoteS = 300.0;
+constexpr double kLatticeMemoryWorthANoteBytes = 1e9;
+
+}  // namespace
+
+void Simulation::noteDeformablePhaseCost()
+{
+    if (mScene.fracture.algorithm != FractureAlgorithm::Lattice || mScene.charges.empty()) return;
+    const int k = mScene.lattice.particleVoxels;
+    const double particleM = mScene.voxelSizeM * k;
+    double particles = 0.0, particleSteps = 0.0;
+    for (size_t i = 0; i < mState.bodies.size(); ++i) {
+        const Material& material = mScene.material(mScene.objects[i].material);
+        const double count = double(mState.bodies[i].mass.voxelCount) / (k * k * k);
+        const double stepS = stableTimeStepS(calibrateLattice(material, particleM), particleM, material.densityKgM3 * std::pow(particleM, 3));
+        // A body stays in the phase while the blast acts on it and at most max_vibration_s after.
+        double blastS = 0.0;
+        for (const Charge& charge : mScene.charges) {
+            const double distanceM = nearestVoxelDistanceM(mState.bodies[i], charge.positionM);
+            if (distanceM > 0.0)
+                blastS = std::max(blastS, blastParameters(mScene.blast.dataset, charge.burst, charge.tntKg, distanceM, mScene.blast.atmosphere).positiveDurationS);
+        }
+        particles += count;
+        particleSteps += count * std::ceil((blastS + mScene.lattice.maxVibrationS) / stepS);
+    }
+    const double seconds = particleSteps / kLatticeParticleStepsPerS, bytes = particles * kLatticeBytesPerParticle;
+    if (seconds < kLatticeCostWorthANoteS && bytes < kLatticeMemoryWorthANoteBytes) return;
+    std::ostringstream note;
+    note.precision(3);
+    note << "the deformable phase may take up to " << particleSteps << " particle-steps (" << std::llround(particles) << " lattice particles): about "
+         << seconds / 60.0 << " min at the " << kLatticeParticleStepsPerS / 1e6 << " M particle-steps a second measured on 2 cores "
+         << "(docs/performance.md), and " << bytes / 1e9 << " GB for its lattices. lattice.max_vibration_s (" << mScene.lattice.maxVibrationS
+         << " s) bounds a body's time in the phase; lattice.particle_voxels k (" << k << ") steps blocks of k^3 voxels, about k^4 times "
+         << "less work; a larger voxel_size_m, less still";
     mNotes.push_back(note.str());
 }
 

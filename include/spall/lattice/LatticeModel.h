@@ -86,6 +86,9 @@ struct LatticeStiffness {
 /// From the material's density, E, ν, tensile strength and Gf (fracture/Material.h), and for
 /// wood its values along the grain.
 LatticeStiffness calibrateLattice(const Material& material, double voxelSizeM);
+/// The largest step central differences keep stable on a lattice of these springs and particles
+/// (Lattice::stableTimeStepS; known before a lattice is built, for the run's cost estimate) (unit: s).
+double stableTimeStepS(const LatticeStiffness& stiffness, double spacingM, double particleMassKg);
 
 /// What a bond remembers (all of it saved with a checkpoint).
 struct BondHistory {

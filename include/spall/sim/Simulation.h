@@ -146,6 +146,9 @@ private:
     /// A note for each charge nearer to an object than its blast data's fits reach (the
     /// pressures are held at the fits' near end there).
     void noteChargesNearerThanTheBlastData();
+    /// Before a run whose deformable phase could take more than 5 minutes or 1 GB: its bound in
+    /// particle-steps, time and memory, and the keys that change it.
+    void noteDeformablePhaseCost();
     /// A note for each mesh object larger than 100 m or smaller than 1 cm (`extentsM` per object),
     /// naming its extent and the keys that set its unit.
     void noteImplausibleMeshSizes(const std::vector<Eigen::Vector3d>& extentsM);
