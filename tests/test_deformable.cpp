@@ -180,12 +180,13 @@ TEST(Deformable, BrickWallBreaksUnderAKilogramAt50cm)
 
 TEST(Deformable, TwoChargesInSequenceBreakAWallThatEitherAloneLeavesStanding)
 {
-    // Issue 47: damage is state. 12 g of TNT 0.5 m from the wall takes its base's bonds far
+    // Issue 47: damage is state. 11 g of TNT 0.5 m from the wall takes its base's bonds far
     // along their softening lines but breaks none; the same charge again 60 ms later, once the
     // wall has left the phase, meets it as the first left it and breaks its base. (Either charge
     // alone is the same run shifted in time. With every bond's history reset on re-entry, as
-    // before this, the pair broke nothing from 6 to 12 g.)
-    Simulation sim(wallScene(0.012, 0.5, {0.0, 0.06}));
+    // before this, the pair broke nothing from 6 to 12 g. Since a bond left with less than a
+    // tenth of its strength counts as broken at hand-off, issue 48, 12 g alone breaks the base.)
+    Simulation sim(wallScene(0.011, 0.5, {0.0, 0.06}));
     sim.advanceTo(0.06);
     ASSERT_TRUE(sim.state().deformable.empty()) << "the wall is meant to have left the phase before the second charge";
     ASSERT_EQ(sim.bodies().size(), 1u);

@@ -6,7 +6,10 @@
 #include "PulseResponse.h"
 #include "TestUtil.h"
 
+#include <spall/blast/Blast.h>
 #include <spall/lattice/Lattice.h>
+#include <spall/scene/Scene.h>
+#include <spall/sim/Simulation.h>
 
 #include <gtest/gtest.h>
 
@@ -199,4 +202,76 @@ TEST(WallResponse, CrackingTracesThePressureImpulseCurveOfTheBeamAndOfItsSingleD
     const LatticeResponse over = loadWall(wall, 1.05 * latticePeakPa[3], durationS, 1.6 * period);
     EXPECT_TRUE(over.damaged);
     EXPECT_LT(over.worstBondHeightM, 1.01 * wall.voxelM);
+}
+
+namespace {
+
+/// Issue 48's cantilever: plain concrete 1.2 m wide, 0.15 m thick, 1.2 m high, bonded to the
+/// ground at its base, 3 cm voxels, a charge of TNT 3 m in front of it at mid-height.
+struct BlastedCantilever {
+    double widthM = 1.2, thicknessM = 0.15, heightM = 1.2, standoffM = 3.0;
+    double massKg() const { return findMaterialPreset("concrete").densityKgM3 * widthM * thicknessM * heightM; }
+
+    /// The hand calculation: the wall as a rigid block free to rock about its rear toe, struck
+    /// by the direct wave's normally reflected impulse Ir (Kingery–Bulmash) over its face,
+    /// acting at mid-height: it rocks with E = (Ir A H/2)² / (2 I_toe), I_toe = m (H² + t²)/3
+    /// (Housner 1963's rocking block) (unit: J).
+    double rockingEnergyJ(double tntKg) const
+    {
+        const double impulsePaS = blastParameters(BlastDataset::KingeryBulmash, BurstType::FreeAir, tntKg, standoffM).reflectedImpulsePaS;
+        const double angularMomentum = impulsePaS * widthM * heightM * heightM / 2.0;
+        return angularMomentum * angularMomentum / (2.0 * massKg() * (heightM * heightM + thicknessM * thicknessM) / 3.0);
+    }
+    /// What lifts its centre over the toe: m g (√(H² + t²) − H) / 2 (unit: J).
+    double overturningEnergyJ() const { return massKg() * 9.81 * (std::hypot(heightM, thicknessM) - heightM) / 2.0; }
+
+    /// The fraction of the wall's mass lying more than `tiltDeg` from upright after `timeS`.
+    double massFractionTiltedPast(double tntKg, double timeS, double tiltDeg) const
+    {
+        char json[1024];
+        std::snprintf(json, sizeof json, R"({"voxel_size_m": 0.03, "duration_s": %g, "seed": 1,
+            "objects": [{"name": "wall", "primitive": {"shape": "box", "size_m": [%g, %g, %g]},
+                         "position_m": [0, 0, %g], "material": "concrete", "anchor": "ground"}],
+            "charges": [{"position_m": [0, %g, %g], "tnt_kg": %g}],
+            "fracture": {"algorithm": "lattice"}})",
+                      timeS, widthM, thicknessM, heightM, heightM / 2, -standoffM, heightM / 2, tntKg);
+        const Scene scene = parseScene(json, "cantilever", ".");
+        Simulation sim(scene);
+        sim.advanceTo(timeS);
+        double tiltedKg = 0.0, totalKg = 0.0;
+        for (const Body& b : sim.bodies()) {
+            totalKg += b.mass.massKg;
+            const double tilt = std::acos(std::clamp((b.motion.orientation * Eigen::Vector3d::UnitZ()).z(), -1.0, 1.0));
+            if (tilt > tiltDeg * M_PI / 180.0) tiltedKg += b.mass.massKg;
+            std::printf("  %.1f kg TNT, %.2f s: body %lld %.1f kg, tilted %.1f deg, %s\n", tntKg, timeS, static_cast<long long>(b.id),
+                        b.mass.massKg, tilt * 180.0 / M_PI, b.anchored ? "anchored" : "free");
+        }
+        return tiltedKg / totalKg;
+    }
+};
+
+}  // namespace
+
+TEST(WallResponse, ACantileverCrackedThroughItsBaseTopplesWhenItRocksPastItsToe)
+{
+    // 3.2 kg: the direct wave alone gives it seven times the energy to overturn (the ground's
+    // reflection adds more); the base cracks, and the wall rocks about its toe until it falls.
+    // Before issue 48 its cracked base still held it by damaged bonds, damping held it at rest,
+    // and the hand-off left it anchored and motionless.
+    const BlastedCantilever wall;
+    const double energyJ = wall.rockingEnergyJ(3.2), overturnJ = wall.overturningEnergyJ();
+    std::printf("rocking energy by hand %.0f J, to overturn %.1f J\n", energyJ, overturnJ);
+    ASSERT_GT(energyJ, 5.0 * overturnJ) << "the case is one that must topple";
+    EXPECT_GT(wall.massFractionTiltedPast(3.2, 0.8, 60.0), 0.95) << "the wall lies on the ground";
+}
+
+TEST(WallResponse, ACantileverThatRocksBelowItsOverturningEnergyStaysUp)
+{
+    // 0.5 kg: the direct wave gives it half the energy to overturn; the base cracks and lets it
+    // rock, but it settles back upright. A mechanism is not a licence to fall.
+    const BlastedCantilever wall;
+    const double energyJ = wall.rockingEnergyJ(0.5), overturnJ = wall.overturningEnergyJ();
+    std::printf("rocking energy by hand %.1f J, to overturn %.1f J\n", energyJ, overturnJ);
+    ASSERT_LT(energyJ, 0.6 * overturnJ) << "the case is one that must stay up";
+    EXPECT_EQ(wall.massFractionTiltedPast(0.5, 0.8, 5.0), 0.0) << "the wall stands";
 }

@@ -376,7 +376,7 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
 /// (Body::linkDamage); null when none is damaged.
 LinkDamageGrid::Ptr survivingDamage(const Body& body, const Lattice& lattice)
 {
-    const auto survivesDamaged = [&](size_t b) { return lattice.bondDamage(b) > 0.0 && lattice.bondDamage(b) < 1.0; };
+    const auto survivesDamaged = [&](size_t b) { return lattice.bondDamage(b) > 0.0 && !lattice.brokenAtHandOff(b); };
     size_t b = 0;
     while (b < lattice.bondCount() && !survivesDamaged(b)) ++b;
     if (b == lattice.bondCount()) return nullptr;
@@ -409,7 +409,7 @@ HandOff handOff(const Body& body, const Lattice& lattice)
     whole.grid = body.grid->deepCopy();
     auto links = whole.grid->getAccessor();
     for (size_t b = 0; b < lattice.bondCount(); ++b) {
-        if (lattice.bondDamage(b) < 1.0) continue;
+        if (!lattice.brokenAtHandOff(b)) continue;
         const LatticeBond& bond = lattice.model().bonds[b];
         if (std::max(bond.low, bond.high) >= lattice.model().voxelParticleCount) {
             // An anchor: its voxels let go of their support.
@@ -431,7 +431,9 @@ HandOff handOff(const Body& body, const Lattice& lattice)
     if (result.parts.empty()) result.parts.push_back(std::move(whole));
     // A fragment keeps its parent's index space: its voxels name their particles. Parts of one
     // piece of the lattice (a block's voxels need not touch each other) share its motion.
-    DisjointSets pieces = lattice.intactPieces();
+    DisjointSets pieces(lattice.particleCount());
+    for (size_t b = 0; b < lattice.bondCount(); ++b)
+        if (!lattice.brokenAtHandOff(b)) pieces.join(lattice.model().bonds[b].low, lattice.model().bonds[b].high);
     std::map<uint32_t, std::vector<Body*>> partsOfPiece;
     for (Body& part : result.parts) {
         part.motion.asleep = false;

@@ -91,6 +91,7 @@ void Lattice::step(double dtS)
     forEach(particleCount(), kick);
     // At the step's end, where velocity Verlet's energy is counted.
     if (events.load() & kSnapped) releaseSnapEnergies();
+    openSupportHinges();
     dampVibration(dtS);
 }
 

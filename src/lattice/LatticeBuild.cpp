@@ -124,6 +124,7 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
     Lattice lattice;
     lattice.mModel.blocks = blocks;
     lattice.mModel.bulkViscosity = settings.bulkViscosity;
+    lattice.mModel.handOffResidualStrength = settings.handoffResidualStrength;
     // Davison–Stevens is the material's rate law in damage's terms; without one it has nothing
     // to add to the softening line (SceneSetup notes it).
     const bool rateDamage = settings.damageLaw == LatticeDamageLaw::DavisonStevens && material.strengthRateLaw != StrengthRateLaw::None;
@@ -183,6 +184,7 @@ void Lattice::addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& plac
 
 void Lattice::addVoxelParticles(const Body& body)
 {
+    mModel.restOrientation = body.motion.orientation;
     for (auto it = body.grid->constTree().cbeginValueOn(); it; ++it) {
         const Eigen::Vector3d offset = body.motion.orientation * body.voxelOffsetM(it.getCoord());
         addParticle(it.getCoord(), body.motion.positionM + offset, body.motion.linearVelocityMS + body.motion.angularVelocityRadS.cross(offset),

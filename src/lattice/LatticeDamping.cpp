@@ -7,6 +7,8 @@
 
 #include <spall/core/Parallel.h>
 
+#include <Eigen/SVD>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -94,13 +96,85 @@ void Lattice::findDampedPieces()
         const double lengthM = piece.held ? (pieceReach[k] + 0.5) * mModel.spacingM : sides[2];
         piece.decayPerS = 2.0 * mModel.dampingRatio * fundamentalFrequencyRadS(sides[0], lengthM, piece.held);
         piece.firstParticle = members[k].front();
+        piece.firstMember = uint32_t(mPieceParticles.size());
+        piece.endMember = uint32_t(mPieceParticles.size() + members[k].size());
+        // A cantilever of height H and thickness t under a uniform load turns as a whole (the
+        // best fit of Biggs' deflected shape) by about ε_t H / (2t) when its base cracks
+        // (tip deflection ft H² / (2 E t), test_wall_response.cpp's model); four times that is
+        // past anything its support can hold elastically.
+        piece.hingeRotationRad = 2.0 * (mModel.stiffness.strength[0].peakStretchM / mModel.spacingM) * lengthM / sides[0];
         for (size_t begin = 0; begin < members[k].size(); begin += kDampingChunk) {
             const uint32_t start = uint32_t(mPieceParticles.size() + begin);
             mDampingChunks.push_back({uint32_t(k), start, start + uint32_t(std::min(kDampingChunk, members[k].size() - begin))});
         }
         mPieceParticles.insert(mPieceParticles.end(), members[k].begin(), members[k].end());
     }
+    findSupportBondsOfPieces(pieceOfRoot, sets);
     mPiecesStale = false;
+}
+
+void Lattice::findSupportBondsOfPieces(const std::vector<int32_t>& pieceOfRoot, DisjointSets& sets)
+{
+    std::vector<std::vector<uint32_t>> supportBonds(mDampedPieces.size());
+    for (size_t b = 0; b < bondCount(); ++b) {
+        const LatticeBond& bond = mModel.bonds[b];
+        if (std::max(bond.low, bond.high) < mModel.voxelParticleCount || bondDamage(b) >= 1.0) continue;
+        supportBonds[size_t(pieceOfRoot[sets.root(std::min(bond.low, bond.high))])].push_back(uint32_t(b));
+    }
+    mPieceSupportBonds.clear();
+    for (size_t k = 0; k < mDampedPieces.size(); ++k) {
+        mDampedPieces[k].firstSupportBond = uint32_t(mPieceSupportBonds.size());
+        mPieceSupportBonds.insert(mPieceSupportBonds.end(), supportBonds[k].begin(), supportBonds[k].end());
+        mDampedPieces[k].endSupportBond = uint32_t(mPieceSupportBonds.size());
+    }
+}
+
+bool Lattice::turnedPastHinge(const DampedPiece& piece) const
+{
+    // Kabsch (1976): the rotation from the particles' rest places (turned as the body was at
+    // rest) to where they are, about their centres; places taken from the first particle. A
+    // thousand particles evenly through the piece fix a rotation as well as all of them do for
+    // a threshold, at a cost that does not grow with the piece.
+    const uint32_t stride = std::max<uint32_t>(1, (piece.endMember - piece.firstMember) / 1024);
+    const Eigen::Matrix3d restTurn = mModel.restOrientation.toRotationMatrix();
+    const Eigen::Vector3d originM = state.positionM[piece.firstParticle];
+    const openvdb::Coord& originVoxel = mModel.voxel[piece.firstParticle];
+    Eigen::Vector3d sumPlaceM = Eigen::Vector3d::Zero(), sumRestM = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d sumPlaceRestM2 = Eigen::Matrix3d::Zero();
+    double n = 0.0;
+    for (uint32_t i = piece.firstMember; i < piece.endMember; i += stride) {
+        const uint32_t p = mPieceParticles[i];
+        if (mModel.held[p]) continue;
+        const openvdb::Coord d = mModel.voxel[p] - originVoxel;
+        const Eigen::Vector3d rest = restTurn * (mModel.spacingM * Eigen::Vector3d(d.x(), d.y(), d.z()));
+        const Eigen::Vector3d place = state.positionM[p] - originM;
+        sumPlaceM += place;
+        sumRestM += rest;
+        sumPlaceRestM2 += place * rest.transpose();
+        n += 1.0;
+    }
+    if (n < 3.0) return false;
+    const Eigen::Matrix3d covariance = sumPlaceRestM2 - sumPlaceM * sumRestM.transpose() / n;
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d flip = Eigen::Matrix3d::Identity();
+    flip(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+    const Eigen::Matrix3d turn = svd.matrixU() * flip * svd.matrixV().transpose();
+    return Eigen::AngleAxisd(turn).angle() > piece.hingeRotationRad;
+}
+
+bool Lattice::openSupportHinges()
+{
+    if (mPiecesStale) findDampedPieces();
+    bool opened = false;
+    for (const DampedPiece& piece : mDampedPieces) {
+        if (!piece.held) continue;
+        const auto first = mPieceSupportBonds.begin() + piece.firstSupportBond, end = mPieceSupportBonds.begin() + piece.endSupportBond;
+        // An uncracked support holds elastically: nothing to measure.
+        if (std::none_of(first, end, [&](uint32_t b) { return bondDamage(b) > 0.0; }) || !turnedPastHinge(piece)) continue;
+        for (auto b = first; b != end; ++b) breakBond(*b);
+        opened = true;
+    }
+    return opened;
 }
 
 namespace {

@@ -39,6 +39,19 @@ double Lattice::bondDamage(size_t b) const
     return crushed == 0.0 ? cracked : 1.0 - (1.0 - cracked) * (1.0 - crushed);
 }
 
+double Lattice::residualStrengthFraction(size_t b) const
+{
+    const double damage = bondDamage(b);
+    if (damage >= 1.0) return 0.0;
+    const double u0 = softeningLineM(b).first;
+    return (1.0 - damage) * std::max(state.bondHistory[b].maxEquivalentStretchM, u0) / u0;
+}
+
+bool Lattice::brokenAtHandOff(size_t b) const
+{
+    return residualStrengthFraction(b) < mModel.handOffResidualStrength;
+}
+
 double Lattice::crackingDamage(size_t b) const
 {
     return mModel.damageLaw == LatticeDamageLaw::DavisonStevens ? state.bondHistory[b].rateDamage : softeningDamage(b);
@@ -112,6 +125,16 @@ void Lattice::startDamaged(size_t b, double damage)
     // κ = u0 uf / ((1 − D)(uf − u0) + u0). A bond that breaks at its peak has no such line.
     history.maxEquivalentStretchM = snapsAtPeak(b) ? u0 : u0 * uf / ((1.0 - damage) * (uf - u0) + u0);
     history.rateDamage = damage;
+}
+
+void Lattice::breakBond(size_t b)
+{
+    BondHistory& history = state.bondHistory[b];
+    const auto [u0, uf] = softeningLineM(b);
+    // Past both ends of its softening line (a bond that snaps at its peak breaks just past it).
+    history.maxEquivalentStretchM = std::max({history.maxEquivalentStretchM, uf, u0}) * (1.0 + 1e-9);
+    history.rateDamage = 1.0;
+    mPiecesStale = true;
 }
 
 bool Lattice::snapsAtPeak(size_t b) const

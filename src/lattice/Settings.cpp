@@ -10,6 +10,7 @@ const std::vector<Field<LatticeSettings>>& fieldTable<LatticeSettings>()
         {"lattice.handoff_energy_fraction", &LatticeSettings::handoffEnergyFraction, closed(0.0, 1.0)},
         {"lattice.max_vibration_s", &LatticeSettings::maxVibrationS, closed(0.0, 10.0)},
         {"lattice.handoff_check_interval_s", &LatticeSettings::handoffCheckIntervalS, closed(1e-7, 1.0)},
+        {"lattice.handoff_residual_strength", &LatticeSettings::handoffResidualStrength, closed(0.0, 1.0)},
         {"lattice.damage_law", choice(&LatticeSettings::damageLaw)},
         {"lattice.particle_voxels", &LatticeSettings::particleVoxels, closed(1, 8)},
     };

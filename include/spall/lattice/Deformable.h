@@ -111,8 +111,9 @@ double elasticCapacityPerVoxelJ(const Material& material, double voxelSizeM);
 DeformableBody continueDeformable(const Body& part, const DeformableBody& whole, const Material& material, const LatticeSettings& settings,
                                   const StaticWorld& supports, uint64_t seed);
 
-/// The body back as rigid bodies: each bond that broke breaks the links across its face (the
-/// frames' fracture surface), each support bond that broke clears its voxels' anchor bits, and
+/// The body back as rigid bodies: each bond broken at hand-off (Lattice::brokenAtHandOff: broken,
+/// or left with less than a stated fraction of its strength) breaks the links across its face
+/// (the frames' fracture surface), each such support bond clears its voxels' anchor bits, and
 /// each connected part gets its particles' momenta and best-fit pose (parts that share a piece
 /// of the lattice, its rigid motion with the piece's momenta); anchored parts stay where they are. Part ids
 /// are left to the caller; with one part, it is the body.

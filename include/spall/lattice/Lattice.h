@@ -86,6 +86,12 @@ public:
     /// 1 − D_c of its normal spring: a crack closes and carries again, as contact; what crushing
     /// took it does not.
     double bondDamage(size_t b) const;
+    /// The traction it could still carry at its largest stretch so far, as a fraction of its
+    /// peak: (1 − D) max(κ, u0) / u0; 0 once broken.
+    double residualStrengthFraction(size_t b) const;
+    /// Broken, or carrying less than LatticeModel::handOffResidualStrength of its peak: what a
+    /// hand-off cuts.
+    bool brokenAtHandOff(size_t b) const;
     /// D_c alone: 0 … 1 on the compressive softening line (Strength::compressiveStrengthPa).
     double crushingDamage(size_t b) const;
     /// The particles grouped by the bonds that have not broken.
@@ -139,6 +145,14 @@ private:
         bool held = false;
         double decayPerS = 0.0;
         uint32_t firstParticle = 0;  ///< the origin of its sums
+        /// A held piece turned further than this from rest is no longer held elastically: its
+        /// support has opened into a hinge (openSupportHinges) (unit: rad).
+        double hingeRotationRad = 0.0;
+        /// Its bonds to supports that had not broken when the pieces were found: a run of
+        /// mPieceSupportBonds, [firstSupportBond, endSupportBond).
+        uint32_t firstSupportBond = 0, endSupportBond = 0;
+        /// Its particles: a run of mPieceParticles, [firstMember, endMember).
+        uint32_t firstMember = 0, endMember = 0;
     };
     /// A run of one piece's particles in mPieceParticles, [begin, end).
     struct DampingChunk {
@@ -148,6 +162,7 @@ private:
     bool mPiecesStale = true;
     std::vector<DampedPiece> mDampedPieces;
     std::vector<uint32_t> mPieceParticles;  ///< the particles piece by piece, each in particle order
+    std::vector<uint32_t> mPieceSupportBonds;  ///< the held pieces' support bonds, piece by piece
     std::vector<DampingChunk> mDampingChunks;
     void findDampedPieces();
     /// Per particle, the fewest intact bonds between it and a held particle (UINT32_MAX: none):
@@ -158,6 +173,19 @@ private:
     /// motion with their linear and angular momentum, about their centre, with their present
     /// inertia) decay by exp(−2 ζ ω dt); so do a held piece's velocities. Momenta are unchanged.
     void dampVibration(double dtS);
+    /// A held piece whose support has cracked and which has turned as a whole (its particles'
+    /// best-fit rotation, Kabsch) further than its intact support would let it turn elastically
+    /// (DampedPiece::hingeRotationRad) moves as a mechanism about its support, not as a
+    /// vibration about rest: its support bonds break, it is a free piece resting on its support
+    /// (contact and friction, as any broken bond), and damping no longer holds it at rest
+    /// (issue 48). Returns whether any did.
+    bool openSupportHinges();
+    /// Whether a held piece has turned past its hinge rotation.
+    bool turnedPastHinge(const DampedPiece& piece) const;
+    /// Each piece's support bonds not yet broken (findDampedPieces' last part).
+    void findSupportBondsOfPieces(const std::vector<int32_t>& pieceOfRoot, DisjointSets& sets);
+    /// Breaks a bond outright: its damage is 1 by cracking (contact in compression only).
+    void breakBond(size_t b);
     /// Per bond, 1 while it has snapped at its peak in this substep and not yet given back its
     /// energy (releaseSnapEnergies); apart from the terms, which it would make 7 % larger.
     std::vector<uint8_t> mSnapped;

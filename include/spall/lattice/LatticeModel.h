@@ -174,6 +174,10 @@ struct LatticeModel {
     VoxelBlocks blocks;
     double particleMassKg = 0.0;
     double particleInertiaKgM2 = 0.0;  ///< a cube's, m h² / 6, the same about every axis
+    /// The body's orientation when the lattice was built: a particle's rest place in the world
+    /// is its index × spacing turned by it (about the body's place). A held piece's rotation away
+    /// from rest is measured against it (Lattice::openSupportHinges).
+    Eigen::Quaterniond restOrientation = Eigen::Quaterniond::Identity();
 
     // Bonds.
     std::vector<LatticeBond> bonds;
@@ -214,6 +218,7 @@ struct LatticeModel {
     /// piece's fundamental frequency would make them (dampVibration). 0 turns it off.
     double dampingRatio = 0.0;
     LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;  ///< LatticeSettings::damageLaw
+    double handOffResidualStrength = 0.0;  ///< LatticeSettings::handoffResidualStrength
 
     // What holds it and what it may not pass through.
     /// The ground plane n·x = offset its particles' cubes may not sink into: a particle that

@@ -43,6 +43,11 @@ struct LatticeSettings {
     /// every piece's rigid motion, as much work as several lattice steps, and a piece that
     /// leaves a millisecond late has moved millimetres as a lattice instead (unit: s).
     double handoffCheckIntervalS = 0.001;
+    /// At hand-off a bond still carrying less than this fraction of its peak traction counts as
+    /// broken: a rigid body's link is whole or cut, and on a linear softening line such a crack
+    /// has dissipated all but this fraction squared of its fracture energy (1 % at 0.1)
+    /// (Lattice::brokenAtHandOff) (unit: 1).
+    double handoffResidualStrength = 0.1;
     /// How bonds' damage grows: the crack band's softening line, or Davison–Stevens in rate form
     /// above it, its B and C fitted to the material's strain-rate law (lattice/RateDamage.h).
     LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;
