@@ -34,10 +34,12 @@ FrameRow frameTotals(const Simulation& sim, const FrameStamp& frame, std::vector
     row.latticeParticleSteps = frame.stats.latticeParticleSteps;
     row.bodyCount = static_cast<int64_t>(sim.bodies().size());
     rows.reserve(sim.bodies().size());
-    for (const Body& b : sim.bodies()) {
-        row.kineticEnergyJ += kineticEnergyJ(b);
-        row.linearMomentum += linearMomentum(b);
-        row.angularMomentum += angularMomentumAboutOrigin(b);
+    const std::vector<BodyMomenta> motions = sim.bodyMomenta();
+    for (size_t i = 0; i < motions.size(); ++i) {
+        const Body& b = sim.bodies()[i];
+        row.kineticEnergyJ += motions[i].kineticEnergyJ;
+        row.linearMomentum += motions[i].linearMomentumKgMS;
+        row.angularMomentum += motions[i].angularMomentumKgM2S;
         row.voxelCount += b.mass.voxelCount;
         const Eigen::Quaterniond& q = b.motion.orientation;
         rows.push_back({b.id, b.parentId, b.motion.positionM, Eigen::Vector4d(q.w(), q.x(), q.y(), q.z()), b.motion.linearVelocityMS,

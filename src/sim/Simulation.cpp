@@ -107,6 +107,19 @@ std::vector<char> Simulation::fractureBodies(const std::vector<OpenWindow>& wind
     return cracked;
 }
 
+std::vector<BodyMomenta> Simulation::bodyMomenta() const
+{
+    std::vector<BodyMomenta> motions;
+    motions.reserve(mState.bodies.size());
+    for (const Body& b : mState.bodies) motions.push_back({kineticEnergyJ(b), linearMomentum(b), angularMomentumAboutOrigin(b)});
+    const DeformablePhase& phase = mState.deformable;
+    for (size_t k = 0; k < phase.lattices.size(); ++k) {
+        const Lattice& lattice = phase.lattices[k].lattice;
+        motions[phase.bodyIndex(k, mState.bodies)] = {lattice.kineticEnergyJ(), lattice.linearMomentum(), lattice.angularMomentumAboutOrigin()};
+    }
+    return motions;
+}
+
 std::pair<Eigen::Vector3d, Eigen::Vector3d> Simulation::totalMomenta() const
 {
     Eigen::Vector3d linear = Eigen::Vector3d::Zero(), angular = Eigen::Vector3d::Zero();

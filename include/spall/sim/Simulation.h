@@ -61,6 +61,13 @@ struct StepRecord {
     Eigen::Vector3d angularMomentumAfterSplit = Eigen::Vector3d::Zero();
 };
 
+/// A body's kinetic energy and momenta as the frames report them (Simulation::bodyMomenta).
+struct BodyMomenta {
+    double kineticEnergyJ = 0.0;
+    Eigen::Vector3d linearMomentumKgMS = Eigen::Vector3d::Zero();
+    Eigen::Vector3d angularMomentumKgM2S = Eigen::Vector3d::Zero();  ///< about the origin
+};
+
 class Simulation {
 public:
     /// Voxelises every object and places it (throws InputError for bad input, e.g. a charge
@@ -93,6 +100,10 @@ public:
     /// What setting the scene up found that a user should know (mesh repairs, memory at risk).
     const std::vector<std::string>& notes() const { return mNotes; }
     StepStats takeStepStats();
+    /// Per body, its kinetic energy and momenta: a body in the deformable phase its lattice's
+    /// particles' (translation and spin; an anchored wall swinging on its base has them, its
+    /// rigid pose none), any other its rigid motion's (issue 48).
+    std::vector<BodyMomenta> bodyMomenta() const;
 
     /// Called after every step (costs nothing when unset).
     void setStepObserver(std::function<void(const Simulation&, const StepRecord&)> observer) { mObserver = std::move(observer); }
