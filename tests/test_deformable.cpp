@@ -198,6 +198,27 @@ TEST(Deformable, TheFramesCountAWallsMotionWhileItIsALattice)
     EXPECT_GT(motion.linearMomentumKgMS.y(), 0.0) << "away from the charge, which is on the wall's -y side";
 }
 
+TEST(Deformable, TheDeformablePhaseTakesNoMoreParticleStepsThanItsBoundSays)
+{
+    // Issue 50: the progress bar's time to come in the deformable phase is this bound at the
+    // pace so far; it must bound what the phase then does.
+    Simulation sim(wallScene(1.0, 0.5));
+    sim.advanceTo(0.003);
+    const Scene& scene = sim.scene();
+    ASSERT_FALSE(sim.state().deformable.empty());
+    const int64_t bound = sim.state().deformable.particleStepsLeftAtMost(sim.timeS(), scene.lattice.maxVibrationS);
+    sim.takeStepStats();
+    int64_t taken = 0;
+    while (!sim.state().deformable.empty()) {
+        sim.advanceTo(sim.timeS() + 0.005);
+        taken += sim.takeStepStats().latticeParticleSteps;
+    }
+    std::printf("at 3 ms: at most %lld particle-steps to come; the phase took %lld\n", static_cast<long long>(bound), static_cast<long long>(taken));
+    EXPECT_LE(taken, bound);
+    EXPECT_GT(taken, 0);
+    EXPECT_EQ(sim.state().deformable.particleStepsLeftAtMost(sim.timeS(), scene.lattice.maxVibrationS), 0) << "nothing left once it is over";
+}
+
 TEST(Deformable, TwoChargesInSequenceBreakAWallThatEitherAloneLeavesStanding)
 {
     // Issue 47: damage is state. 11 g of TNT 0.5 m from the wall takes its base's bonds far

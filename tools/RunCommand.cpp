@@ -33,36 +33,46 @@ std::string readableDuration(double seconds)
     return text;
 }
 
-/// What the progress bar says of the time to come: while lattices run, how many (a simulated
-/// second of the deformable phase costs hours where the flight after it costs seconds, so the
-/// pace so far says nothing of the rest); after, the time left at the pace since they ended.
-std::string timeToCome(const spall::RunProgress& p, double& paceFromS, double& paceFromTimeS)
+/// Where the progress bar measures a pace from: the wall clock and the work done then, or
+/// none yet (fromS < 0).
+struct PaceStart {
+    double fromS = -1.0;
+    double work = 0.0;  ///< simulated seconds, or lattice particle-steps
+};
+
+/// What the progress bar says of the time to come. While lattices run (a simulated second of the
+/// deformable phase costs hours where the flight after it costs seconds, so the pace in
+/// simulated time says nothing of the rest): the most particle-steps they can still take at the
+/// particle-steps per second since the phase began. After: the time left at the pace since.
+std::string timeToCome(const spall::RunProgress& p, PaceStart& flight, PaceStart& phase)
 {
     if (p.latticeParticles > 0) {
-        paceFromS = -1.0;
-        return "in the deformable phase (" + std::to_string(p.latticeParticles) + " particles)";
+        flight.fromS = -1.0;
+        if (phase.fromS < 0.0) phase = {p.elapsedS, double(p.latticeParticleSteps)};
+        const double stepsPerS = (double(p.latticeParticleSteps) - phase.work) / (p.elapsedS - phase.fromS);
+        const std::string particles = std::to_string(p.latticeParticles) + " particles";
+        if (!(stepsPerS > 0.0)) return "deformable phase (" + particles + "), pace not yet known";
+        return "deformable phase (" + particles + "): at most " + readableDuration(double(p.latticeParticleStepsLeftAtMost) / stepsPerS) + " left";
     }
-    if (paceFromS < 0.0) {
-        paceFromS = p.elapsedS;
-        paceFromTimeS = p.timeS;
-    }
-    const double simulatedS = p.timeS - paceFromTimeS;
+    phase.fromS = -1.0;
+    if (flight.fromS < 0.0) flight = {p.elapsedS, p.timeS};
+    const double simulatedS = p.timeS - flight.work;
     if (simulatedS <= 0.0) return "pace not yet known";
-    return readableDuration((p.elapsedS - paceFromS) * (p.endTimeS - p.timeS) / simulatedS) + " left at this pace";
+    return readableDuration((p.elapsedS - flight.fromS) * (p.endTimeS - p.timeS) / simulatedS) + " left at this pace";
 }
 
 /// The progress callback: draws a progress bar by simulated time with the time spent and the time
 /// to come (timeToCome), unless quiet, and says whether to go on (not after Ctrl-C or SIGTERM).
 std::function<bool(const spall::RunProgress&)> progressBar(bool quiet)
 {
-    return [quiet, paceFromS = -1.0, paceFromTimeS = 0.0](const spall::RunProgress& p) mutable {
+    return [quiet, flight = PaceStart(), phase = PaceStart()](const spall::RunProgress& p) mutable {
         if (!quiet) {
             const int width = 30;
             const double done = p.endTimeS > 0.0 ? std::min(1.0, p.timeS / p.endTimeS) : 1.0;
-            std::fprintf(stderr, "\r[%-*s] frame %d/%d%s  t=%.4f s  bodies %zu  steps %lld  %s spent, %-36s", width,
+            std::fprintf(stderr, "\r[%-*s] frame %d/%d%s  t=%.4f s  bodies %zu  steps %lld  %s spent, %-56s", width,
                          std::string(size_t(width * done), '#').c_str(), p.frame + 1, p.frameCount, p.frameWritten ? "" : " (computing)",
                          p.timeS, p.bodies, static_cast<long long>(p.totalSteps), readableDuration(p.elapsedS).c_str(),
-                         timeToCome(p, paceFromS, paceFromTimeS).c_str());
+                         timeToCome(p, flight, phase).c_str());
             std::fflush(stderr);
         }
         return !stopRequested();

@@ -2,6 +2,7 @@
 
 #include <spall/core/Error.h>
 
+#include <algorithm>
 #include <cmath>
 #include <unordered_map>
 
@@ -24,6 +25,16 @@ void DeformablePhase::reindex(const std::vector<Body>& bodies)
         if (found == indexOf.end()) throw InputError("saved state: deformable body " + std::to_string(d.bodyId) + " is not among the bodies");
         mBodyIndex.push_back(found->second);
     }
+}
+
+int64_t DeformablePhase::particleStepsLeftAtMost(double timeS, double maxVibrationS) const
+{
+    int64_t steps = 0;
+    for (const DeformableBody& d : lattices) {
+        const double leftS = std::max(0.0, d.lastLoadedS + maxVibrationS - timeS) + d.pendingS;
+        steps += static_cast<int64_t>(std::ceil(leftS / d.lattice.stableTimeStepS())) * static_cast<int64_t>(d.lattice.particleCount());
+    }
+    return steps;
 }
 
 void DeformablePhase::enter(std::vector<Body>& bodies, const ReachedByBlast& reached, const std::vector<Material>& materials,

@@ -50,10 +50,21 @@ size_t latticeParticles(const Simulation& sim)
 
 /// Where a run stands at simulated time `timeS` within (or at the end of) `frame`, for the
 /// progress callback.
-RunProgress progressOf(const Simulation& sim, int frame, int frameCount, double timeS, int64_t steps, double elapsedS, bool frameWritten)
+RunProgress progressOf(const Simulation& sim, int frame, int frameCount, double timeS, int64_t steps, double elapsedS, bool frameWritten,
+                       int64_t latticeParticleSteps)
 {
     const double endTimeS = (frameCount - 1) / sim.scene().frameRateHz;
-    return {frame, frameCount, timeS, sim.bodies().size(), steps, elapsedS, endTimeS, frameWritten, latticeParticles(sim)};
+    return {frame,
+            frameCount,
+            timeS,
+            sim.bodies().size(),
+            steps,
+            elapsedS,
+            endTimeS,
+            frameWritten,
+            latticeParticles(sim),
+            latticeParticleSteps,
+            sim.state().deformable.particleStepsLeftAtMost(sim.timeS(), sim.scene().lattice.maxVibrationS)};
 }
 
 /// Writes frames firstFrame .. frameCount-1 of a simulation that stands at firstFrame's start.
@@ -75,6 +86,7 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
         writeCheckpoint(checkpointPath.string(), {framesDone, frameCount, report.totalSteps, checkpointScene, sim.state()});
     };
     auto lastReport = start;
+    int64_t latticeStepsDone = 0;  // in the frames written
     const auto elapsedS = [&](std::chrono::steady_clock::time_point now) { return std::chrono::duration<double>(now - start).count(); };
     for (int f = firstFrame; f < frameCount; ++f) {
         const double t = f / scene.frameRateHz;
@@ -83,7 +95,7 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
             if (!onFrame || std::chrono::duration<double>(now - lastReport).count() < options.progressEveryS) return;
             lastReport = now;
             const int64_t steps = report.totalSteps + sim.state().stepStats.steps;
-            onFrame(progressOf(sim, f, frameCount, sim.timeS(), steps, elapsedS(now), false));
+            onFrame(progressOf(sim, f, frameCount, sim.timeS(), steps, elapsedS(now), false, latticeStepsDone + sim.state().stepStats.latticeParticleSteps));
         };
         if (!sim.advanceTo(t, options.interrupter, reportWithinFrame)) {
             // Asked to stop within the frame (a frame of the deformable phase can take minutes):
@@ -94,11 +106,12 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
         }
         const StepStats stats = sim.takeStepStats();
         report.totalSteps += stats.steps;
+        latticeStepsDone += stats.latticeParticleSteps;
         for (const auto& sink : sinks) sink->write(sim, {f, t, stats});
         report.framesWritten = f + 1;
         const auto now = std::chrono::steady_clock::now();
         lastReport = now;
-        const bool stop = onFrame && !onFrame(progressOf(sim, f, frameCount, t, report.totalSteps, elapsedS(now), true)) && f + 1 < frameCount;
+        const bool stop = onFrame && !onFrame(progressOf(sim, f, frameCount, t, report.totalSteps, elapsedS(now), true, latticeStepsDone)) && f + 1 < frameCount;
         // The checkpoint goes after the frame's outputs: whatever it says is written, is.
         const double every = scene.output.checkpointEveryS;
         if (every > 0 && f + 1 < frameCount && (stop || std::chrono::duration<double>(now - lastCheckpoint).count() >= every)) {

@@ -51,6 +51,11 @@ public:
     /// those, a lattice knows its body's place without a lookup.
     void reindex(const std::vector<Body>& bodies);
 
+    /// The most particle-steps its lattices can still take: each steps at most until
+    /// `maxVibrationS` after the blast last loaded it (0 when the phase is empty). While the blast
+    /// still acts it moves that time on: the bound leaves out what remains of the loading, a few
+    /// milliseconds against the tenth of a second of `maxVibrationS`.
+    int64_t particleStepsLeftAtMost(double timeS, double maxVibrationS) const;
     /// Bodies with links or anchors that the blast reaches become lattices.
     void enter(std::vector<Body>& bodies, const ReachedByBlast& reached, const std::vector<Material>& materials,
                const LatticeSettings& settings, const StaticWorld& supports, uint64_t seed, double timeS);

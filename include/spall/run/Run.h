@@ -59,6 +59,11 @@ struct RunProgress {
     /// Particles of the lattices in the deformable phase: while there are any, a simulated
     /// second costs far more than it will in the flight after it.
     size_t latticeParticles = 0;
+    /// The particle-steps the lattices have taken since this run (or resume) began, and the
+    /// most they can still take (DeformablePhase::particleStepsLeftAtMost): with the pace so far,
+    /// a bound on the phase's time to come.
+    int64_t latticeParticleSteps = 0;
+    int64_t latticeParticleStepsLeftAtMost = 0;
 };
 
 struct RunReport {
