@@ -183,16 +183,17 @@ TEST(Deformable, TheFramesCountAWallsMotionWhileItIsALattice)
     // Issue 48: an anchored wall swinging under the blast has a pose that does not move (it is
     // anchored) and a lattice that does; the frames' kinetic energy and momenta are the
     // lattice's. Before, the history said 0 J until the hand-off.
-    Simulation sim(wallScene(1.0, 0.5));
+    Simulation sim(wallScene(0.011, 0.5));
     sim.advanceTo(0.003);
     ASSERT_EQ(sim.state().deformable.lattices.size(), 1u) << "the wall is meant to be a lattice at 3 ms";
     const Lattice& lattice = sim.state().deformable.lattices.front().lattice;
     const size_t wall = sim.state().deformable.bodyIndex(0, sim.bodies());
     ASSERT_TRUE(sim.bodies()[wall].anchored);
+    ASSERT_TRUE(lattice.heldBySupport()) << "still held by its base, its body does not follow it";
     EXPECT_EQ(kineticEnergyJ(sim.bodies()[wall]), 0.0) << "its rigid pose is anchored";
     const BodyMomenta motion = sim.bodyMomenta()[wall];
     std::printf("at 3 ms the wall's lattice holds %.1f J and %.2f kg m/s\n", motion.kineticEnergyJ, motion.linearMomentumKgMS.norm());
-    EXPECT_GT(motion.kineticEnergyJ, 1.0) << "a kilogram at 0.5 m sets it moving";
+    EXPECT_GT(motion.kineticEnergyJ, 0.1) << "11 g at 0.5 m sets it moving";
     EXPECT_EQ(motion.kineticEnergyJ, lattice.kineticEnergyJ());
     EXPECT_EQ(motion.linearMomentumKgMS, lattice.linearMomentum());
     EXPECT_GT(motion.linearMomentumKgMS.y(), 0.0) << "away from the charge, which is on the wall's -y side";

@@ -32,7 +32,7 @@ std::string hex(uint64_t value)
 
 TEST(Golden, TheDefaultSceneEndsInItsRecordedState)
 {
-    EXPECT_EQ(hex(lastFrameStateHash("default.json")), "0x94f57efe4410f89f");
+    EXPECT_EQ(hex(lastFrameStateHash("default.json")), "0x96eb352c5fbd5465");
 }
 
 TEST(Golden, TheGlassSceneEndsInItsRecordedState)

@@ -239,7 +239,7 @@ RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& par
 
 void followLattice(Body& body, const Lattice& lattice)
 {
-    if (body.anchored) return;
+    if (body.anchored && lattice.heldBySupport()) return;
     std::vector<uint32_t> voxels(lattice.model().voxelParticleCount);
     std::iota(voxels.begin(), voxels.end(), 0u);
     setMotionsFromFit({&body}, fitRigidMotion(lattice, voxels), blockCentreOffsetM(body.voxelSizeM, lattice.model().blocks));

@@ -33,6 +33,16 @@ double Lattice::fundamentalFrequencyRadS(double thicknessM, double lengthM, bool
     return shapeFactor * barSpeedMS * thicknessM / (lengthM * lengthM);
 }
 
+bool Lattice::heldBySupport() const
+{
+    for (uint32_t p = 0; p < particleCount(); ++p) {
+        if (!mModel.held[p]) continue;
+        for (const int32_t b : mModel.bondAcross[p])
+            if (b >= 0 && bondDamage(size_t(b)) < 1.0) return true;
+    }
+    return false;
+}
+
 std::vector<uint32_t> Lattice::bondsFromHeld() const
 {
     // Breadth first from every held particle at once, through intact bonds, in particle order.

@@ -75,7 +75,9 @@ struct RigidFit {
 RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& particles);
 
 /// Sets the body's pose and velocities to its lattice's rigid fit (as a whole), so frames, the
-/// history and the other bodies' contacts see where it is. An anchored body stays put.
+/// history and the other bodies' contacts see where it is. An anchored body stays put while its
+/// lattice still holds to a support; once every support bond has broken (a wall rocking on its
+/// opened base, issue 48) it moves with it, so its path has no jump at the hand-off.
 void followLattice(Body& body, const Lattice& lattice);
 
 /// Adds linear momentum and angular momentum (about the origin) to a lattice's free particles as

@@ -96,6 +96,9 @@ public:
     double crushingDamage(size_t b) const;
     /// The particles grouped by the bonds that have not broken.
     DisjointSets intactPieces() const;
+    /// Whether any bond to a held particle is still unbroken: false once the whole lattice has
+    /// let go of its supports (its anchored body then moves with it).
+    bool heldBySupport() const;
     /// A piece's fundamental angular frequency, estimated as an Euler–Bernoulli beam's of
     /// thickness t and length L: free at both ends, ω = 22.37 √(EI / ρAL⁴) = 6.458 c t / L², or
     /// clamped at one, 3.516 √(EI / ρAL⁴) = 1.015 c t / L² (c = √(E / ρ)) (unit: rad/s). A free
