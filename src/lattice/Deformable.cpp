@@ -88,7 +88,8 @@ double rigidKineticEnergyJ(const Lattice& lattice, const std::vector<uint32_t>& 
 DeformableBody latticeInBlocks(const Body& body, const VoxelBlocks& blocks, const Material& material, const LatticeSettings& settings,
                                const StaticWorld& supports, uint64_t seed, double timeS)
 {
-    DeformableBody d{body.id, blocks, Lattice::fromBody(body, material, supports, settings, blocks, seed), timeS, timeS, {}, 0.0, {}};
+    DeformableBody d{body.id, blocks, Lattice::fromBody(body, material, supports, settings, blocks, seed), timeS, timeS, {}, 0.0, {},
+                     body.motion.positionM, body.motion.orientation};
     // Faces come in leaf order, a voxel's together: a particle is looked up once per voxel.
     d.particleOfFace.reserve(body.exposedFaces.size());
     for (size_t f = 0; f < body.exposedFaces.size(); ++f)
@@ -119,7 +120,10 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
     if (saved.blocks.voxels < 1 || saved.blocks.voxels > 8)
         throw InputError("saved state: the lattice of body " + std::to_string(body.id) + " has particles of " +
                          std::to_string(saved.blocks.voxels) + " voxels (1 to 8)");
-    DeformableBody fresh = latticeInBlocks(body, saved.blocks, material, settings, supports, seed, saved.enteredS);
+    Body atEntry = body;
+    atEntry.motion.positionM = saved.entryPositionM;
+    atEntry.motion.orientation = saved.entryOrientation;
+    DeformableBody fresh = latticeInBlocks(atEntry, saved.blocks, material, settings, supports, seed, saved.enteredS);
     fresh.lastLoadedS = saved.lastLoadedS;
     Lattice& to = fresh.lattice;
     Lattice& from = saved.lattice;

@@ -121,6 +121,8 @@ void transferDeformable(Archive& a, D& d)
     a.pod(d.enteredS, "deformable since");
     a.pod(d.lastLoadedS, "deformable last loaded");
     a.pod(d.blocks.voxels, "particle voxels");
+    a.vec(d.entryPositionM, "deformable entry position");
+    a.doubles(d.entryOrientation.coeffs().data(), 4, "deformable entry orientation");
     for (int axis = 0; axis < 3; ++axis) a.pod(d.blocks.origin[axis], "particle blocks' origin");
     auto& lattice = d.lattice;
     a.sequence(lattice.state.positionM, "particle positions", [&](auto& v) { a.vec(v, "particle position"); });

@@ -30,6 +30,12 @@ struct DeformableBody {
     /// short. What is gathered and not yet stepped (unit: s, N s):
     double pendingS = 0.0;
     std::vector<Eigen::Vector3d> pendingImpulseNs;
+    /// The body's pose when its lattice was built: a saved lattice is built again there
+    /// (restoreDeformable), so what its model took from the pose (support points, the ground's
+    /// offset, bearing loads, its rest orientation) is as it was, though an anchored body that
+    /// let go of its supports has moved with it since (followLattice) (unit: m).
+    Eigen::Vector3d entryPositionM = Eigen::Vector3d::Zero();
+    Eigen::Quaterniond entryOrientation = Eigen::Quaterniond::Identity();
 };
 
 /// The lattice of a body entering the phase, moving with the body: a particle per voxel, or per
