@@ -283,8 +283,8 @@ TEST(WallResponse, ACantileverCrackedThroughItsBaseTopplesWhenItRocksPastItsToe)
     EXPECT_GT(wall.massFractionTiltedPast(3.2, 0.8, 60.0), 0.95) << "the wall lies on the ground";
     // While it rocks as a lattice its body follows it: no jump at the hand-off (before, the
     // anchored body stood still until then and jumped 54 mm, nearly two 3 cm voxels).
-    // What is left is the turn before its support opens (2 ε_t H/t, 1.6 mrad, about 1 mm at its
-    // centre): a tenth of a voxel at most.
+    // What is left is the turn before its support opens (2 ε_t H/t = 1.4 mrad, about 0.85 mm at
+    // its centre, and more by the step it opens): a tenth of a voxel at most.
     std::printf("largest jump of its centre in a step: %.2f mm\n", 1e3 * wall.largestJumpM);
     EXPECT_LT(wall.largestJumpM, 0.003);
 }

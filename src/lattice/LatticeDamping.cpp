@@ -73,7 +73,7 @@ void Lattice::findDampedPieces()
     std::vector<int32_t> pieceOfRoot(particleCount(), -1);
     std::vector<openvdb::Coord> low, high;
     std::vector<std::vector<uint32_t>> members;
-    std::vector<char> pieceHeld;
+    std::vector<char> pieceHeld, pieceHeldByVoxels;
     std::vector<uint32_t> pieceReach;  // a held piece's most bonds between a particle and a held one (a free piece's: unreached)
     const std::vector<uint32_t> hops = bondsFromHeld();
     for (uint32_t p = 0; p < particleCount(); ++p) {
@@ -82,12 +82,14 @@ void Lattice::findDampedPieces()
             piece = int32_t(members.size());
             members.emplace_back();
             pieceHeld.push_back(0);
+            pieceHeldByVoxels.push_back(0);
             pieceReach.push_back(0);
             low.push_back(mModel.voxel[p]);
             high.push_back(mModel.voxel[p]);
         }
         members[size_t(piece)].push_back(p);
         pieceHeld[size_t(piece)] |= mModel.held[p];
+        pieceHeldByVoxels[size_t(piece)] |= mModel.held[p] && p < mModel.voxelParticleCount;
         pieceReach[size_t(piece)] = std::max(pieceReach[size_t(piece)], hops[p]);
         low[size_t(piece)].minComponent(mModel.voxel[p]);
         high[size_t(piece)].maxComponent(mModel.voxel[p]);
@@ -100,6 +102,7 @@ void Lattice::findDampedPieces()
     for (size_t k = 0; k < members.size(); ++k) {
         DampedPiece& piece = mDampedPieces[k];
         piece.held = pieceHeld[k] != 0;
+        piece.heldByVoxels = pieceHeldByVoxels[k] != 0;
         std::array<double, 3> sides{};
         for (int axis = 0; axis < 3; ++axis) sides[size_t(axis)] = double(high[k][axis] - low[k][axis] + 1) * mModel.spacingM;
         std::sort(sides.begin(), sides.end());
@@ -108,10 +111,10 @@ void Lattice::findDampedPieces()
         piece.firstParticle = members[k].front();
         piece.firstMember = uint32_t(mPieceParticles.size());
         piece.endMember = uint32_t(mPieceParticles.size() + members[k].size());
-        // A cantilever of height H and thickness t under a uniform load turns as a whole (the
-        // best fit of Biggs' deflected shape) by about ε_t H / (2t) when its base cracks
-        // (tip deflection ft H² / (2 E t), test_wall_response.cpp's model); four times that is
-        // past anything its support can hold elastically.
+        // A cantilever of height H and thickness t under a uniform load reaches ft at its base
+        // with its tip deflected ft H² / (2 E t) (Euler–Bernoulli): a chord turned by ε_t H / (2t),
+        // a best-fit (least-squares) turn of (8/15) ε_t H / t. 2 ε_t H / t, 3.75 times that, is
+        // past anything its support holds elastically (2.9 times under a load at its tip).
         piece.hingeRotationRad = 2.0 * (mModel.stiffness.strength[0].peakStretchM / mModel.spacingM) * lengthM / sides[0];
         for (size_t begin = 0; begin < members[k].size(); begin += kDampingChunk) {
             const uint32_t start = uint32_t(mPieceParticles.size() + begin);
@@ -166,6 +169,8 @@ bool Lattice::turnedPastHinge(const DampedPiece& piece) const
     if (n < 3.0) return false;
     const Eigen::Matrix3d covariance = sumPlaceRestM2 - sumPlaceM * sumRestM.transpose() / n;
     const Eigen::JacobiSVD<Eigen::Matrix3d> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    // Particles on one line fix no turn about it: the fit's would be rounding noise.
+    if (svd.singularValues()(1) <= 1e-9 * svd.singularValues()(0)) return false;
     Eigen::Matrix3d flip = Eigen::Matrix3d::Identity();
     flip(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
     const Eigen::Matrix3d turn = svd.matrixU() * flip * svd.matrixV().transpose();
@@ -177,7 +182,9 @@ bool Lattice::openSupportHinges()
     if (mPiecesStale) findDampedPieces();
     bool opened = false;
     for (const DampedPiece& piece : mDampedPieces) {
-        if (!piece.held) continue;
+        // A piece held by its own voxels (no free face to a support) stays held whatever its
+        // support bonds do: breaking them would free nothing.
+        if (!piece.held || piece.heldByVoxels) continue;
         const auto first = mPieceSupportBonds.begin() + piece.firstSupportBond, end = mPieceSupportBonds.begin() + piece.endSupportBond;
         // An uncracked support holds elastically: nothing to measure.
         if (std::none_of(first, end, [&](uint32_t b) { return bondDamage(b) > 0.0; }) || !turnedPastHinge(piece)) continue;

@@ -146,6 +146,7 @@ private:
     // of Structures, 1993, §12-4: mass-proportional damping a0 M damps mode n at a0 / 2 ω_n).
     struct DampedPiece {
         bool held = false;
+        bool heldByVoxels = false;  ///< some of its own voxels are held (no support bond between)
         double decayPerS = 0.0;
         uint32_t firstParticle = 0;  ///< the origin of its sums
         /// A held piece turned further than this from rest is no longer held elastically: its
@@ -177,7 +178,8 @@ private:
     /// inertia) decay by exp(−2 ζ ω dt); so do a held piece's velocities. Momenta are unchanged.
     void dampVibration(double dtS);
     /// A held piece whose support has cracked and which has turned as a whole (its particles'
-    /// best-fit rotation, Kabsch) further than its intact support would let it turn elastically
+    /// best-fit rotation, Kabsch; not one on a line, nor one held by its own voxels) further than
+    /// its intact support would let it turn elastically
     /// (DampedPiece::hingeRotationRad) moves as a mechanism about its support, not as a
     /// vibration about rest: its support bonds break, it is a free piece resting on its support
     /// (contact and friction, as any broken bond), and damping no longer holds it at rest

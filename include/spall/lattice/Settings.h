@@ -45,7 +45,8 @@ struct LatticeSettings {
     double handoffCheckIntervalS = 0.001;
     /// At hand-off a bond still carrying less than this fraction of its peak traction counts as
     /// broken: a rigid body's link is whole or cut, and on a linear softening line such a crack
-    /// has dissipated all but this fraction squared of its fracture energy (1 % at 0.1)
+    /// has dissipated 1 − this fraction of its fracture energy (90 % at 0.1; damage is secant, so
+    /// unloading returns to the origin)
     /// (Lattice::brokenAtHandOff) (unit: 1).
     double handoffResidualStrength = 0.1;
     /// How bonds' damage grows: the crack band's softening line, or Davison–Stevens in rate form
