@@ -199,6 +199,106 @@ TEST(Deformable, TheFramesCountAWallsMotionWhileItIsALattice)
     EXPECT_GT(motion.linearMomentumKgMS.y(), 0.0) << "away from the charge, which is on the wall's -y side";
 }
 
+TEST(Deformable, AWallsPiecesShowAsTheySeparateAndKeepTheirIdsThroughTheHandOff)
+{
+    // Issue 48, item 4: the frames show a lattice's pieces as they come apart, and a piece shown
+    // keeps its id and its path when it leaves the phase. Before, the wall stood whole in every
+    // frame until the hand-off, when its pieces appeared at once under new ids.
+    Simulation sim(wallScene(1.0, 0.5));
+    const int64_t wallId = sim.bodies().front().id;
+    const int64_t wallVoxels = sim.bodies().front().mass.voxelCount;
+    const auto holdsWall = [&] { return std::any_of(sim.bodies().begin(), sim.bodies().end(), [&](const Body& b) { return b.id == wallId; }); };
+    const double frameS = 0.0005;
+    std::vector<Body> lastShown;
+    double lastShownS = 0.0;
+    double firstSeparateS = -1.0;
+    while (holdsWall() && sim.timeS() < 0.05) {
+        std::vector<Body> shown = sim.showPieces();
+        if (shown.size() > 1) {
+            if (firstSeparateS < 0.0) firstSeparateS = sim.timeS();
+            std::map<int64_t, int> timesShown;
+            int64_t voxels = 0;
+            for (const Body& piece : shown) {
+                EXPECT_EQ(++timesShown[piece.id], 1) << "id " << piece.id << " shown twice at " << sim.timeS() << " s";
+                EXPECT_EQ(piece.parentId, wallId);
+                voxels += piece.mass.voxelCount;
+            }
+            EXPECT_EQ(voxels, wallVoxels) << "the pieces shown are the wall, all of it, at " << sim.timeS() << " s";
+        }
+        lastShown = std::move(shown);
+        lastShownS = sim.timeS();
+        sim.advanceTo(sim.timeS() + frameS);
+    }
+    ASSERT_FALSE(holdsWall()) << "the wall is meant to leave the phase in pieces within 50 ms";
+    std::printf("pieces first shown at %.1f ms, %zu shown at %.1f ms, %zu bodies at the hand-off's frame %.1f ms\n", 1e3 * firstSeparateS,
+                lastShown.size(), 1e3 * lastShownS, sim.bodies().size(), 1e3 * sim.timeS());
+    ASSERT_GT(firstSeparateS, 0.0);
+    EXPECT_LT(firstSeparateS, lastShownS) << "shown in pieces in a frame before the one that hands them off";
+    // A piece shown keeps its id when it leaves, where its shown motion takes it to within a voxel.
+    std::map<int64_t, const Body*> now;
+    for (const Body& b : sim.bodies()) now[b.id] = &b;
+    const double dtS = sim.timeS() - lastShownS;
+    double shownKg = 0.0, keptKg = 0.0, largestJumpM = 0.0;
+    for (const Body& piece : lastShown) {
+        shownKg += piece.mass.massKg;
+        const auto found = now.find(piece.id);
+        if (found == now.end()) continue;
+        keptKg += piece.mass.massKg;
+        const Eigen::Vector3d expectedM = piece.motion.positionM + dtS * piece.motion.linearVelocityMS;
+        largestJumpM = std::max(largestJumpM, (found->second->motion.positionM - expectedM).norm());
+    }
+    std::printf("%.0f %% of the mass shown keeps its ids; its largest jump beyond its motion %.2f mm\n", 100.0 * keptKg / shownKg, 1e3 * largestJumpM);
+    EXPECT_GT(keptKg, 0.9 * shownKg);
+    EXPECT_LT(largestJumpM, kH);
+}
+
+TEST(Deformable, PiecesFreedWhileTheBlastActsTakeItOnTheirOwnFaces)
+{
+    // Issue 48, item 3: once the wall has come apart under the blast, each piece carries on as a
+    // lattice of its own and the loads act on its own faces. Its momentum once the blast has
+    // passed is then that of the same piece loaded as a rigid body of its own from the start
+    // (within 10 %), where before the loads kept acting on the intact wall's faces until the
+    // hand-off and a piece took only what its bonds passed on.
+    Simulation cracked(wallScene(1.0, 0.5));
+    const int64_t wallId = cracked.bodies().front().id;
+    while (cracked.state().deformable.lattices.size() < 2 && cracked.timeS() < 0.01) cracked.step();
+    ASSERT_GE(cracked.state().deformable.lattices.size(), 2u) << "the wall is meant to come apart under the blast";
+    const double splitS = cracked.timeS();
+    // The pieces as they separated, at rest where they stood, are the reference's rigid bodies.
+    SimulationState rigid;
+    for (const Body& piece : cracked.bodies()) {
+        ASSERT_EQ(piece.parentId, wallId);
+        Body atRest = piece;
+        atRest.motion.linearVelocityMS = atRest.motion.angularVelocityRadS = Eigen::Vector3d::Zero();
+        atRest.motion.deformable = false;
+        rigid.bodies.push_back(atRest);
+        rigid.nextId = std::max(rigid.nextId, piece.id + 1);
+    }
+    Scene rigidScene = cracked.scene();
+    rigidScene.fracture.algorithm = FractureAlgorithm::None;
+    Simulation reference(rigidScene, std::move(rigid));
+    const double endS = 0.004;
+    cracked.advanceTo(endS);
+    reference.advanceTo(endS);
+    // Each free piece that is still whole in both, by its momentum along the blast (+y).
+    std::map<int64_t, const Body*> referenceById;
+    for (const Body& b : reference.bodies()) referenceById[b.id] = &b;
+    int compared = 0;
+    double worst = 0.0;
+    for (const Body& piece : cracked.bodies()) {
+        const auto found = referenceById.find(piece.id);
+        if (piece.anchored || found == referenceById.end() || found->second->mass.voxelCount != piece.mass.voxelCount) continue;
+        const double py = linearMomentum(piece).y(), expected = linearMomentum(*found->second).y();
+        if (expected < 0.05 * piece.mass.massKg) continue;  // barely moved: no meaningful ratio
+        worst = std::max(worst, std::abs(py / expected - 1.0));
+        ++compared;
+    }
+    std::printf("split at %.2f ms; at %.0f ms %d free pieces compared, the worst %.1f %% from the same piece loaded rigidly from the start\n",
+                1e3 * splitS, 1e3 * endS, compared, 100.0 * worst);
+    EXPECT_GT(compared, 5);
+    EXPECT_LT(worst, 0.1);
+}
+
 TEST(Deformable, TheDeformablePhaseTakesNoMoreParticleStepsThanItsBoundSays)
 {
     // Issue 50: the progress bar's time to come in the deformable phase is this bound at the

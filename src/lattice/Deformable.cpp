@@ -89,7 +89,7 @@ DeformableBody latticeInBlocks(const Body& body, const VoxelBlocks& blocks, cons
                                const StaticWorld& supports, uint64_t seed, double timeS)
 {
     DeformableBody d{body.id, blocks, Lattice::fromBody(body, material, supports, settings, blocks, seed), timeS, timeS, {}, 0.0, {},
-                     body.motion.positionM, body.motion.orientation};
+                     body.motion.positionM, body.motion.orientation, {}};
     // Faces come in leaf order, a voxel's together: a particle is looked up once per voxel.
     d.particleOfFace.reserve(body.exposedFaces.size());
     for (size_t f = 0; f < body.exposedFaces.size(); ++f)
@@ -456,6 +456,33 @@ HandOff handOff(const Body& body, const Lattice& lattice)
         setMotionsFromFit(parts, fitRigidMotion(lattice, particles), blockCentreOffsetM(body.voxelSizeM, lattice.model().blocks));
     }
     return result;
+}
+
+openvdb::Coord partKey(const Body& part) { return part.grid->cbeginValueOn().getCoord(); }
+
+int64_t shownIdOf(const DeformableBody& deformable, const Body& part)
+{
+    const openvdb::Coord key = partKey(part);
+    for (const auto& [shownKey, id] : deformable.shownPieceIds)
+        if (shownKey == key) return id;
+    return kNoBodyId;
+}
+
+bool anyBondBrokenAtHandOff(const Lattice& lattice)
+{
+    for (size_t b = 0; b < lattice.bondCount(); ++b)
+        if (lattice.brokenAtHandOff(b)) return true;
+    return false;
+}
+
+Departure separatePieces(const Body& body, const Lattice& lattice)
+{
+    Departure departure;
+    if (!anyBondBrokenAtHandOff(lattice)) return departure;
+    departure.handOff = handOff(body, lattice);
+    if (departure.handOff.parts.size() < 2) return Departure{};
+    for (Body& part : departure.handOff.parts) part.motion.deformable = true;
+    return departure;
 }
 
 Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tolerancePerParticleJ, bool timeUp)

@@ -86,10 +86,10 @@ PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, con
         const double toleranceJ = settings.handoffEnergyFraction * elasticCapacityPerVoxelJ(materials[body.materialIndex], d.lattice.model().spacingM);
         const bool timeUp = sinceBlastS >= settings.maxVibrationS;
         Departure departure;
-        if (sinceBlastS > 0.0 && (checkDue || timeUp)) {
+        if (checkDue || timeUp) {
             out.particleSteps += catchUpDeformable(d);
             followLattice(body, d.lattice);
-            departure = spall::leaveQuietPieces(body, d.lattice, toleranceJ, timeUp);
+            departure = sinceBlastS > 0.0 ? spall::leaveQuietPieces(body, d.lattice, toleranceJ, timeUp) : separatePieces(body, d.lattice);
         }
         std::vector<Body>& leftParts = departure.handOff.parts;
         if (leftParts.empty() || (leftParts.size() == 1 && leftParts.front().motion.deformable)) {
@@ -106,6 +106,7 @@ PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, con
             body = std::move(leftParts.front());
             continue;
         }
+        for (Body& part : leftParts) part.id = shownIdOf(d, part);
         out.parts[i] = std::move(leftParts);
         out.leaving.push_back(std::move(d));
     }
@@ -113,6 +114,34 @@ PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, con
     lattices = std::move(staying);
     mBodyIndex = std::move(stayingBodyIndex);
     return out;
+}
+
+std::vector<Body> DeformablePhase::showPieces(const std::vector<Body>& bodies, int64_t& nextId)
+{
+    std::vector<std::vector<Body>> partsOf(bodies.size());
+    for (size_t k = 0; k < lattices.size(); ++k) {
+        DeformableBody& d = lattices[k];
+        const size_t i = bodyIndex(k, bodies);
+        if (!anyBondBrokenAtHandOff(d.lattice)) continue;
+        std::vector<Body> parts = handOff(bodies[i], d.lattice).parts;
+        if (parts.size() < 2) continue;
+        for (Body& part : parts) {
+            part.id = shownIdOf(d, part);
+            if (part.id == kNoBodyId) {
+                part.id = nextId++;
+                d.shownPieceIds.emplace_back(partKey(part), part.id);
+            }
+            part.parentId = bodies[i].id;
+        }
+        partsOf[i] = std::move(parts);
+    }
+    std::vector<Body> shown;
+    shown.reserve(bodies.size());
+    for (size_t i = 0; i < bodies.size(); ++i) {
+        if (partsOf[i].empty()) shown.push_back(bodies[i]);
+        for (Body& part : partsOf[i]) shown.push_back(std::move(part));
+    }
+    return shown;
 }
 
 void DeformablePhase::continueVibratingParts(const std::vector<Body>& bodies, const std::vector<DeformableBody>& leaving,

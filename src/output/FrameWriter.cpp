@@ -65,8 +65,9 @@ openvdb::FloatTree::Ptr FrameWriter::intern(std::unordered_multimap<uint64_t, In
 const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
 {
     auto found = mByBody.find(body.id);
-    if (found != mByBody.end()) return found->second;
+    if (found != mByBody.end() && found->second.madeFrom.lock() == body.grid) return found->second;
     FragmentTrees trees;
+    trees.madeFrom = body.grid;
     trees.originIjk = body.indexBounds.min();
     auto voxels = std::make_shared<openvdb::FloatTree>(0.0f);
     auto fractureFaces = std::make_shared<openvdb::FloatTree>(0.0f);
@@ -99,7 +100,7 @@ const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
                            [&] { return levelSet ? voxelSurfaceLevelSet(faces, body.voxelSizeM, style) : voxels; });
     if (!fractureFaces->empty()) trees.fractureFaces = intern(mFractureFaces, fractureFaces, fractureHash, [&] { return fractureFaces; });
     trees.meshKey = splitmix64(shapeHash ^ splitmix64(fractureHash));
-    return mByBody.emplace(body.id, std::move(trees)).first->second;
+    return mByBody.insert_or_assign(body.id, std::move(trees)).first->second;
 }
 
 openvdb::GridBase::Ptr FrameWriter::fragmentGrid(const FrameInfo& info, const Body& body, const FragmentTrees& trees,

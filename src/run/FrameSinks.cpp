@@ -16,14 +16,15 @@ namespace {
 class VdbSink : public FrameSink {
 public:
     VdbSink(const std::string& directory, const OutputSettings& settings) : mWriter(directory, settings) {}
-    void write(const Simulation& sim, const FrameStamp& frame) override { mWriter.write({frame.frame, frame.timeS}, sim.bodies()); }
+    void write(const Simulation&, const FrameStamp& frame) override { mWriter.write({frame.frame, frame.timeS}, frame.bodies); }
     void finish(const RunEnd&) override {}
 
 private:
     FrameWriter mWriter;
 };
 
-/// The frame's totals over its bodies, and a row per body.
+/// The frame's totals over its bodies, and a row per body it shows: the totals count a lattice's
+/// particles (Simulation::bodyMomenta), the rows its pieces' rigid fits.
 FrameRow frameTotals(const Simulation& sim, const FrameStamp& frame, std::vector<BodyRow>& rows)
 {
     FrameRow row;
@@ -32,14 +33,14 @@ FrameRow frameTotals(const Simulation& sim, const FrameStamp& frame, std::vector
     row.steps = frame.stats.steps;
     row.minDtS = frame.stats.steps > 0 ? frame.stats.minDtS : 0.0;
     row.latticeParticleSteps = frame.stats.latticeParticleSteps;
-    row.bodyCount = static_cast<int64_t>(sim.bodies().size());
-    rows.reserve(sim.bodies().size());
-    const std::vector<BodyMomenta> motions = sim.bodyMomenta();
-    for (size_t i = 0; i < motions.size(); ++i) {
-        const Body& b = sim.bodies()[i];
-        row.kineticEnergyJ += motions[i].kineticEnergyJ;
-        row.linearMomentum += motions[i].linearMomentumKgMS;
-        row.angularMomentum += motions[i].angularMomentumKgM2S;
+    row.bodyCount = static_cast<int64_t>(frame.bodies.size());
+    for (const BodyMomenta& m : sim.bodyMomenta()) {
+        row.kineticEnergyJ += m.kineticEnergyJ;
+        row.linearMomentum += m.linearMomentumKgMS;
+        row.angularMomentum += m.angularMomentumKgM2S;
+    }
+    rows.reserve(frame.bodies.size());
+    for (const Body& b : frame.bodies) {
         row.voxelCount += b.mass.voxelCount;
         const Eigen::Quaterniond& q = b.motion.orientation;
         rows.push_back({b.id, b.parentId, b.motion.positionM, Eigen::Vector4d(q.w(), q.x(), q.y(), q.z()), b.motion.linearVelocityMS,
@@ -90,10 +91,10 @@ public:
         for (int i = 0; i < n; ++i) mChosen.push_back(n == 1 ? frameCount - 1 : int(std::lround(double(i) * (frameCount - 1) / (n - 1))));
     }
 
-    void write(const Simulation& sim, const FrameStamp& frame) override
+    void write(const Simulation&, const FrameStamp& frame) override
     {
         if (std::find(mChosen.begin(), mChosen.end(), frame.frame) == mChosen.end()) return;
-        mBodies.push_back(sim.bodies());
+        mBodies.push_back(frame.bodies);
         mTimes.push_back(frame.timeS);
     }
 

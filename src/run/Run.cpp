@@ -107,7 +107,8 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
         const StepStats stats = sim.takeStepStats();
         report.totalSteps += stats.steps;
         latticeStepsDone += stats.latticeParticleSteps;
-        for (const auto& sink : sinks) sink->write(sim, {f, t, stats});
+        const std::vector<Body> shown = sim.showPieces();
+        for (const auto& sink : sinks) sink->write(sim, {f, t, stats, shown});
         report.framesWritten = f + 1;
         const auto now = std::chrono::steady_clock::now();
         lastReport = now;

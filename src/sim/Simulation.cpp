@@ -120,6 +120,8 @@ std::vector<BodyMomenta> Simulation::bodyMomenta() const
     return motions;
 }
 
+std::vector<Body> Simulation::showPieces() { return mState.deformable.showPieces(mState.bodies, mState.nextId); }
+
 std::pair<Eigen::Vector3d, Eigen::Vector3d> Simulation::totalMomenta() const
 {
     Eigen::Vector3d linear = Eigen::Vector3d::Zero(), angular = Eigen::Vector3d::Zero();
@@ -140,7 +142,10 @@ void Simulation::splitBodies(const std::vector<char>& cracked)
     if (mObserver) std::tie(mRecord.linearMomentumBeforeSplit, mRecord.angularMomentumBeforeSplit) = totalMomenta();
     std::vector<std::vector<Body>> parts(mState.bodies.size());
     for (size_t i = 0; i < mState.bodies.size(); ++i)
-        if (cracked[i]) parts[i] = splitBody(mState.bodies[i]);
+        if (cracked[i]) {
+            parts[i] = splitBody(mState.bodies[i]);
+            for (Body& part : parts[i]) part.id = kNoBodyId;
+        }
     replaceWithParts(parts);
     if (mObserver) {
         mRecord.split = true;
@@ -167,7 +172,7 @@ void Simulation::replaceWithParts(std::vector<std::vector<Body>>& parts)
                                        angularMomentumAboutOrigin(part)});
                 continue;
             }
-            part.id = mState.nextId++;
+            if (part.id == kNoBodyId) part.id = mState.nextId++;
             event.childIds.push_back(part.id);
             next.push_back(std::move(part));
         }

@@ -63,13 +63,22 @@ public:
     /// and gravity; its body follows it. Returns the particle-steps taken.
     int64_t deform(std::vector<Body>& bodies, const std::vector<std::vector<Eigen::Vector3d>>& faceForcesN, const Eigen::Vector3d& gravityMS2,
                    const ReachedByBlast& reached, double timeS, double dtS);
-    /// Bodies the blast has passed, looked at once per lattice.handoff_check_interval_s (in the
-    /// step of length dtS that reaches a multiple of it) or when their time is up: their quiet
-    /// pieces leave as rigid bodies (leaveQuietPieces, Deformable.h). A body that leaves whole is
+    /// Each lattice, looked at once per lattice.handoff_check_interval_s (in the step of length
+    /// dtS that reaches a multiple of it) or when its time is up. One the blast has passed: its
+    /// quiet pieces leave as rigid bodies (leaveQuietPieces, Deformable.h). One the blast still
+    /// acts on: once it has come apart, its pieces carry on as lattices of their own
+    /// (separatePieces), each taking the blast on its own faces. A body that leaves whole is
     /// replaced in `bodies` at once, in its place; one that leaves in parts is left to the
     /// caller, which replaces it with `parts`, reindexes, then calls continueVibratingParts.
+    /// A part has the id it was shown with (showPieces), or none yet (kNoBodyId).
     PhaseDepartures leaveQuietPieces(std::vector<Body>& bodies, const std::vector<Material>& materials, const LatticeSettings& settings,
                                      double timeS, double dtS, std::vector<HandOffRecord>& records);
+    /// The bodies as a frame shows them: a body whose lattice has come apart (some bond broken at
+    /// hand-off, Lattice::brokenAtHandOff) as the parts a hand-off now would give, at their
+    /// particles' best-fit poses with their momenta (handOff), after it in `bodies`' order. A
+    /// part keeps the id it was first shown with, which a hand-off gives it too
+    /// (leaveQuietPieces), so its path through the frames runs on; new ids come from `nextId`.
+    std::vector<Body> showPieces(const std::vector<Body>& bodies, int64_t& nextId);
     /// Parts marked deformable of bodies that left (`leaving`) carry on in the phase, with
     /// lattices that take their state from their whole's.
     void continueVibratingParts(const std::vector<Body>& bodies, const std::vector<DeformableBody>& leaving,

@@ -15,11 +15,13 @@ namespace spall {
 
 class HistoryWriter;
 
-/// A frame reached: its index, its time and what the steps since the last frame did.
+/// A frame reached: its index, its time, what the steps since the last frame did, and the bodies
+/// it shows (Simulation::showPieces).
 struct FrameStamp {
     int frame = 0;
     double timeS = 0.0;  ///< (unit: s)
     StepStats stats;
+    const std::vector<Body>& bodies;
 };
 
 /// How the run ended: `complete` when its last frame was written; `resumed` when this process

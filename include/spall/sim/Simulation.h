@@ -105,6 +105,12 @@ public:
     /// rigid pose none), any other its rigid motion's (issue 48).
     std::vector<BodyMomenta> bodyMomenta() const;
 
+    /// The bodies as a frame shows them: bodies(), except that a body in the deformable phase
+    /// whose lattice has come apart is shown as the parts a hand-off now would give, at their
+    /// particles' poses (DeformablePhase::showPieces). A part keeps the id it is first shown
+    /// with through the hand-off, so it takes one from the simulation's ids (issue 48).
+    std::vector<Body> showPieces();
+
     /// Called after every step (costs nothing when unset).
     void setStepObserver(std::function<void(const Simulation&, const StepRecord&)> observer) { mObserver = std::move(observer); }
 
@@ -119,7 +125,8 @@ private:
     /// Bodies that lost links split into their connected parts (or dust), in body order.
     void splitBodies(const std::vector<char>& cracked);
     /// Replaces each body i with parts[i] (when not empty): small ones become dust as the
-    /// scene says, the others get ids, and a fracture event records them.
+    /// scene says, the others get ids (a part the frames have shown has its own: showPieces),
+    /// and a fracture event records them.
     void replaceWithParts(std::vector<std::vector<Body>>& parts);
     /// Bodies the blast reaches become lattices (fracture.algorithm "lattice").
     void enterDeformablePhase(const std::vector<OpenWindow>& windows);

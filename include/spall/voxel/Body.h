@@ -78,13 +78,16 @@ struct BodyMotion {
     double restTimeS = 0.0;  ///< how long the body has been below the sleep thresholds (unit: s)
 };
 
+/// No body: a parent id of a body the scene made, or a part's id before the simulation gives it one.
+inline constexpr int64_t kNoBodyId = -1;
+
 /// One rigid body of connected voxels: its motion, its shape (grid, per-voxel state), and what is
 /// derived from the shape, which only refreshDerivedData writes. Every body of a simulation has
 /// the same voxel size (the scene's; fragments inherit it): the contact code relies on that and
 /// requireVoxelSize checks it where a simulation starts.
 struct Body {
     int64_t id = 0;
-    int64_t parentId = -1;
+    int64_t parentId = kNoBodyId;
     int materialIndex = 0;
     BodyMotion motion;
 
