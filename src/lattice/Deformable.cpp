@@ -458,14 +458,45 @@ HandOff handOff(const Body& body, const Lattice& lattice)
     return result;
 }
 
-openvdb::Coord partKey(const Body& part) { return part.grid->cbeginValueOn().getCoord(); }
+namespace {
 
-int64_t shownIdOf(const DeformableBody& deformable, const Body& part)
+/// The voxel particles of a part (of its body's lattice, particleOfVoxel), each once.
+std::vector<uint32_t> particlesOfPart(const Lattice& lattice, const Body& part)
 {
-    const openvdb::Coord key = partKey(part);
-    for (const auto& [shownKey, id] : deformable.shownPieceIds)
-        if (shownKey == key) return id;
-    return kNoBodyId;
+    std::vector<uint32_t> particles;
+    for (auto it = part.grid->constTree().cbeginValueOn(); it; ++it) particles.push_back(particleOfVoxel(lattice, it.getCoord()));
+    std::sort(particles.begin(), particles.end());
+    particles.erase(std::unique(particles.begin(), particles.end()), particles.end());
+    return particles;
+}
+
+}  // namespace
+
+void nameParts(DeformableBody& deformable, std::vector<Body>& parts, int64_t* nextId)
+{
+    std::vector<std::vector<uint32_t>> particles;
+    for (const Body& part : parts) particles.push_back(particlesOfPart(deformable.lattice, part));
+    // Per id shown, the part holding most of its particles (the first such part on a tie).
+    std::map<int64_t, std::pair<size_t, size_t>> heir;  // id -> (particles held, part)
+    const std::vector<int64_t>& shown = deformable.shownIdOfParticle;
+    for (size_t k = 0; k < parts.size(); ++k) {
+        std::map<int64_t, size_t> held;
+        if (!shown.empty())
+            for (const uint32_t p : particles[k]) ++held[shown[p]];
+        for (const auto& [id, count] : held) {
+            auto [it, isNew] = heir.emplace(id, std::make_pair(count, k));
+            if (!isNew && count > it->second.first) it->second = {count, k};
+        }
+    }
+    for (Body& part : parts) part.id = kNoBodyId;
+    for (const auto& [id, held] : heir)
+        if (id != kNoBodyId && parts[held.second].id == kNoBodyId) parts[held.second].id = id;
+    if (!nextId) return;
+    deformable.shownIdOfParticle.assign(deformable.lattice.model().voxelParticleCount, kNoBodyId);
+    for (size_t k = 0; k < parts.size(); ++k) {
+        if (parts[k].id == kNoBodyId) parts[k].id = (*nextId)++;
+        for (const uint32_t p : particles[k]) deformable.shownIdOfParticle[p] = parts[k].id;
+    }
 }
 
 bool anyBondBrokenAtHandOff(const Lattice& lattice)
@@ -473,16 +504,6 @@ bool anyBondBrokenAtHandOff(const Lattice& lattice)
     for (size_t b = 0; b < lattice.bondCount(); ++b)
         if (lattice.brokenAtHandOff(b)) return true;
     return false;
-}
-
-Departure separatePieces(const Body& body, const Lattice& lattice)
-{
-    Departure departure;
-    if (!anyBondBrokenAtHandOff(lattice)) return departure;
-    departure.handOff = handOff(body, lattice);
-    if (departure.handOff.parts.size() < 2) return Departure{};
-    for (Body& part : departure.handOff.parts) part.motion.deformable = true;
-    return departure;
 }
 
 Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tolerancePerParticleJ, bool timeUp)

@@ -86,10 +86,10 @@ PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, con
         const double toleranceJ = settings.handoffEnergyFraction * elasticCapacityPerVoxelJ(materials[body.materialIndex], d.lattice.model().spacingM);
         const bool timeUp = sinceBlastS >= settings.maxVibrationS;
         Departure departure;
-        if (checkDue || timeUp) {
+        if (sinceBlastS > 0.0 && (checkDue || timeUp)) {
             out.particleSteps += catchUpDeformable(d);
             followLattice(body, d.lattice);
-            departure = sinceBlastS > 0.0 ? spall::leaveQuietPieces(body, d.lattice, toleranceJ, timeUp) : separatePieces(body, d.lattice);
+            departure = spall::leaveQuietPieces(body, d.lattice, toleranceJ, timeUp);
         }
         std::vector<Body>& leftParts = departure.handOff.parts;
         if (leftParts.empty() || (leftParts.size() == 1 && leftParts.front().motion.deformable)) {
@@ -106,7 +106,7 @@ PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, con
             body = std::move(leftParts.front());
             continue;
         }
-        for (Body& part : leftParts) part.id = shownIdOf(d, part);
+        nameParts(d, leftParts, nullptr);
         out.parts[i] = std::move(leftParts);
         out.leaving.push_back(std::move(d));
     }
@@ -125,14 +125,8 @@ std::vector<Body> DeformablePhase::showPieces(const std::vector<Body>& bodies, i
         if (!anyBondBrokenAtHandOff(d.lattice)) continue;
         std::vector<Body> parts = handOff(bodies[i], d.lattice).parts;
         if (parts.size() < 2) continue;
-        for (Body& part : parts) {
-            part.id = shownIdOf(d, part);
-            if (part.id == kNoBodyId) {
-                part.id = nextId++;
-                d.shownPieceIds.emplace_back(partKey(part), part.id);
-            }
-            part.parentId = bodies[i].id;
-        }
+        nameParts(d, parts, &nextId);
+        for (Body& part : parts) part.parentId = bodies[i].id;
         partsOf[i] = std::move(parts);
     }
     std::vector<Body> shown;

@@ -124,10 +124,7 @@ void transferDeformable(Archive& a, D& d)
     a.vec(d.entryPositionM, "deformable entry position");
     a.doubles(d.entryOrientation.coeffs().data(), 4, "deformable entry orientation");
     for (int axis = 0; axis < 3; ++axis) a.pod(d.blocks.origin[axis], "particle blocks' origin");
-    a.sequence(d.shownPieceIds, "shown pieces", [&](auto& shown) {
-        for (int axis = 0; axis < 3; ++axis) a.pod(shown.first[axis], "shown piece's first voxel");
-        a.pod(shown.second, "shown piece's id");
-    });
+    a.sequence(d.shownIdOfParticle, "shown ids", [&](auto& id) { a.pod(id, "shown id"); });
     auto& lattice = d.lattice;
     a.sequence(lattice.state.positionM, "particle positions", [&](auto& v) { a.vec(v, "particle position"); });
     a.sequence(lattice.state.velocityMS, "particle velocities", [&](auto& v) { a.vec(v, "particle velocity"); });

@@ -36,19 +36,18 @@ struct DeformableBody {
     /// let go of its supports has moved with it since (followLattice) (unit: m).
     Eigen::Vector3d entryPositionM = Eigen::Vector3d::Zero();
     Eigen::Quaterniond entryOrientation = Eigen::Quaterniond::Identity();
-    /// The ids its pieces were shown with in the frames (DeformablePhase::showPieces), by each
-    /// piece's partKey: a hand-off gives a part the id it was shown with, so its path in the
-    /// frames runs on across the hand-off.
-    std::vector<std::pair<openvdb::Coord, int64_t>> shownPieceIds;
+    /// Per voxel particle, the id of the piece the frames last showed it in (DeformablePhase::
+    /// showPieces; empty: none shown yet): a part a hand-off gives takes the id of the piece shown
+    /// it holds most of, so its path in the frames runs on across the hand-off.
+    std::vector<int64_t> shownIdOfParticle;
 };
 
-/// A part of a body that a crack has cut off, named by its first voxel in tree order (in its
-/// body's index space, which its parts keep): when the part splits again, the sub-part holding
-/// that voxel keeps the name.
-openvdb::Coord partKey(const Body& part);
-
-/// The id a body's part was shown with (DeformableBody::shownPieceIds), or kNoBodyId.
-int64_t shownIdOf(const DeformableBody& deformable, const Body& part);
+/// Gives each of a body's parts (handOff's, in the body's lattice's index space) the id of the
+/// piece shown before (DeformableBody::shownIdOfParticle) that it holds most particles of; a
+/// piece shown whose particles went to several parts names the one holding most of them. A part
+/// left without one gets a new id from `nextId` when `nextId` is given (and the shown ids are
+/// updated: showing), otherwise kNoBodyId (leaving: the simulation names it).
+void nameParts(DeformableBody& deformable, std::vector<Body>& parts, int64_t* nextId);
 
 /// The lattice of a body entering the phase, moving with the body: a particle per voxel, or per
 /// block of settings.particleVoxels³ voxels (ParticleBlocks.h) with the body's momenta.
@@ -160,10 +159,5 @@ Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tole
 /// have come apart.
 bool anyBondBrokenAtHandOff(const Lattice& lattice);
 
-/// While the blast still acts on a body: when its lattice has come apart, handOff's parts, every
-/// one carrying on in the phase with its piece's state (DeformablePhase::continueVibratingParts),
-/// so each takes the blast on its own faces, crack faces included, and a breach lets the wave
-/// through to what is behind (issue 48, item 3); nothing (no parts) while it holds together.
-Departure separatePieces(const Body& body, const Lattice& lattice);
 
 }  // namespace spall

@@ -63,11 +63,9 @@ public:
     /// and gravity; its body follows it. Returns the particle-steps taken.
     int64_t deform(std::vector<Body>& bodies, const std::vector<std::vector<Eigen::Vector3d>>& faceForcesN, const Eigen::Vector3d& gravityMS2,
                    const ReachedByBlast& reached, double timeS, double dtS);
-    /// Each lattice, looked at once per lattice.handoff_check_interval_s (in the step of length
-    /// dtS that reaches a multiple of it) or when its time is up. One the blast has passed: its
-    /// quiet pieces leave as rigid bodies (leaveQuietPieces, Deformable.h). One the blast still
-    /// acts on: once it has come apart, its pieces carry on as lattices of their own
-    /// (separatePieces), each taking the blast on its own faces. A body that leaves whole is
+    /// Bodies the blast has passed, looked at once per lattice.handoff_check_interval_s (in the
+    /// step of length dtS that reaches a multiple of it) or when their time is up: their quiet
+    /// pieces leave as rigid bodies (leaveQuietPieces, Deformable.h). A body that leaves whole is
     /// replaced in `bodies` at once, in its place; one that leaves in parts is left to the
     /// caller, which replaces it with `parts`, reindexes, then calls continueVibratingParts.
     /// A part has the id it was shown with (showPieces), or none yet (kNoBodyId).
