@@ -127,6 +127,8 @@ TEST(Scene, MaterialAndLatticeErrorsNameTheKeyAndReason)
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"max_vibration_s": "long"}})").find("lattice.max_vibration_s: must be a number"),
               std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"handoff_residual_strength": 1.5}})").find("lattice.handoff_residual_strength: must be in"),
+              std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"damage_law": "paper"}})").find("lattice.damage_law"), std::string::npos);
     for (const char* interval : {"0", "-0.001", "2"})
         EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"handoff_check_interval_s": )" + interval + "}}")

@@ -7,6 +7,7 @@ of a pane or a wall just after it broke.
 Needs Debian's python3-openvdb and python3-matplotlib (under /usr/bin/python3).
 """
 import argparse
+import os
 import sys
 
 import matplotlib
@@ -54,7 +55,7 @@ def main():
     ax.set_aspect("equal")
     ax.set_xlabel(f"{names[0]} (m)")
     ax.set_ylabel(f"{names[1]} (m)")
-    ax.set_title(f"{args.frame}: {pieces} pieces, seen along {args.along}")
+    ax.set_title(f"{os.path.basename(args.frame)}: {pieces} pieces, seen along {args.along}")
     figure.savefig(args.picture, dpi=110)
 
 

@@ -2,35 +2,45 @@
 # Makes every picture README.md and docs/ show, from the built binaries, so that a change to
 # what spall computes cannot leave the pictures describing an older build (issue 50).
 #
-#   tools/regenerate_docs.sh [--check] [--full] [BUILD_DIR]     (BUILD_DIR: build)
+#   tools/regenerate_docs.sh [--check] [--full] [--keep DIR] [BUILD_DIR]     (BUILD_DIR: build)
 #
 # Without --full, the pictures that take about a minute in all: the default scene, its wall
 # during the deformable phase at 2 ms intervals, the timber post. --full adds the concrete slab,
-# the glass pane and its cracks, the house wall (7 minutes), the 3 M-voxel wall (9 minutes) and
+# the glass pane and its cracks, the house wall (7 minutes), the 3 M-voxel wall (8 minutes) and
 # the accuracy plots (whose run times vary from run to run, so --check leaves them out).
 # --check writes into a scratch directory and compares each picture byte for byte with the one
 # in docs/images (runs are deterministic); it exits 1 naming those that differ. ctest runs
 # `--check` (test docs_pictures). Without --check the pictures in docs/images are replaced.
+# --keep DIR runs into DIR and keeps it: the runs' history.h5 (spall inspect, spall debris) and
+# accuracy/accuracy.csv hold the figures the text beside each picture quotes, to update with it.
 set -euo pipefail
 
 check=0
 full=0
 build=build
-for arg in "$@"; do
-    case "$arg" in
+keep=
+while [ $# -gt 0 ]; do
+    case "$1" in
         --check) check=1 ;;
         --full) full=1 ;;
-        -h|--help) sed -n 2,14p "$0"; exit 0 ;;
-        -*) echo "regenerate_docs.sh: unknown option $arg (see --help)" >&2; exit 2 ;;
-        *) build=$arg ;;
+        --keep) keep=${2:?regenerate_docs.sh: --keep needs a directory}; shift ;;
+        -h|--help) sed -n 2,16p "$0"; exit 0 ;;
+        -*) echo "regenerate_docs.sh: unknown option $1 (see --help)" >&2; exit 2 ;;
+        *) build=$1 ;;
     esac
+    shift
 done
 root=$(cd "$(dirname "$0")/.." && pwd)
 spall=$(cd "$build" && pwd)/spall
 [ -x "$spall" ] || { echo "regenerate_docs.sh: no spall binary at $spall (build first: tools/build.sh)" >&2; exit 2; }
 images=$root/docs/images
-scratch=$(mktemp -d)
-trap 'rm -rf "$scratch"' EXIT
+if [ -n "$keep" ]; then
+    mkdir -p "$keep"
+    scratch=$(cd "$keep" && pwd)
+else
+    scratch=$(mktemp -d)
+    trap 'rm -rf "$scratch"' EXIT
+fi
 differ=()
 
 # scene_with BASE OUT KEY=JSON ...: BASE with the dotted keys set (charges.0.tnt_kg=20).
@@ -67,7 +77,7 @@ run_scene() {
     local name=$1
     shift
     echo "running $name ..."
-    "$spall" run "$@" -o "$scratch/$name" --quiet >/dev/null
+    "$spall" run "$@" -o "$scratch/$name" --overwrite --quiet >/dev/null
 }
 
 run_scene default
@@ -99,6 +109,7 @@ if [ "$full" = 1 ]; then
 
     if [ "$check" = 0 ]; then
         echo "running spall bench accuracy ..."
+        rm -rf "$scratch/accuracy"
         "$spall" bench accuracy -o "$scratch/accuracy" --scene-duration 0.3 >/dev/null
         for plot in accuracy-integrators-friedlander-pulse.png accuracy-default-scene.png; do
             place "$plot" "$scratch/accuracy/$plot"

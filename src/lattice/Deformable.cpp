@@ -376,11 +376,11 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
     return d;
 }
 
-/// The damage of the bonds that survive, on the links and anchors of the voxels they join
-/// (Body::linkDamage); null when none is damaged.
-LinkDamageGrid::Ptr survivingDamage(const Body& body, const Lattice& lattice)
+/// The damage of the bonds that survive (`broken`: per bond, whether it is broken at hand-off),
+/// on the links and anchors of the voxels they join (Body::linkDamage); null when none is damaged.
+LinkDamageGrid::Ptr survivingDamage(const Body& body, const Lattice& lattice, const std::vector<char>& broken)
 {
-    const auto survivesDamaged = [&](size_t b) { return lattice.bondDamage(b) > 0.0 && !lattice.brokenAtHandOff(b); };
+    const auto survivesDamaged = [&](size_t b) { return !broken[b] && lattice.bondDamage(b) > 0.0; };
     size_t b = 0;
     while (b < lattice.bondCount() && !survivesDamaged(b)) ++b;
     if (b == lattice.bondCount()) return nullptr;
@@ -412,8 +412,10 @@ HandOff handOff(const Body& body, const Lattice& lattice)
     Body whole = body;
     whole.grid = body.grid->deepCopy();
     auto links = whole.grid->getAccessor();
+    std::vector<char> broken(lattice.bondCount());
+    for (size_t b = 0; b < lattice.bondCount(); ++b) broken[b] = lattice.brokenAtHandOff(b);
     for (size_t b = 0; b < lattice.bondCount(); ++b) {
-        if (!lattice.brokenAtHandOff(b)) continue;
+        if (!broken[b]) continue;
         const LatticeBond& bond = lattice.model().bonds[b];
         if (std::max(bond.low, bond.high) >= lattice.model().voxelParticleCount) {
             // An anchor: its voxels let go of their support.
@@ -429,7 +431,7 @@ HandOff handOff(const Body& body, const Lattice& lattice)
         });
         result.brokenBonds += result.brokenLinks > linksBefore ? 1 : 0;
     }
-    whole.linkDamage = survivingDamage(whole, lattice);
+    whole.linkDamage = survivingDamage(whole, lattice, broken);
     refreshDerivedData(whole);
     result.parts = splitBody(whole);
     if (result.parts.empty()) result.parts.push_back(std::move(whole));
@@ -437,7 +439,7 @@ HandOff handOff(const Body& body, const Lattice& lattice)
     // piece of the lattice (a block's voxels need not touch each other) share its motion.
     DisjointSets pieces(lattice.particleCount());
     for (size_t b = 0; b < lattice.bondCount(); ++b)
-        if (!lattice.brokenAtHandOff(b)) pieces.join(lattice.model().bonds[b].low, lattice.model().bonds[b].high);
+        if (!broken[b]) pieces.join(lattice.model().bonds[b].low, lattice.model().bonds[b].high);
     std::map<uint32_t, std::vector<Body*>> partsOfPiece;
     for (Body& part : result.parts) {
         part.motion.asleep = false;
