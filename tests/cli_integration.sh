@@ -395,6 +395,15 @@ if "$spall" render "$dir/nowhere" 2> "$dir/err.txt"; then fail "render accepted 
 grep -q "nowhere" "$dir/err.txt" || fail "render error: $(cat "$dir/err.txt")"
 if "$spall" render "$dir/out" --size 10x 2> "$dir/err.txt"; then fail "render accepted a bad size"; fi
 grep -q "size" "$dir/err.txt" || fail "render error: $(cat "$dir/err.txt")"
+# A camera of one's own: another picture than the framing one; an eye of two numbers, or one on
+# its target, is refused.
+"$spall" render "$dir/out" --frame 2 -o "$dir/pics-eye" --size 320x180 --eye 0,-12,1.5 --target 0,0,0.4 --fov 30 > /dev/null \
+  || fail "render with --eye, --target, --fov failed"
+cmp -s "$dir/pics/frame.0002.png" "$dir/pics-eye/frame.0002.png" && fail "--eye and --target did not move the camera"
+if "$spall" render "$dir/out" --eye 1,2 2> "$dir/err.txt"; then fail "render accepted --eye 1,2"; fi
+grep -q "eye" "$dir/err.txt" || fail "render error: $(cat "$dir/err.txt")"
+if "$spall" render "$dir/out" --eye 0,0,1 --target 0,0,1 2> "$dir/err.txt"; then fail "render accepted an eye on its target"; fi
+grep -q "same point" "$dir/err.txt" || fail "render error: $(cat "$dir/err.txt")"
 if "$spall" run "$dir/scene.json" -o "$dir/neg" --threads -1 2> /dev/null; then fail "run accepted --threads -1"; fi
 mkdir -p "$dir/empty"
 if "$spall" render "$dir/empty" 2> "$dir/err.txt"; then fail "render accepted an empty directory"; fi

@@ -406,7 +406,7 @@ TEST(Render, TheCameraFramesTheDebrisNotTheEmptyGround)
     initialiseOpenVdb();
     // A 2 x 0.3 x 1.5 m wall, then the same with one voxel thrown 50 m away: the wall fills the
     // picture either way (a fifth of its pixels or more), the far voxel is left out of frame.
-    const RenderSettings settings{320, 180, 0.0};
+    const RenderSettings settings{320, 180, 0.0, {}};
     Body wall = test::boxBody(20, 3, 15, 0.1, 1000.0, Eigen::Vector3d(0, 0, 0.75));
     Body stray = test::boxBody(1, 1, 1, 0.1, 1000.0, Eigen::Vector3d(50, 20, 0.05));
     stray.id = 1;
@@ -431,7 +431,7 @@ TEST(Render, ABodyInFrontOfTheCameraCoversTheMiddleOfThePicture)
     // A 1 m cube at the origin seen from 10 m along -y, level with it: it fills the middle of the
     // picture (its half-width subtends 2.9 degrees of a 40 degree view: about 7 % of the height).
     const std::vector<Body> bodies{test::boxBody(10, 10, 10, 0.1, 1000.0, Eigen::Vector3d(0, 0, 0.5))};
-    const RenderSettings settings{200, 200, -10.0};  // the ground far below, out of view
+    const RenderSettings settings{200, 200, -10.0, {}};  // the ground far below, out of view
     Camera camera;
     camera.eyeM = Eigen::Vector3d(0, -10, 0.5);
     camera.targetM = Eigen::Vector3d(0, 0, 0.5);
@@ -443,3 +443,25 @@ TEST(Render, ABodyInFrontOfTheCameraCoversTheMiddleOfThePicture)
     EXPECT_TRUE(inside.r == centre.r && inside.g == centre.g && inside.b == centre.b);
     EXPECT_FALSE(outside.r == centre.r && outside.g == centre.g && outside.b == centre.b);
 }
+
+TEST(Render, AChargeIsDrawnWhereItIsUnlessABodyHidesIt)
+{
+    initialiseOpenVdb();
+    // The 1 m cube of the test above, seen from 10 m along -y: a charge 2 m in front of it and
+    // 0.3 m to the right is drawn there in the charge colour; one behind the cube's middle is hidden.
+    const std::vector<Body> bodies{test::boxBody(10, 10, 10, 0.1, 1000.0, Eigen::Vector3d(0, 0, 0.5))};
+    RenderSettings settings{200, 200, -10.0, {Eigen::Vector3d(0.3, -2.0, 0.5), Eigen::Vector3d(0, 3.0, 0.5)}};
+    Camera camera;
+    camera.eyeM = Eigen::Vector3d(0, -10, 0.5);
+    camera.targetM = Eigen::Vector3d(0, 0, 0.5);
+    const Image image = renderFragments(fragmentsOf(bodies), camera, settings);
+    // 0.3 m right at 8 m: atan(0.3/8) of a 40 degree view of 200 pixels, about 10 pixels right.
+    const double focal = 100.0 / std::tan(20.0 * M_PI / 180.0);
+    const int x = int(100 + focal * 0.3 / 8.0);
+    const auto isCharge = [](Rgb c) { return c.r == kChargeColour.r && c.g == kChargeColour.g && c.b == kChargeColour.b; };
+    EXPECT_TRUE(isCharge(image.get(x, 100))) << "the charge in front is not drawn where it is";
+    EXPECT_FALSE(isCharge(image.get(100, 100))) << "the charge behind the cube shows through it";
+    settings.chargesM.clear();
+    EXPECT_FALSE(isCharge(renderFragments(fragmentsOf(bodies), camera, settings).get(x, 100)));
+}
+

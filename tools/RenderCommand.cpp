@@ -9,10 +9,49 @@
 #include <spall/voxel/VdbIo.h>
 #include <spall/render/Render.h>
 
+#include <nlohmann/json.hpp>
+
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 
 namespace {
+
+/// Where the run's charges were, from its scene.json (none when it has none).
+std::vector<Eigen::Vector3d> chargesOfRun(const std::string& outDir)
+{
+    const std::filesystem::path path = std::filesystem::path(outDir) / "scene.json";
+    std::vector<Eigen::Vector3d> charges;
+    std::ifstream in(path);
+    if (!in) return charges;
+    try {
+        const nlohmann::json scene = nlohmann::json::parse(in);
+        for (const auto& charge : scene.value("charges", nlohmann::json::array())) {
+            const auto& p = charge.at("position_m");
+            charges.emplace_back(p.at(0).get<double>(), p.at(1).get<double>(), p.at(2).get<double>());
+        }
+    } catch (const std::exception& e) {
+        throw spall::IoError(path.string() + ": charges[].position_m cannot be read: " + e.what());
+    }
+    return charges;
+}
+
+/// The camera the options ask for: the one that frames the run's first and last frames, moved to
+/// `eye` and turned to `target` where those are given.
+struct CameraOptions {
+    std::vector<double> eyeM, targetM;
+    double verticalFovDeg = 0.0;  ///< 0: the default
+};
+spall::Camera chooseCamera(const std::vector<std::string>& paths, const spall::RenderSettings& settings, const CameraOptions& options)
+{
+    const spall::FrameGrids first = spall::readFrame(paths.front()), last = spall::readFrame(paths.back());
+    spall::Camera camera = spall::frameCamera({spall::fragmentsOf(first), spall::fragmentsOf(last)}, settings);
+    if (options.eyeM.size() == 3) camera.eyeM = Eigen::Vector3d(options.eyeM[0], options.eyeM[1], options.eyeM[2]);
+    if (options.targetM.size() == 3) camera.targetM = Eigen::Vector3d(options.targetM[0], options.targetM[1], options.targetM[2]);
+    if (options.verticalFovDeg > 0.0) camera.verticalFovDeg = options.verticalFovDeg;
+    if ((camera.targetM - camera.eyeM).norm() < 1e-6) throw spall::InputError("--eye and --target are the same point: the camera looks nowhere");
+    return camera;
+}
 
 spall::RenderSettings parseSize(const std::string& size)
 {
@@ -28,15 +67,18 @@ spall::RenderSettings parseSize(const std::string& size)
 }
 
 
-int runRender(const std::string& outDir, int frame, bool all, bool sheet, std::string pictureDir, const std::string& size)
+int runRender(const std::string& outDir, int frame, bool all, bool sheet, std::string pictureDir, const std::string& size,
+              const CameraOptions& cameraOptions)
 {
-    const spall::RenderSettings settings = parseSize(size);
+    spall::RenderSettings settings = parseSize(size);
+    settings.chargesM = chargesOfRun(outDir);
     const std::vector<std::string> paths = spall::listFramePaths(outDir);
+    const spall::Camera camera = chooseCamera(paths, settings, cameraOptions);
     if (pictureDir.empty()) pictureDir = outDir;
     std::filesystem::create_directories(pictureDir);
     if (sheet) {
         const std::string path = (std::filesystem::path(pictureDir) / "sheet.png").string();
-        const int n = spall::writeContactSheet(outDir, path, 9, settings);
+        const int n = spall::writeContactSheet(outDir, path, 9, settings, camera);
         std::printf("contact sheet of %d frames: %s\n", n, path.c_str());
         return 0;
     }
@@ -51,8 +93,6 @@ int runRender(const std::string& outDir, int frame, bool all, bool sheet, std::s
     } else {
         selected = {paths.back()};
     }
-    const spall::FrameGrids first = spall::readFrame(paths.front()), last = spall::readFrame(paths.back());
-    const spall::Camera camera = spall::frameCamera({spall::fragmentsOf(first), spall::fragmentsOf(last)}, settings);
     for (const std::string& path : selected) {
         const spall::FrameGrids f = spall::readFrame(path);
         char name[32];
@@ -72,6 +112,7 @@ void addRenderCommand(CLI::App& app, CommandAction& action)
         std::string directory, output, size = "960x540";
         int frame = -1;
         bool all = false, sheet = false;
+        CameraOptions camera;
     };
     auto o = std::make_shared<Options>();
     auto* sub = app.add_subcommand("render", "Render preview pictures (PNG) of a run's frames");
@@ -81,5 +122,11 @@ void addRenderCommand(CLI::App& app, CommandAction& action)
     sub->add_flag("--sheet", o->sheet, "A contact sheet of nine frames across the run");
     sub->add_option("-o,--output", o->output, "Where the pictures go (default: the output directory)");
     sub->add_option("--size", o->size, "WIDTHxHEIGHT in pixels");
-    sub->callback([o, &action] { action = [o] { return runRender(o->directory, o->frame, o->all, o->sheet, o->output, o->size); }; });
+    sub->add_option("--eye", o->camera.eyeM, "X,Y,Z: where the camera stands, in metres (default: where it frames the first and last frames)")
+        ->delimiter(',')->expected(3);
+    sub->add_option("--target", o->camera.targetM, "X,Y,Z: the point it looks at, in metres (default: the debris' centre)")->delimiter(',')->expected(3);
+    sub->add_option("--fov", o->camera.verticalFovDeg, "Vertical field of view in degrees (default 40)")->check(CLI::Range(1.0, 170.0));
+    sub->callback([o, &action] {
+        action = [o] { return runRender(o->directory, o->frame, o->all, o->sheet, o->output, o->size, o->camera); };
+    });
 }

@@ -291,6 +291,21 @@ void drawVoxelFace(Image& img, std::vector<float>& depth, const View& view, cons
     rasteriseTriangle(img, depth, p[0], p[2], p[3], c);
 }
 
+/// A disc of the charge colour, ringed dark, where the charge is, unless something in front of
+/// it hides it: a marker a picture's reader can find at any size.
+void drawCharge(Image& img, const std::vector<float>& depth, const View& view, const Eigen::Vector3d& chargeM)
+{
+    const Eigen::Vector3d p = view.project(chargeM);
+    if (p.z() <= 1e-3) return;  // behind the camera
+    const double radius = std::max(3.0, img.height() / 90.0), ring = radius + 1.5;
+    for (int y = std::max(0, int(p.y() - ring)); y <= std::min(img.height() - 1, int(p.y() + ring)); ++y)
+        for (int x = std::max(0, int(p.x() - ring)); x <= std::min(img.width() - 1, int(p.x() + ring)); ++x) {
+            const double r = std::hypot(x + 0.5 - p.x(), y + 0.5 - p.y());
+            if (r > ring || depth[size_t(y) * img.width() + x] < float(p.z())) continue;
+            img.set(x, y, r <= radius ? kChargeColour : Rgb{60, 25, 0});
+        }
+}
+
 }  // namespace
 
 Image renderFragments(const std::vector<FragmentRef>& fragments, const Camera& camera, const RenderSettings& settings)
@@ -311,6 +326,7 @@ Image renderFragments(const std::vector<FragmentRef>& fragments, const Camera& c
                     drawVoxelFace(img, depth, view, *fragment.transform, ijk, f, base);
         }
     });
+    for (const Eigen::Vector3d& charge : settings.chargesM) drawCharge(img, depth, view, charge);
     return img;
 }
 
@@ -331,8 +347,8 @@ Image contactSheet(const std::vector<Image>& frames, const std::vector<double>& 
     return sheet;
 }
 
-
-int writeContactSheet(const std::string& outputDirectory, const std::string& pngPath, int count, const RenderSettings& settings)
+int writeContactSheet(const std::string& outputDirectory, const std::string& pngPath, int count, const RenderSettings& settings,
+                      const std::optional<Camera>& chosenCamera)
 {
     const std::vector<std::string> paths = listFramePaths(outputDirectory);
     const int n = std::min<int>(count, static_cast<int>(paths.size()));
@@ -341,7 +357,7 @@ int writeContactSheet(const std::string& outputDirectory, const std::string& png
         const size_t index = n == 1 ? paths.size() - 1 : size_t(std::lround(double(i) * (paths.size() - 1) / (n - 1)));
         frames.push_back(readFrame(paths[index]));
     }
-    const Camera camera = frameCamera({fragmentsOf(frames.front()), fragmentsOf(frames.back())}, settings);
+    const Camera camera = chosenCamera ? *chosenCamera : frameCamera({fragmentsOf(frames.front()), fragmentsOf(frames.back())}, settings);
     std::vector<Image> images;
     std::vector<double> times;
     for (const FrameGrids& f : frames) {

@@ -85,8 +85,9 @@ class PreviewSink : public FrameSink {
 public:
     PreviewSink(const std::string& path, int sheetFrames, int frameCount, const Scene& scene, const std::string& directory)
         : mPath(path), mSheetFrames(sheetFrames), mDirectory(directory), mFramesOnDisk(scene.output.vdb),
-          mSettings{640, 360, scene.world.ground.offsetM}
+          mSettings{640, 360, scene.world.ground.offsetM, {}}
     {
+        for (const Charge& charge : scene.charges) mSettings.chargesM.push_back(charge.positionM);
         const int n = std::min(sheetFrames, frameCount);
         for (int i = 0; i < n; ++i) mChosen.push_back(n == 1 ? frameCount - 1 : int(std::lround(double(i) * (frameCount - 1) / (n - 1))));
     }

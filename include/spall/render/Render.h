@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,7 +27,13 @@ struct RenderSettings {
     int width = 960;
     int height = 540;
     double groundHeightM = 0.0;
+    /// Where the charges were (unit: m): each is drawn as an orange disc, hidden where a
+    /// fragment stands in front of it.
+    std::vector<Eigen::Vector3d> chargesM;
 };
+
+/// The colour a charge is drawn in.
+inline constexpr Rgb kChargeColour{255, 110, 0};
 
 /// One frame's fragments as read from fragments.NNNN.vdb (the `fragment_*` grids).
 struct FrameGrids {
@@ -59,10 +66,10 @@ Image renderFragments(const std::vector<FragmentRef>& fragments, const Camera& c
 /// Tiles frames into a contact sheet with the time of each under it.
 Image contactSheet(const std::vector<Image>& frames, const std::vector<double>& timesS, int columns);
 
-
-
 /// Renders a contact sheet of up to `count` frames spread evenly over the run into `pngPath`,
-/// framing the first and last frames. Returns the number of frames on the sheet.
-int writeContactSheet(const std::string& outputDirectory, const std::string& pngPath, int count, const RenderSettings& settings);
+/// from `camera` (default: one framing the first and last frames). Returns the number of frames
+/// on the sheet.
+int writeContactSheet(const std::string& outputDirectory, const std::string& pngPath, int count, const RenderSettings& settings,
+                      const std::optional<Camera>& camera = std::nullopt);
 
 }  // namespace spall
