@@ -7,6 +7,7 @@
 #include <spall/dynamics/Integrate.h>
 #include <spall/scene/Scene.h>
 #include <spall/lattice/Deformable.h>
+#include <spall/sim/Checkpoint.h>
 #include <spall/sim/Simulation.h>
 
 #include <gtest/gtest.h>
@@ -250,6 +251,30 @@ TEST(Deformable, AWallsPiecesShowAsTheySeparateAndKeepTheirIdsThroughTheHandOff)
     std::printf("%.0f %% of the mass shown keeps its ids; its largest jump beyond its motion %.2f mm\n", 100.0 * keptKg / shownKg, 1e3 * largestJumpM);
     EXPECT_GT(keptKg, 0.9 * shownKg);
     EXPECT_LT(largestJumpM, kH);
+}
+
+TEST(Deformable, PiecesShownBeforeACheckpointKeepTheirIdsAfterIt)
+{
+    // A run resumed from a checkpoint taken while the frames show a wall in pieces names its
+    // pieces as the uninterrupted run does: the ids shown go through the checkpoint.
+    const Scene scene = wallScene(1.0, 0.5);
+    Simulation straight(scene), interrupted(scene);
+    for (Simulation* sim : {&straight, &interrupted}) sim->advanceTo(0.002);
+    ASSERT_GT(straight.showPieces().size(), straight.bodies().size()) << "the wall is meant to show pieces at 2 ms";
+    ASSERT_GT(interrupted.showPieces().size(), interrupted.bodies().size());
+    const std::string path = testing::TempDir() + "/spall-test-shown-pieces.checkpoint";
+    writeCheckpoint(path, {1, 12, 10, sceneToJson(interrupted.scene()).dump(), interrupted.state()});
+    Checkpoint back = readCheckpoint(path);
+    Simulation resumed(parseScene(back.sceneJson, "checkpoint", "."), std::move(back.state));
+    for (double t = 0.0025; t < 0.03; t += 0.0005) {
+        std::vector<Body> a = straight.showPieces(), b = resumed.showPieces();
+        ASSERT_EQ(a.size(), b.size()) << "at " << t << " s";
+        for (size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i].id, b[i].id) << "body " << i << " at " << t << " s";
+        straight.advanceTo(t);
+        resumed.advanceTo(t);
+    }
+    ASSERT_EQ(straight.bodies().size(), resumed.bodies().size());
+    for (size_t i = 0; i < straight.bodies().size(); ++i) EXPECT_EQ(straight.bodies()[i].id, resumed.bodies()[i].id);
 }
 
 TEST(Deformable, TheDeformablePhaseTakesNoMoreParticleStepsThanItsBoundSays)

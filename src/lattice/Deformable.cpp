@@ -130,13 +130,15 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
     const size_t n = to.particleCount(), bonds = to.bondCount();
     if (from.state.positionM.size() != n || from.state.velocityMS.size() != n || from.state.angularVelocityRadS.size() != n || from.state.orientation.size() != n ||
         from.state.bondHistory.size() != bonds || from.state.bondForceN.size() != n || from.state.bondMomentNm.size() != n ||
-        (!saved.pendingImpulseNs.empty() && saved.pendingImpulseNs.size() != n))
+        (!saved.pendingImpulseNs.empty() && saved.pendingImpulseNs.size() != n) ||
+        (!saved.shownIdOfParticle.empty() && saved.shownIdOfParticle.size() != to.model().voxelParticleCount))
         throw InputError("saved state: the lattice of body " + std::to_string(body.id) + " does not fit its voxels and links");
     if (!(saved.pendingS >= 0.0 && saved.pendingS < to.stableTimeStepS()) || (saved.pendingS > 0.0) != !saved.pendingImpulseNs.empty())
         throw InputError("saved state: the lattice of body " + std::to_string(body.id) + " has a gathered time of " +
                          std::to_string(saved.pendingS) + " s that does not fit its gathered impulses");
     fresh.pendingS = saved.pendingS;
     fresh.pendingImpulseNs = std::move(saved.pendingImpulseNs);
+    fresh.shownIdOfParticle = std::move(saved.shownIdOfParticle);
     to.state.positionM = std::move(from.state.positionM);
     to.state.velocityMS = std::move(from.state.velocityMS);
     to.state.angularVelocityRadS = std::move(from.state.angularVelocityRadS);

@@ -159,5 +159,4 @@ Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tole
 /// have come apart.
 bool anyBondBrokenAtHandOff(const Lattice& lattice);
 
-
 }  // namespace spall

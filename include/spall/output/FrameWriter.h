@@ -45,7 +45,7 @@ private:
         openvdb::Coord originIjk;               ///< the trees' (0,0,0) in the body's index space
         uint64_t meshKey = 0;                   ///< hash of voxels and fracture faces
         /// The grid they were made from: a body shown in pieces during the deformable phase
-        /// (Simulation::frameBodies) keeps a piece's id while the piece loses voxels to cracks.
+        /// (Simulation::showPieces) keeps a piece's id while the piece loses voxels to cracks.
         std::weak_ptr<const LinkGrid> madeFrom;
     };
     /// Trees by content: equal content, one tree.
