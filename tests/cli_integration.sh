@@ -192,17 +192,30 @@ JSON
 grep -q "view.html" "$dir/view.txt" || fail "spall view printed no summary"
 node "$(dirname "$0")/../tools/js/screenshot_view.mjs" "$dir/crate/view.html" "$dir/view_" 0 1e9 > "$dir/view.log" 2>&1 \
   || fail "viewer in Chromium: $(cat "$dir/view.log")"
-$py - "$dir/view_0.png" "$dir/view_1e9.png" <<'PY'
-import sys, numpy as np
+$py - "$dir/view_0.png" "$dir/view_1e9.png" "$dir/view.log" "$dir/crate/history.h5" <<'PY'
+import re, sys, h5py, numpy as np
 from PIL import Image
 # The 3D stage without the status line and the control bar.
-first, last = (np.asarray(Image.open(p).convert("RGB"), dtype=float)[30:-50] for p in sys.argv[1:])
+first, last = (np.asarray(Image.open(p).convert("RGB"), dtype=float)[30:-50] for p in sys.argv[1:3])
+def charge(image):  # the viewer's charge marker, pure orange (255, 110, 0)
+    r, g, b = image[..., 0], image[..., 1], image[..., 2]
+    return (r > 230) & (g > 80) & (g < 140) & (b < 30)
 def debris(image):  # the background and the grid are nearly grey; the brick is not
-    return (image.max(axis=2) - image.min(axis=2)) > 30
+    return ((image.max(axis=2) - image.min(axis=2)) > 30) & ~charge(image)
 for name, image in (("first", first), ("last", last)):
     assert debris(image).sum() > 500, (name, debris(image).sum())
+    assert charge(image).sum() > 20, f"no charge marker in the {name} picture ({charge(image).sum()} orange pixels)"
 changed = (debris(first) != debris(last)).mean()
 assert changed > 0.02, f"the debris did not move between the first and last moments ({changed:.4f} of pixels changed)"
+# The ground grid reaches past every fragment's resting place (history.h5, spall's Z-up axes;
+# the page reports its grid in glTF's Y-up axes, x and -y).
+x0, x1, z0, z1 = map(float, re.search(r"ground (\S+)", open(sys.argv[3]).read()).group(1).split(","))
+with h5py.File(sys.argv[4]) as h:
+    offsets = h["frames/body_offset"][:]
+    rest = h["bodies/position_m"][offsets[-2]:offsets[-1]]
+assert len(rest) > 0
+inside = (rest[:, 0] > x0) & (rest[:, 0] < x1) & (-rest[:, 1] > z0) & (-rest[:, 1] < z1)
+assert inside.all(), f"{(~inside).sum()} fragments rest beyond the viewer's ground {x0, x1, z0, z1}"
 PY
 # ... and refuses what it cannot mesh, naming it, leaving nothing behind
 if "$spall" export gltf "$dir/nowhere" 2> "$dir/err.txt"; then fail "export of a missing directory accepted"; fi

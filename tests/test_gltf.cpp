@@ -115,10 +115,20 @@ TEST(Gltf, EachFragmentIsANodeThatFollowsTheHistoryWithAMeshOfItsVolume)
     tinygltf::TinyGLTF loader;
     std::string error, warning;
     ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, dir + "/debris.glb")) << error;
-    EXPECT_EQ(int(model.nodes.size()), report.nodes);
+    EXPECT_EQ(int(model.nodes.size()), report.nodes + report.charges);
     ASSERT_EQ(model.materials.size(), 2u);
     std::map<std::string, int> nodeByName;
     for (size_t i = 0; i < model.nodes.size(); ++i) nodeByName[model.nodes[i].name] = int(i);
+    // The charge: an empty node where the scene put it, in glTF's Y-up axes (x, z, -y), with its mass.
+    ASSERT_EQ(report.charges, 1);
+    ASSERT_TRUE(nodeByName.count("charge_0"));
+    const tinygltf::Node& charge = model.nodes[nodeByName["charge_0"]];
+    EXPECT_EQ(charge.mesh, -1);
+    ASSERT_EQ(charge.translation.size(), 3u);
+    EXPECT_NEAR(charge.translation[0], 0.2, 1e-6);
+    EXPECT_NEAR(charge.translation[1], 0.0, 1e-6);
+    EXPECT_NEAR(charge.translation[2], 2.0, 1e-6);
+    EXPECT_DOUBLE_EQ(charge.extras.Get("tnt_kg").GetNumberAsDouble(), 3.0);
 
     const History h = readHistory(dir + "/history.h5");
     const int frames = int(h.timeS.size());

@@ -401,6 +401,66 @@ TEST(Png, PixelsReadBackThroughLibpngAndAFailedWriteLeavesNothing)
     EXPECT_FALSE(std::filesystem::exists(dir + "/missing"));
 }
 
+namespace {
+
+/// Rows of a plot where a pixel of `colour` lies in column x, top first.
+std::vector<int> rowsOfColour(const Image& image, int x, Rgb colour)
+{
+    std::vector<int> rows;
+    for (int y = 0; y < image.height(); ++y) {
+        const Rgb c = image.get(x, y);
+        if (c.r == colour.r && c.g == colour.g && c.b == colour.b) rows.push_back(y);
+    }
+    return rows;
+}
+
+bool saturated(Rgb c) { return std::max({c.r, c.g, c.b}) - std::min({c.r, c.g, c.b}) > 60; }
+
+}  // namespace
+
+TEST(Plot, ALogAxisSetsALimitFarBelowTheDataApartFromIt)
+{
+    // A density falling from 7 to 0.015 per m2 over 10 m and a limit of 1 per 55.7 m2 (DDESB's
+    // hazardous density): where the density is 30 times the limit, the two lines must be a
+    // tenth of the plot's height apart (on a linear axis they are 7 %).
+    PlotSeries density{"density", {}, {}}, limit{"limit", {0, 10}, {1 / 55.7, 1 / 55.7}};
+    for (int i = 0; i <= 10; ++i) {
+        density.x.push_back(i);
+        density.y.push_back(7.0 * std::pow(0.015 / 7.0, i / 10.0));
+    }
+    const double xAt30Times = 10 * std::log(30 / 55.7 / 7.0) / std::log(0.015 / 7.0);
+    const int width = 900, height = 560, left = 110, right = width - 30;
+    const int column = int(left + xAt30Times / 10 * (right - left));
+    for (const PlotScale scale : {PlotScale::LogY, PlotScale::Linear}) {
+        const Image plot = plotSeries({density, limit}, "x", "y", "", scale, width, height);
+        const std::vector<int> densityRows = rowsOfColour(plot, column, Rgb{30, 90, 200}), limitRows = rowsOfColour(plot, column, Rgb{200, 60, 40});
+        ASSERT_FALSE(densityRows.empty());
+        ASSERT_FALSE(limitRows.empty());
+        const double apart = double(limitRows.front() - densityRows.back()) / (height - 120);
+        if (scale == PlotScale::LogY) EXPECT_GT(apart, 0.1);
+        else EXPECT_LT(apart, 0.1) << "the linear axis should crowd them (the reason for the log axis)";
+    }
+}
+
+TEST(Plot, TheLegendHidesAlmostNoneOfTheLines)
+{
+    // Lines through all four corners but one: the legend goes to the free one.
+    PlotSeries rising{"rising line", {0, 10}, {0, 10}}, falling{"falling line and its long name", {0, 5, 10}, {10, 5, 10}};
+    PlotSeries risingUnnamed{"", rising.x, rising.y}, fallingUnnamed{"", falling.x, falling.y};
+    const Image withLegend = plotSeries({rising, falling}, "x", "y", "", PlotScale::Linear);
+    const Image without = plotSeries({risingUnnamed, fallingUnnamed}, "x", "y", "", PlotScale::Linear);
+    int linePixels = 0, hidden = 0;
+    for (int y = 0; y < without.height(); ++y)
+        for (int x = 0; x < without.width(); ++x) {
+            if (!saturated(without.get(x, y))) continue;
+            ++linePixels;
+            const Rgb a = without.get(x, y), b = withLegend.get(x, y);
+            hidden += a.r != b.r || a.g != b.g || a.b != b.b;
+        }
+    ASSERT_GT(linePixels, 1000);
+    EXPECT_LT(hidden, linePixels / 100) << hidden << " of " << linePixels << " line pixels hidden by the legend";
+}
+
 TEST(Render, TheCameraFramesTheDebrisNotTheEmptyGround)
 {
     initialiseOpenVdb();

@@ -325,7 +325,7 @@ void plotStudy(const std::string& path, const std::vector<Row>& rows, const std:
         for (size_t i : order) sorted.x.push_back(s.x[i]), sorted.y.push_back(s.y[i]);
         s = std::move(sorted);
     }
-    writePng(path, plotSeries(series, "run time (s)", "error", title, true, 1000, 620));
+    writePng(path, plotSeries(series, "run time (s)", "error", title, spall::PlotScale::LogLog, 1000, 620));
 }
 
 }  // namespace

@@ -24,11 +24,19 @@ int debrisCommand(const std::string& outDir, const spall::DebrisSettings& settin
                 report.fragments.size() - static_cast<size_t>(report.debrisCount()));
     std::printf("throw distance: max %.2f m, median %.2f m, mass median %.2f m\n", report.maxThrowDistanceM, report.medianThrowDistanceM,
                 report.massMedianThrowDistanceM);
-    std::printf("hazardous fragment distance (1 per %.1f m2): %.2f m over whole rings, %.2f m in the worst of %d sectors\n",
-                settings.hazardousAreaM2, report.hazardousFragmentDistanceM, report.worstSectorHazardousFragmentDistanceM, settings.sectors);
+    if (report.hazardousCount() == 0)
+        std::printf("hazardous fragment distance: none, as no fragment is hazardous\n");
+    else if (report.worstSectorHazardousFragmentDistanceM == 0)
+        std::printf("hazardous fragment distance: none, as hazardous fragments are nowhere denser than 1 per %.1f m2\n", settings.hazardousAreaM2);
+    else
+        std::printf("hazardous fragment distance (1 per %.1f m2): %.2f m over whole rings, %.2f m in the worst of %d sectors\n",
+                    settings.hazardousAreaM2, report.hazardousFragmentDistanceM, report.worstSectorHazardousFragmentDistanceM, settings.sectors);
     if (report.massFit.fragments > 0)
         std::printf("mass: Weibull N(>m) = N exp(-(m/%.4g kg)^%.3f), R2 %.3f over %lld fragments (Mott: exponent 0.5)\n",
                     report.massFit.scaleKg, report.massFit.shape, report.massFit.rSquared, static_cast<long long>(report.massFit.fragments));
+    else
+        std::printf("mass: no Weibull fit, as a fit needs at least 3 distinct masses among the thrown fragments (%lld thrown)\n",
+                    static_cast<long long>(report.debrisCount()));
     std::printf("wrote %s/debris.h5, debris.csv, debris_throw.png, debris_density.png, debris_mass.png\n", outDir.c_str());
     return 0;
 }

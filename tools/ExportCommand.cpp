@@ -23,8 +23,9 @@ std::function<void(int, int)> gltfProgress(bool quiet)
 
 void printGltfReport(const std::string& glbPath, const spall::GltfExportReport& r)
 {
-    std::printf("%s: %d fragments over %d frames, %d distinct meshes (%lld triangles), %lld pose samples, %.1f MB\n", glbPath.c_str(),
-                r.nodes, r.frames, r.meshes, static_cast<long long>(r.triangles), static_cast<long long>(r.keyframes), r.bytes / 1e6);
+    std::printf("%s: %d fragments over %d frames, %d distinct meshes (%lld triangles), %lld pose samples, %d charge%s, %.1f MB\n",
+                glbPath.c_str(), r.nodes, r.frames, r.meshes, static_cast<long long>(r.triangles), static_cast<long long>(r.keyframes),
+                r.charges, r.charges == 1 ? "" : "s", r.bytes / 1e6);
 }
 
 int exportGltfCommand(const std::string& outDir, std::string glbPath, bool quiet)

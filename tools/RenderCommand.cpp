@@ -6,35 +6,14 @@
 #include <spall/core/Error.h>
 #include <spall/output/Png.h>
 #include <spall/output/FrameWriter.h>
+#include <spall/output/RunCharges.h>
 #include <spall/voxel/VdbIo.h>
 #include <spall/render/Render.h>
 
-#include <nlohmann/json.hpp>
-
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 
 namespace {
-
-/// Where the run's charges were, from its scene.json (none when it has none).
-std::vector<Eigen::Vector3d> chargesOfRun(const std::string& outDir)
-{
-    const std::filesystem::path path = std::filesystem::path(outDir) / "scene.json";
-    std::vector<Eigen::Vector3d> charges;
-    std::ifstream in(path);
-    if (!in) return charges;
-    try {
-        const nlohmann::json scene = nlohmann::json::parse(in);
-        for (const auto& charge : scene.value("charges", nlohmann::json::array())) {
-            const auto& p = charge.at("position_m");
-            charges.emplace_back(p.at(0).get<double>(), p.at(1).get<double>(), p.at(2).get<double>());
-        }
-    } catch (const std::exception& e) {
-        throw spall::IoError(path.string() + ": charges[].position_m cannot be read: " + e.what());
-    }
-    return charges;
-}
 
 /// The camera the options ask for: the one that frames the run's first and last frames, moved to
 /// `eye` and turned to `target` where those are given.
@@ -71,7 +50,7 @@ int runRender(const std::string& outDir, int frame, bool all, bool sheet, std::s
               const CameraOptions& cameraOptions)
 {
     spall::RenderSettings settings = parseSize(size);
-    settings.chargesM = chargesOfRun(outDir);
+    for (const spall::Charge& charge : spall::chargesOfRun(outDir)) settings.chargesM.push_back(charge.positionM);
     const std::vector<std::string> paths = spall::listFramePaths(outDir);
     const spall::Camera camera = chooseCamera(paths, settings, cameraOptions);
     if (pictureDir.empty()) pictureDir = outDir;

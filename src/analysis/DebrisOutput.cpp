@@ -145,7 +145,7 @@ Image throwPlot(const DebrisReport& report)
     }
     const std::string title = "max " + fixed(report.maxThrowDistanceM) + " m  median " + fixed(report.medianThrowDistanceM) + " m  by mass " +
                               fixed(report.massMedianThrowDistanceM) + " m";
-    return plotSeries({count, mass}, "resting distance from the charges (m)", "fraction beyond", title, false);
+    return plotSeries({count, mass}, "resting distance from the charges (m)", "fraction beyond", title, PlotScale::Linear);
 }
 
 Image densityPlot(const DebrisReport& report)
@@ -162,9 +162,14 @@ Image densityPlot(const DebrisReport& report)
         worst.y.push_back(r.worstSectorHazardousDensityPerM2());
     }
     if (!report.rings.empty()) limit = {limit.name, {0.0, report.rings.back().outerM}, {1 / report.settings.hazardousAreaM2, 1 / report.settings.hazardousAreaM2}};
-    const std::string title = "hazardous fragment distance " + fixed(report.hazardousFragmentDistanceM) + " m  (sector " +
-                              fixed(report.worstSectorHazardousFragmentDistanceM) + " m)";
-    return plotSeries({all, hazardous, worst, limit}, "ring (m)", "per m2", title, false);
+    std::string title = "hazardous fragment distance " + fixed(report.hazardousFragmentDistanceM) + " m  (sector " +
+                        fixed(report.worstSectorHazardousFragmentDistanceM) + " m)";
+    if (report.hazardousCount() == 0)
+        title = "no hazardous fragments (none reached " + fixed(report.settings.hazardousEnergyJ, 0) + " joules at impact)";
+    else if (report.worstSectorHazardousFragmentDistanceM == 0)
+        title = "hazardous fragments nowhere denser than 1 per " + fixed(report.settings.hazardousAreaM2) + " m2";
+    // Densities span decades and the limit is far below the densest rings: a log axis shows both.
+    return plotSeries({all, hazardous, worst, limit}, "ring (m)", "per m2", title, PlotScale::LogY);
 }
 
 Image massPlot(const DebrisReport& report)
@@ -179,14 +184,18 @@ Image massPlot(const DebrisReport& report)
         counted.y.push_back(double(i + 1));
     }
     const WeibullMassFit& fit = report.massFit;
+    // The fit down to half a fragment: below that it says nothing a count can show.
     if (fit.fragments > 0)
         for (double m : masses) {
+            const double expected = fit.fragments * std::exp(-std::pow(m / fit.scaleKg, fit.shape));
+            if (expected < 0.5) continue;
             fitted.x.push_back(m);
-            fitted.y.push_back(fit.fragments * std::exp(-std::pow(m / fit.scaleKg, fit.shape)));
+            fitted.y.push_back(expected);
         }
-    const std::string title = "weibull shape " + fixed(fit.shape, 2) + " (mott 0.5)  scale " + fixed(fit.scaleKg, 3) + " kg  r2 " +
-                              fixed(fit.rSquared, 3);
-    return plotSeries({counted, fitted}, "mass (kg)", "count", title, true);
+    const std::string title = fit.fragments > 0 ? "weibull shape " + fixed(fit.shape, 2) + " (mott 0.5)  scale " + fixed(fit.scaleKg, 3) +
+                                                      " kg  r2 " + fixed(fit.rSquared, 3)
+                                                : "no weibull fit: " + std::to_string(masses.size()) + " thrown fragments, it needs 3 masses";
+    return plotSeries({counted, fitted}, "mass (kg)", "count", title, PlotScale::LogLog);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <spall/core/Parallel.h>
 #include <spall/output/FragmentSurface.h>
 #include <spall/output/FrameWriter.h>
+#include <spall/output/RunCharges.h>
 #include <spall/voxel/VdbIo.h>
 #include <spall/voxel/LinkBits.h>
 
@@ -274,6 +275,22 @@ void addNodes(tinygltf::Model& model, BufferPacker& packer, const std::map<int64
     report.nodes = int(tracks.size());
 }
 
+/// A node without a mesh per charge, `charge_<i>` where it was, its TNT mass in the node's extras
+/// (`tnt_kg`): Blender imports it as an empty, the viewer draws a marker there.
+void addChargeNodes(tinygltf::Model& model, const std::vector<Charge>& charges, GltfExportReport& report)
+{
+    for (size_t i = 0; i < charges.size(); ++i) {
+        tinygltf::Node n;
+        n.name = "charge_" + std::to_string(i);
+        const Eigen::Vector3f p = toYUp(charges[i].positionM);
+        n.translation = {p.x(), p.y(), p.z()};
+        n.extras = tinygltf::Value(tinygltf::Value::Object{{"tnt_kg", tinygltf::Value(charges[i].tntKg)}});
+        model.scenes.front().nodes.push_back(int(model.nodes.size()));
+        model.nodes.push_back(n);
+    }
+    report.charges = int(charges.size());
+}
+
 openvdb::io::File openFrame(const std::string& path)
 {
     openvdb::io::File file(path);
@@ -364,6 +381,7 @@ GltfExportReport exportGltf(const std::string& outputDirectory, const std::strin
     BufferPacker packer(model);
     addMeshes(model, packer, pieces, report);
     addNodes(model, packer, tracks, frameTimes, report);
+    addChargeNodes(model, chargesOfRun(outputDirectory), report);
     writeFileAtomically(glbPath, [&](std::ostream& out) {
         tinygltf::TinyGLTF writer;
         if (!writer.WriteGltfSceneToStream(&model, out, false, true)) throw IoError(glbPath + ": tinygltf could not write the model");

@@ -142,36 +142,38 @@ void writePng(const std::string& path, const Image& image)
 Image plotCurve(const std::vector<double>& x, const std::vector<double>& y, const std::string& xLabel, const std::string& yLabel,
                 const std::string& title, int width, int height)
 {
-    return plotSeries({{"", x, y}}, xLabel, yLabel, title, false, width, height);
+    return plotSeries({{"", x, y}}, xLabel, yLabel, title, PlotScale::Linear, width, height);
 }
 
 namespace {
 
-/// Where values land on a plot: the data range (log10 of it on log-log axes) onto the pixel box.
+/// Where values land on a plot: the data range (log10 of it on a log axis) onto the pixel box.
 struct PlotAxes {
     int left = 0, right = 0, top = 0, bottom = 0;
-    bool logLog = false;
+    bool logX = false, logY = false;
     double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
 
-    double value(double v) const { return logLog ? std::log10(v) : v; }
-    /// Points that are not finite (or, on log-log axes, not positive) are left out.
-    bool usable(double v) const { return std::isfinite(v) && (!logLog || v > 0); }
+    double xValue(double v) const { return logX ? std::log10(v) : v; }
+    double yValue(double v) const { return logY ? std::log10(v) : v; }
+    /// Points that are not finite (or, on a log axis, not positive) are left out.
+    bool usable(double x, double y) const { return std::isfinite(x) && std::isfinite(y) && (!logX || x > 0) && (!logY || y > 0); }
     double px(double v) const { return left + (v - x0) / (x1 - x0) * (right - left); }
     double py(double v) const { return bottom - (v - y0) / (y1 - y0) * (bottom - top); }
 };
 
-PlotAxes fitAxes(const std::vector<PlotSeries>& series, bool logLog, int width, int height)
+PlotAxes fitAxes(const std::vector<PlotSeries>& series, PlotScale scale, int width, int height)
 {
     PlotAxes axes;
     axes.left = 110, axes.right = width - 30, axes.top = 50, axes.bottom = height - 70;
-    axes.logLog = logLog;
+    axes.logX = scale == PlotScale::LogLog;
+    axes.logY = scale != PlotScale::Linear;
     for (const PlotSeries& s : series)
         for (size_t i = 0; i < s.x.size(); ++i) {
-            if (!axes.usable(s.x[i]) || !axes.usable(s.y[i])) continue;
-            axes.x0 = std::min(axes.x0, axes.value(s.x[i]));
-            axes.x1 = std::max(axes.x1, axes.value(s.x[i]));
-            axes.y0 = std::min(axes.y0, axes.value(s.y[i]));
-            axes.y1 = std::max(axes.y1, axes.value(s.y[i]));
+            if (!axes.usable(s.x[i], s.y[i])) continue;
+            axes.x0 = std::min(axes.x0, axes.xValue(s.x[i]));
+            axes.x1 = std::max(axes.x1, axes.xValue(s.x[i]));
+            axes.y0 = std::min(axes.y0, axes.yValue(s.y[i]));
+            axes.y1 = std::max(axes.y1, axes.yValue(s.y[i]));
         }
     if (axes.x0 > axes.x1) axes.x0 = 0, axes.x1 = 1, axes.y0 = 0, axes.y1 = 1;
     if (axes.x1 <= axes.x0) axes.x1 = axes.x0 + 1;
@@ -186,61 +188,97 @@ const Rgb kAxisColour{60, 60, 60};
 void drawGridAndTicks(Image& img, const PlotAxes& a)
 {
     const Rgb grid{225, 225, 225};
-    const auto tickLabel = [&](double v) { return a.logLog ? "1e" + formatTick(v) : formatTick(v); };
-    const double xs = a.logLog ? std::max(1.0, std::ceil((a.x1 - a.x0) / 8)) : tickStep(a.x1 - a.x0, 8);
-    const double ys = a.logLog ? std::max(1.0, std::ceil((a.y1 - a.y0) / 6)) : tickStep(a.y1 - a.y0, 6);
+    const auto tickStepOf = [](bool log, double span, int ticks) { return log ? std::max(1.0, std::ceil(span / ticks)) : tickStep(span, ticks); };
+    const auto tickLabel = [](bool log, double v) { return log ? "1e" + formatTick(v) : formatTick(v); };
+    const double xs = tickStepOf(a.logX, a.x1 - a.x0, 8), ys = tickStepOf(a.logY, a.y1 - a.y0, 6);
     for (double v = std::ceil(a.x0 / xs) * xs; v <= a.x1 + 1e-12 * xs; v += xs) {
         img.line(a.px(v), a.top, a.px(v), a.bottom, grid);
-        const std::string s = tickLabel(v);
+        const std::string s = tickLabel(a.logX, v);
         img.text(int(a.px(v)) - Image::textWidth(s) / 2, a.bottom + 10, s, kAxisColour);
     }
     for (double v = std::ceil(a.y0 / ys) * ys; v <= a.y1 + 1e-12 * ys; v += ys) {
         img.line(a.left, a.py(v), a.right, a.py(v), grid);
-        const std::string s = tickLabel(v);
+        const std::string s = tickLabel(a.logY, v);
         img.text(a.left - 10 - Image::textWidth(s), int(a.py(v)) - 7, s, kAxisColour);
     }
-    if (!a.logLog && a.y0 < 0 && a.y1 > 0) img.line(a.left, a.py(0), a.right, a.py(0), kAxisColour);
+    if (!a.logY && a.y0 < 0 && a.y1 > 0) img.line(a.left, a.py(0), a.right, a.py(0), kAxisColour);
     img.line(a.left, a.top, a.left, a.bottom, kAxisColour);
     img.line(a.left, a.bottom, a.right, a.bottom, kAxisColour);
 }
 
-/// Each series as a line (with markers when there are several), named in a legend at the upper right.
-void drawSeries(Image& img, const PlotAxes& a, const std::vector<PlotSeries>& series)
+const Rgb kSeriesColours[] = {{30, 90, 200}, {200, 60, 40}, {40, 150, 60}, {150, 60, 170}, {220, 140, 20}, {20, 150, 160}};
+
+/// Each series as a line (with markers when there are several); returns the pixels it went
+/// through, one sample every pixel or so, for the legend to keep clear of.
+std::vector<std::pair<double, double>> drawSeries(Image& img, const PlotAxes& a, const std::vector<PlotSeries>& series)
 {
-    const Rgb colours[] = {{30, 90, 200}, {200, 60, 40}, {40, 150, 60}, {150, 60, 170}, {220, 140, 20}, {20, 150, 160}};
-    size_t longestName = 0;
-    for (const PlotSeries& s : series) longestName = std::max(longestName, s.name.size());
+    std::vector<std::pair<double, double>> drawn;
     for (size_t k = 0; k < series.size(); ++k) {
         const PlotSeries& s = series[k];
-        const Rgb colour = colours[k % std::size(colours)];
+        const Rgb colour = kSeriesColours[k % std::size(kSeriesColours)];
         bool havePrevious = false;
         double previousX = 0, previousY = 0;
         for (size_t i = 0; i < s.x.size(); ++i) {
-            if (!a.usable(s.x[i]) || !a.usable(s.y[i])) continue;
-            const double cx = a.px(a.value(s.x[i])), cy = a.py(a.value(s.y[i]));
-            if (havePrevious) img.line(previousX, previousY, cx, cy, colour, 2);
+            if (!a.usable(s.x[i], s.y[i])) continue;
+            const double cx = a.px(a.xValue(s.x[i])), cy = a.py(a.yValue(s.y[i]));
+            if (havePrevious) {
+                img.line(previousX, previousY, cx, cy, colour, 2);
+                const int steps = 1 + int(std::hypot(cx - previousX, cy - previousY));
+                for (int j = 1; j <= steps; ++j) drawn.push_back({previousX + (cx - previousX) * j / steps, previousY + (cy - previousY) * j / steps});
+            }
             if (series.size() > 1) img.fillRect(int(cx) - 3, int(cy) - 3, int(cx) + 3, int(cy) + 3, colour);
+            drawn.push_back({cx, cy});
             havePrevious = true;
             previousX = cx;
             previousY = cy;
         }
-        if (s.name.empty()) continue;
-        const int lx = a.right - 30 - Image::textWidth(std::string(longestName, ' '));
-        const int ly = a.top + 10 + 20 * int(k);
-        img.fillRect(lx - 20, ly + 2, lx - 6, ly + 12, colour);
-        img.text(lx, ly, s.name, kAxisColour);
+    }
+    return drawn;
+}
+
+/// The series' names on a white box in the corner of the plot that hides least of the lines.
+void drawLegend(Image& img, const PlotAxes& a, const std::vector<PlotSeries>& series, const std::vector<std::pair<double, double>>& drawn)
+{
+    int rows = 0, widest = 0;
+    for (const PlotSeries& s : series) {
+        rows += !s.name.empty();
+        widest = std::max(widest, Image::textWidth(s.name));
+    }
+    if (rows == 0) return;
+    const int boxWidth = widest + 40, boxHeight = 20 * rows + 8, gap = 8;
+    const int xs[] = {a.right - gap - boxWidth, a.left + gap}, ys[] = {a.top + gap, a.bottom - gap - boxHeight};
+    int bestX = xs[0], bestY = ys[0];
+    size_t leastHidden = SIZE_MAX;
+    for (const int y : ys)  // upper right first, then upper left, lower right, lower left
+        for (const int x : xs) {
+            const size_t hidden = size_t(std::count_if(drawn.begin(), drawn.end(), [&](const auto& p) {
+                return p.first >= x && p.first <= x + boxWidth && p.second >= y && p.second <= y + boxHeight;
+            }));
+            if (hidden < leastHidden) leastHidden = hidden, bestX = x, bestY = y;
+        }
+    img.fillRect(bestX, bestY, bestX + boxWidth, bestY + boxHeight, {255, 255, 255});
+    img.line(bestX, bestY, bestX + boxWidth, bestY, {200, 200, 200});
+    img.line(bestX, bestY + boxHeight, bestX + boxWidth, bestY + boxHeight, {200, 200, 200});
+    img.line(bestX, bestY, bestX, bestY + boxHeight, {200, 200, 200});
+    img.line(bestX + boxWidth, bestY, bestX + boxWidth, bestY + boxHeight, {200, 200, 200});
+    int row = 0;
+    for (size_t k = 0; k < series.size(); ++k) {
+        if (series[k].name.empty()) continue;
+        const int ly = bestY + 6 + 20 * row++;
+        img.fillRect(bestX + 8, ly + 2, bestX + 22, ly + 12, kSeriesColours[k % std::size(kSeriesColours)]);
+        img.text(bestX + 30, ly, series[k].name, kAxisColour);
     }
 }
 
 }  // namespace
 
 Image plotSeries(const std::vector<PlotSeries>& series, const std::string& xLabel, const std::string& yLabel, const std::string& title,
-                 bool logLog, int width, int height)
+                 PlotScale scale, int width, int height)
 {
     Image img(width, height);
-    const PlotAxes axes = fitAxes(series, logLog, width, height);
+    const PlotAxes axes = fitAxes(series, scale, width, height);
     drawGridAndTicks(img, axes);
-    drawSeries(img, axes, series);
+    drawLegend(img, axes, series, drawSeries(img, axes, series));
     img.text((axes.left + axes.right - Image::textWidth(xLabel)) / 2, height - 35, xLabel, kAxisColour);
     img.text(10, 15, yLabel, kAxisColour);
     img.text((axes.left + axes.right - Image::textWidth(title)) / 2, 15, title, kAxisColour);

@@ -154,7 +154,7 @@ Image hazardDistancePlot(const SweepPlan& plan, const SweepSummary& s)
         }
         if (series.size() < 8) series.push_back(line);
     }
-    return plotSeries(series, "hazardous fragment distance (m)", "fraction of seeds", "hazardous fragment distance over seeds", false);
+    return plotSeries(series, "hazardous fragment distance (m)", "fraction of seeds", "hazardous fragment distance over seeds", PlotScale::Linear);
 }
 
 }  // namespace

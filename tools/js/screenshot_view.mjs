@@ -37,6 +37,7 @@ try {
   await page.goto(url);
   await page.waitForFunction(() => document.body.dataset.ready || document.body.dataset.error, null, { timeout: 120000 });
   console.log(`${page_path}: loaded in ${((Date.now() - started) / 1000).toFixed(1)} s`);
+  console.log(`ground ${await page.evaluate(() => document.body.dataset.ground ?? "none")}`);
   for (const t of times) {
     await page.evaluate((time) => { delete document.body.dataset.shownTime; window.location.hash = `t=${time}`; }, t);
     await page.waitForFunction(() => document.body.dataset.shownTime !== undefined || document.body.dataset.error,

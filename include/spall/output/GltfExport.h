@@ -11,6 +11,7 @@ namespace spall {
 struct GltfExportReport {
     int frames = 0;
     int nodes = 0;           ///< one per fragment that ever existed
+    int charges = 0;         ///< nodes `charge_<i>` without a mesh, from OUTDIR/scene.json
     int meshes = 0;          ///< distinct pieces (fragments of equal mesh_key share one)
     int64_t triangles = 0;   ///< over the distinct meshes
     int64_t keyframes = 0;   ///< pose samples kept (a resting body's repeats are dropped)
@@ -24,6 +25,7 @@ struct GltfExportReport {
 ///   broke, from fracture_faces_<id>); no normals, so readers shade it flat;
 /// - per fragment, a node `fragment_<id>` whose translation and rotation are sampled at every frame
 ///   it lives (LINEAR), with scale 1 while it lives and 0 before and after (STEP);
+/// - per charge in OUTDIR/scene.json, a node `charge_<i>` without a mesh, extras `tnt_kg`;
 /// - metres, converted from spall's Z-up to glTF's Y-up: (x, y, z) -> (x, z, -y).
 /// Throws InputError (no frames, fog frames) or IoError. `onFrame(done, total)` reports progress.
 GltfExportReport exportGltf(const std::string& outputDirectory, const std::string& glbPath,

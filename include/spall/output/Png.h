@@ -42,10 +42,13 @@ struct PlotSeries {
     std::vector<double> x, y;
 };
 
-/// Lines with axes, ticks, labels and a legend; on log-log axes (powers of ten) points that
-/// are not positive are left out.
+/// Linear axes, or logarithmic ones (ticks at powers of ten) for y or for both.
+enum class PlotScale { Linear, LogY, LogLog };
+
+/// Lines with axes, ticks, labels and a legend in the corner where it hides least; on a
+/// logarithmic axis, points that are not positive are left out.
 Image plotSeries(const std::vector<PlotSeries>& series, const std::string& xLabel, const std::string& yLabel, const std::string& title,
-                 bool logLog, int width = 900, int height = 560);
+                 PlotScale scale, int width = 900, int height = 560);
 
 /// A line plot of y(x) with axes, ticks and labels.
 Image plotCurve(const std::vector<double>& x, const std::vector<double>& y, const std::string& xLabel,

@@ -66,9 +66,54 @@ function frameBox(stage, box) {
   stage.camera.position.copy(centre).addScaledVector(direction, distance);
   stage.controls.target.copy(centre);
   stage.controls.update();
-  // spall's ground is z = 0, y = 0 in glTF's Y-up frame: a reference grid there.
-  const size = Math.max(2, 2 * Math.ceil(radius));
-  stage.scene.add(new THREE.GridHelper(size, size, 0x8a8f96, 0xb8bec6));
+  return radius;
+}
+
+// The box of every pose sample, the furthest fragment's included, and of the charges.
+function reachBox(clip, charges) {
+  const box = new THREE.Box3();
+  for (const track of clip ? clip.tracks : []) {
+    if (!track.name.endsWith(".position")) continue;
+    for (let i = 0; i + 2 < track.values.length; i += 3)
+      box.expandByPoint(new THREE.Vector3(track.values[i], track.values[i + 1], track.values[i + 2]));
+  }
+  for (const charge of charges) box.expandByPoint(charge.position);
+  return box;
+}
+
+// spall's ground is z = 0, y = 0 in glTF's Y-up frame: a grid of 1 m squares there, centred on
+// whole metres, wide enough that every fragment lands on it. Its extent (x0,x1,z0,z1 in metres,
+// glTF axes) goes into document.body.dataset.ground for scripts.
+function addGround(stage, reach) {
+  const margin = 1;  // a centre of mass within 1 m of the grid's edge keeps its piece on the grid
+  const cx = Math.round((reach.min.x + reach.max.x) / 2), cz = Math.round((reach.min.z + reach.max.z) / 2);
+  const half = Math.max(cx - reach.min.x, reach.max.x - cx, cz - reach.min.z, reach.max.z - cz, 0) + margin;
+  const size = 2 * Math.ceil(half);
+  const grid = new THREE.GridHelper(size, size, 0x8a8f96, 0xb8bec6);
+  grid.position.set(cx, 0, cz);
+  stage.scene.add(grid);
+  document.body.dataset.ground = [cx - size / 2, cx + size / 2, cz - size / 2, cz + size / 2].join(",");
+}
+
+// The glTF's empty nodes with a TNT mass in their extras (spall export gltf writes one per charge).
+function chargesOf(gltfScene) {
+  const charges = [];
+  gltfScene.traverse((o) => {
+    if (o.userData && typeof o.userData.tnt_kg === "number") charges.push({ position: o.getWorldPosition(new THREE.Vector3()), tntKg: o.userData.tnt_kg });
+  });
+  return charges;
+}
+
+// Each charge as an orange ball: the TNT's own sphere (density 1600 kg/m3) or, where that would be
+// a speck, 1.5 % of the view's size, so it can be found at any zoom.
+function addChargeMarkers(stage, charges, viewRadius) {
+  const material = new THREE.MeshBasicMaterial({ color: 0xff6e00 });
+  for (const charge of charges) {
+    const tntRadius = Math.cbrt((3 * charge.tntKg) / (4 * Math.PI * 1600));
+    const marker = new THREE.Mesh(new THREE.SphereGeometry(Math.max(tntRadius, 0.015 * viewRadius), 24, 16), material);
+    marker.position.copy(charge.position);
+    stage.scene.add(marker);
+  }
 }
 
 function parseHashTime() {
@@ -85,7 +130,12 @@ function start(gltf, stage) {
   // The viewer keeps the time itself and poses the clip there: the mixer's own clock would wrap
   // at the end or stop the action, and a stopped action ignores a new time.
   const action = clip ? mixer.clipAction(clip).play() : null;
-  frameBox(stage, clip ? debrisBox(clip) : new THREE.Box3().setFromObject(gltf.scene));
+  const charges = chargesOf(gltf.scene);
+  const framed = clip ? debrisBox(clip) : new THREE.Box3().setFromObject(gltf.scene);
+  for (const charge of charges) framed.expandByPoint(charge.position);
+  const viewRadius = frameBox(stage, framed);
+  addGround(stage, reachBox(clip, charges));
+  addChargeMarkers(stage, charges, viewRadius);
 
   const slider = document.getElementById("time");
   const label = document.getElementById("time-label");
@@ -132,7 +182,7 @@ function start(gltf, stage) {
     }
   });
   document.getElementById("status").textContent =
-    `${gltf.scene.children.length} fragments, ${duration.toFixed(3)} s`;
+    `${gltf.scene.children.length - charges.length} fragments, ${charges.length} charge${charges.length === 1 ? "" : "s"}, ${duration.toFixed(3)} s`;
   document.body.dataset.ready = "1";
 }
 
