@@ -217,6 +217,30 @@ assert len(rest) > 0
 inside = (rest[:, 0] > x0) & (rest[:, 0] < x1) & (-rest[:, 1] > z0) & (-rest[:, 1] < z1)
 assert inside.all(), f"{(~inside).sum()} fragments rest beyond the viewer's ground {x0, x1, z0, z1}"
 PY
+# spall loads: the crate's faces as it stood, read back by h5py and pyopenvdb; the face toward the
+# charge (+x) is its front and took more than any other; a directory without a scene is refused
+"$spall" loads "$dir/crate" --quiet > "$dir/loads.txt" || fail "spall loads failed"
+grep -q "front face +x" "$dir/loads.txt" || fail "spall loads did not find the front face: $(cat "$dir/loads.txt")"
+grep -q "normally reflected Ir" "$dir/loads.txt" || fail "spall loads printed no hand calculation"
+[[ -s "$dir/crate/loads_front.png" ]] || fail "spall loads wrote no picture"
+$py - "$dir/crate/loads.h5" "$dir/crate/loads.vdb" <<'PY'
+import sys, h5py, numpy as np, pyopenvdb as vdb
+with h5py.File(sys.argv[1]) as h:
+    crate = h["objects/crate"]
+    impulse, face, normal = crate["impulse_Pa_s"][:], crate["face"][:], crate["normal"][:]
+    assert crate.attrs["front_face"] == 1, crate.attrs["front_face"]
+    assert impulse[face == 1].mean() > impulse[face != 1].max() * 0.5
+    assert (crate["negative_impulse_Pa_s"][:] <= 0).all() and (impulse >= 0).all()
+    # Kingery-Bulmash's free-air Ir is the direct wave's; 0.3 m up, the ground's reflection
+    # nearly doubles it (a surface burst is a free-air charge of twice the mass)
+    ratio = impulse[crate.attrs["nearest_face"]] / crate.attrs["reference_reflected_impulse_Pa_s"]
+    assert 1.0 < ratio < 2.2, ratio
+    grid = vdb.read(sys.argv[2], "crate.impulse_Pa_s")
+    assert abs(grid.evalMinMax()[1] - impulse.max()) < 1e-3 * impulse.max(), (grid.evalMinMax(), impulse.max())
+    assert grid.activeVoxelCount() > 0
+PY
+if "$spall" loads "$dir/nowhere" 2> "$dir/err.txt"; then fail "loads of a missing directory accepted"; fi
+grep -q "nowhere" "$dir/err.txt" || fail "loads error does not name the source: $(cat "$dir/err.txt")"
 # ... and refuses what it cannot mesh, naming it, leaving nothing behind
 if "$spall" export gltf "$dir/nowhere" 2> "$dir/err.txt"; then fail "export of a missing directory accepted"; fi
 grep -q "nowhere" "$dir/err.txt" || fail "error does not name the directory: $(cat "$dir/err.txt")"

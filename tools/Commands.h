@@ -43,6 +43,7 @@ void addBenchCommands(CLI::App& app, CommandAction& action);
 void addExportCommand(CLI::App& app, CommandAction& action);
 void addViewCommand(CLI::App& app, CommandAction& action);
 void addDebrisCommand(CLI::App& app, CommandAction& action);
+void addLoadsCommand(CLI::App& app, CommandAction& action);
 void addSweepCommands(CLI::App& app, CommandAction& action);
 
 /// `spall export gltf`: writes GLBPATH (default OUTDIR/debris.glb) from OUTDIR's frames.

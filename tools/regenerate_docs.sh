@@ -4,8 +4,9 @@
 #
 #   tools/regenerate_docs.sh [--check] [--full] [--keep DIR] [BUILD_DIR]     (BUILD_DIR: build)
 #
-# Without --full, the pictures that take about a minute in all: the default scene, its wall
-# during the deformable phase at 2 ms intervals, the timber post. --full adds the concrete slab,
+# Without --full, the pictures that take about a minute in all: the default scene, the loads on
+# its wall and where its debris lands, its wall during the deformable phase at 2 ms intervals,
+# the timber post. --full adds the concrete slab,
 # the glass pane and its cracks, the house wall (7 minutes), the 3 M-voxel wall (8 minutes) and
 # the accuracy plots (whose run times vary from run to run, so --check leaves them out).
 # --check writes into a scratch directory and compares each picture byte for byte with the one
@@ -82,6 +83,10 @@ run_scene() {
 
 run_scene default
 place default-scene.png "$scratch/default/preview.png"
+"$spall" loads "$scratch/default" --quiet >/dev/null
+place default-wall-loads.png "$scratch/default/loads_front.png"
+"$spall" debris "$scratch/default" >/dev/null
+place default-debris-density.png "$scratch/default/debris_density.png"
 
 scene_with "$root/assets/scenes/default.json" "$scratch/phase.json" frame_rate_hz=500 duration_s=0.016
 run_scene phase "$scratch/phase.json" --no-preview

@@ -74,6 +74,7 @@ int main(int argc, char** argv)
     addExportCommand(app, action);
     addViewCommand(app, action);
     addDebrisCommand(app, action);
+    addLoadsCommand(app, action);
     addSweepCommands(app, action);
     try {
         app.parse(argc, argv);

@@ -50,9 +50,13 @@ void H5Out::write(const char* name, const std::vector<int64_t>& values, size_t c
     dataset(name, H5T_NATIVE_INT64, values.data(), values.size(), cols);
 }
 
-void H5Out::attribute(const char* name, double value) { scalar(name, H5T_NATIVE_DOUBLE, &value); }
+void H5Out::attribute(const char* name, double value) { scalar(".", name, H5T_NATIVE_DOUBLE, &value); }
 
-void H5Out::attribute(const char* name, int64_t value) { scalar(name, H5T_NATIVE_INT64, &value); }
+void H5Out::attribute(const char* name, int64_t value) { scalar(".", name, H5T_NATIVE_INT64, &value); }
+
+void H5Out::attribute(const char* object, const char* name, double value) { scalar(object, name, H5T_NATIVE_DOUBLE, &value); }
+
+void H5Out::attribute(const char* object, const char* name, int64_t value) { scalar(object, name, H5T_NATIVE_INT64, &value); }
 
 void H5Out::close()
 {
@@ -74,10 +78,10 @@ void H5Out::dataset(const char* name, int64_t type, const void* data, size_t cou
     checked(status, name);
 }
 
-void H5Out::scalar(const char* name, int64_t type, const void* value)
+void H5Out::scalar(const char* object, const char* name, int64_t type, const void* value)
 {
     const hid_t space = H5Screate(H5S_SCALAR);
-    const hid_t attr = checked(H5Acreate2(mFile, name, type, space, H5P_DEFAULT, H5P_DEFAULT), name);
+    const hid_t attr = checked(H5Acreate_by_name(mFile, object, name, type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name);
     const herr_t status = H5Awrite(attr, type, value);
     H5Aclose(attr);
     H5Sclose(space);

@@ -26,15 +26,18 @@ public:
     /// A dataset of rows × cols (1-D when cols is 1), from row-major values.
     void write(const char* name, const std::vector<double>& values, size_t cols = 1);
     void write(const char* name, const std::vector<int64_t>& values, size_t cols = 1);
+    /// A scalar attribute of the file's root, or of the group or dataset `object` (a path).
     void attribute(const char* name, double value);
     void attribute(const char* name, int64_t value);
+    void attribute(const char* object, const char* name, double value);
+    void attribute(const char* object, const char* name, int64_t value);
     /// Closes the file; throws IoError naming it when HDF5 cannot finish it.
     void close();
 
 private:
     int64_t checked(int64_t id, const std::string& what) const;
     void dataset(const char* name, int64_t type, const void* data, size_t count, size_t cols);
-    void scalar(const char* name, int64_t type, const void* value);
+    void scalar(const char* object, const char* name, int64_t type, const void* value);
 
     std::string mPath;
     int64_t mFile = -1;

@@ -95,6 +95,8 @@ public:
     const std::vector<FractureEvent>& fractureEvents() const { return mState.events; }
     const std::vector<DustRecord>& dust() const { return mState.dust; }
     const BlastField& field() const { return *mField; }
+    /// The ground and colliders, built once from the scene.
+    const StaticWorld& staticWorld() const { return mStaticWorld; }
     const Scene& scene() const { return mScene; }
     int64_t initialVoxelCount() const { return mState.initialVoxels; }
     /// What setting the scene up found that a user should know (mesh repairs, memory at risk).
