@@ -200,13 +200,14 @@ first, last = (np.asarray(Image.open(p).convert("RGB"), dtype=float)[30:-50] for
 def charge(image):  # the viewer's charge marker, pure orange (255, 110, 0)
     r, g, b = image[..., 0], image[..., 1], image[..., 2]
     return (r > 230) & (g > 80) & (g < 140) & (b < 30)
-def debris(image):  # the background and the grid are nearly grey; the brick is not
-    return ((image.max(axis=2) - image.min(axis=2)) > 30) & ~charge(image)
+def debris(image):  # the background and the grid are bluish greys; brick and mortar are warm
+    return ((image[..., 0] - image[..., 2]) > 8) & ~charge(image)
 for name, image in (("first", first), ("last", last)):
     assert debris(image).sum() > 500, (name, debris(image).sum())
     assert charge(image).sum() > 20, f"no charge marker in the {name} picture ({charge(image).sum()} orange pixels)"
+# (a fragment moving its own width changes a few per cent of the picture: 1 % is about 5 000 pixels)
 changed = (debris(first) != debris(last)).mean()
-assert changed > 0.02, f"the debris did not move between the first and last moments ({changed:.4f} of pixels changed)"
+assert changed > 0.01, f"the debris did not move between the first and last moments ({changed:.4f} of pixels changed)"
 # The ground grid reaches past every fragment's resting place (history.h5, spall's Z-up axes;
 # the page reports its grid in glTF's Y-up axes, x and -y).
 x0, x1, z0, z1 = map(float, re.search(r"ground (\S+)", open(sys.argv[3]).read()).group(1).split(","))

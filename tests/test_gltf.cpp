@@ -10,9 +10,11 @@
 #include <spall/run/Run.h>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
 #include <filesystem>
+#include <fstream>
 #include <unistd.h>
 #include <map>
 #include <set>
@@ -116,7 +118,9 @@ TEST(Gltf, EachFragmentIsANodeThatFollowsTheHistoryWithAMeshOfItsVolume)
     std::string error, warning;
     ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, dir + "/debris.glb")) << error;
     EXPECT_EQ(int(model.nodes.size()), report.nodes + report.charges);
-    ASSERT_EQ(model.materials.size(), 2u);
+    // The wall's material, its own surface and its cracks' (through bricks, along joints).
+    ASSERT_GE(model.materials.size(), 2u);
+    for (const tinygltf::Material& m : model.materials) EXPECT_EQ(m.name.rfind("brick-masonry", 0), 0u) << m.name;
     std::map<std::string, int> nodeByName;
     for (size_t i = 0; i < model.nodes.size(); ++i) nodeByName[model.nodes[i].name] = int(i);
     // The charge: an empty node where the scene put it, in glTF's Y-up axes (x, z, -y), with its mass.
@@ -162,7 +166,7 @@ TEST(Gltf, EachFragmentIsANodeThatFollowsTheHistoryWithAMeshOfItsVolume)
         }
     int fractured = 0;
     for (const int mesh : shapesShown)
-        for (const auto& primitive : model.meshes[mesh].primitives) fractured += model.materials.at(primitive.material).name == "fracture";
+        for (const auto& primitive : model.meshes[mesh].primitives) fractured += model.materials.at(primitive.material).name != "brick-masonry";
     EXPECT_GT(firstFrame.size(), 5u) << "the wall should have broken";
     EXPECT_GT(fractured, 0) << "no piece shows fracture surface";
     std::printf("%d nodes, %d meshes, %lld triangles, %.2f MB\n", report.nodes, report.meshes, static_cast<long long>(report.triangles),
@@ -185,7 +189,7 @@ TEST(Gltf, FractureMaterialCoversExactlyTheFacesThatBroke)
         std::filesystem::create_directories(dir);
         OutputSettings settings;
         settings.fractureRoughnessVoxels = roughness;
-        FrameWriter(dir, settings).write({0, 0.0}, halves);
+        FrameWriter(dir, settings, {findMaterialPreset("concrete")}).write({0, 0.0}, halves);
         exportGltf(dir, dir + "/debris.glb");
         tinygltf::Model model;
         tinygltf::TinyGLTF loader;
@@ -194,10 +198,124 @@ TEST(Gltf, FractureMaterialCoversExactlyTheFacesThatBroke)
         ASSERT_EQ(model.meshes.size(), 2u);
         for (const tinygltf::Mesh& mesh : model.meshes) {
             std::map<std::string, double> area = areaByMaterial(model, mesh);
-            std::printf("roughness %.1f: outer %.5f m^2, fracture %.5f m^2\n", roughness, area["outer"], area["fracture"]);
+            std::printf("roughness %.1f: outer %.5f m^2, fracture %.5f m^2\n", roughness, area["concrete"], area["concrete interior"]);
             // Roughness wrinkles the broken face, adding a little area to it.
-            EXPECT_NEAR(area["fracture"], 0.01, roughness > 0 ? 0.003 : 1e-6) << mesh.name;
-            EXPECT_NEAR(area["outer"], 0.09, 1e-6) << mesh.name;
+            EXPECT_NEAR(area["concrete interior"], 0.01, roughness > 0 ? 0.003 : 1e-6) << mesh.name;
+            EXPECT_NEAR(area["concrete"], 0.09, 1e-6) << mesh.name;
         }
+    }
+}
+
+TEST(Gltf, AMasonryCrackShowsMortarAlongAJointAndBrickThroughAUnit)
+{
+    initialiseOpenVdb();
+    // A bar of brick masonry along x in the bottom course, 2.5 cm voxels at index times h: the
+    // running bond's first course has a unit every 0.215 + 0.010 m from x = 0 (the preset's
+    // brick and joint), so voxels 8 (x = 0.200 m) and 9 (0.225 m) lie in different bricks and 3
+    // and 4 in the same one. A break between 8 and 9 shows mortar on both halves, one between 3
+    // and 4 the brick's interior.
+    const Material brick = findMaterialPreset("brick-masonry");
+    for (const auto& [breakAfter, expected] : {std::pair{8, "brick-masonry joint"}, std::pair{3, "brick-masonry interior"}}) {
+        Body bar = test::boxBody(10, 1, 1, 0.025, 1900.0, Eigen::Vector3d(0.125, 0, 0.0125));
+        auto acc = bar.grid->getAccessor();
+        breakLink(acc, openvdb::Coord(breakAfter, 0, 0), kPosX);
+        std::vector<Body> halves = splitBody(bar);
+        ASSERT_EQ(halves.size(), 2u);
+        for (size_t i = 0; i < halves.size(); ++i) halves[i].id = int64_t(i);
+        const std::string dir = (std::filesystem::temp_directory_path() / "spall_test_gltf_joint").string();
+        std::filesystem::remove_all(dir);
+        std::filesystem::create_directories(dir);
+        FrameWriter(dir, OutputSettings{}, {brick}).write({0, 0.0}, halves);
+        exportGltf(dir, dir + "/debris.glb");
+        tinygltf::Model model;
+        tinygltf::TinyGLTF loader;
+        std::string error, warning;
+        ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, dir + "/debris.glb")) << error;
+        for (const tinygltf::Mesh& mesh : model.meshes) {
+            std::map<std::string, double> area = areaByMaterial(model, mesh);
+            EXPECT_NEAR(area[expected], 0.025 * 0.025, 1e-4 * 0.025 * 0.025) << mesh.name << " broken after voxel " << breakAfter;
+            EXPECT_EQ(area.size(), 2u) << mesh.name << ": only the brick's own surface and the break";
+        }
+        // Each surface in the preset's colours: a brick's red outside, the mortar's grey.
+        for (const tinygltf::Material& m : model.materials) {
+            const Eigen::Vector3d& colour = m.name == "brick-masonry" ? brick.colourRgb : m.name == "brick-masonry joint" ? brick.jointColourRgb : brick.interiorColourRgb;
+            for (int c = 0; c < 3; ++c) EXPECT_DOUBLE_EQ(m.pbrMetallicRoughness.baseColorFactor[c], colour[c]) << m.name;
+        }
+    }
+}
+
+namespace {
+
+/// Per undirected edge of a mesh's triangles (all primitives), how many triangles use it.
+std::map<std::pair<uint32_t, uint32_t>, int> edgeUses(const tinygltf::Model& model, const tinygltf::Mesh& mesh)
+{
+    std::map<std::pair<uint32_t, uint32_t>, int> uses;
+    for (const auto& primitive : mesh.primitives) {
+        const std::vector<uint32_t> idx = indicesOf(model, primitive.indices);
+        for (size_t t = 0; t + 2 < idx.size(); t += 3)
+            for (int e = 0; e < 3; ++e) {
+                const uint32_t a = idx[t + e], b = idx[t + (e + 1) % 3];
+                ++uses[{std::min(a, b), std::max(a, b)}];
+            }
+    }
+    return uses;
+}
+
+int64_t triangleCount(const tinygltf::Model& model, const tinygltf::Mesh& mesh)
+{
+    int64_t n = 0;
+    for (const auto& primitive : mesh.primitives) n += int64_t(model.accessors.at(primitive.indices).count / 3);
+    return n;
+}
+
+}  // namespace
+
+TEST(Gltf, APieceOverItsTriangleBudgetIsMeshedAdaptivelyAndStaysAClosedSolid)
+{
+    initialiseOpenVdb();
+    // A brick of 9 x 4 x 3 voxels of 2.5 cm broken off a bar: exact, its faces are a fine grid of
+    // triangles (three level-set samples per voxel edge); within the default budget of 1000 the
+    // mesher merges the flat faces. Either way the mesh is closed (every edge between two
+    // triangles) and holds the brick's volume within 1 %, and its broken face keeps its material
+    // (within 5 % of its area: merged triangles near its rim may fall either side).
+    Body bar = test::boxBody(12, 4, 3, 0.025, 1900.0, Eigen::Vector3d(0.2, 0, 0.04));
+    auto acc = bar.grid->getAccessor();
+    for (int y = 0; y < 4; ++y)
+        for (int z = 0; z < 3; ++z) breakLink(acc, openvdb::Coord(8, y, z), kPosX);
+    std::vector<Body> parts = splitBody(bar);
+    ASSERT_EQ(parts.size(), 2u);
+    for (size_t i = 0; i < parts.size(); ++i) parts[i].id = int64_t(i);
+    const Body& brick = parts[0].mass.voxelCount == 9 * 4 * 3 ? parts[0] : parts[1];
+    const std::string dir = (std::filesystem::temp_directory_path() / "spall_test_gltf_budget").string();
+    int64_t exactTriangles = 0;
+    for (const int64_t budget : {int64_t{0}, int64_t{1000}}) {
+        std::filesystem::remove_all(dir);
+        std::filesystem::create_directories(dir);
+        Scene scene = parseScene(R"({"objects": [{"name": "b", "primitive": {"shape": "box", "size_m": [0.1, 0.1, 0.1]},
+                                                   "position_m": [0, 0, 0.05], "material": "concrete"}],
+                                      "charges": [{"position_m": [1, 0, 0.1], "tnt_kg": 1}]})", "budget", ".");
+        scene.output.gltfMaxTrianglesPerPiece = budget;
+        std::ofstream(dir + "/scene.json") << sceneToJson(scene).dump();
+        FrameWriter(dir, OutputSettings{}, {findMaterialPreset("concrete")}).write({0, 0.0}, {brick});
+        exportGltf(dir, dir + "/debris.glb");
+        tinygltf::Model model;
+        tinygltf::TinyGLTF loader;
+        std::string error, warning;
+        ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, dir + "/debris.glb")) << error;
+        ASSERT_EQ(model.meshes.size(), 1u);
+        const tinygltf::Mesh& mesh = model.meshes[0];
+        const int64_t triangles = triangleCount(model, mesh);
+        const double volume = 9 * 4 * 3 * std::pow(0.025, 3), interior = 4 * 3 * 0.025 * 0.025;
+        const double volumeRatio = meshVolume(model, mesh) / volume, interiorRatio = areaByMaterial(model, mesh)["concrete interior"] / interior;
+        std::printf("budget %lld: %lld triangles, volume x %.4f, broken face's area x %.4f\n", static_cast<long long>(budget),
+                    static_cast<long long>(triangles), volumeRatio, interiorRatio);
+        if (budget == 0) exactTriangles = triangles;
+        else {
+            EXPECT_LE(triangles, budget);
+            EXPECT_LT(triangles, exactTriangles / 3);
+        }
+        for (const auto& [edge, uses] : edgeUses(model, mesh)) ASSERT_EQ(uses, 2) << "edge " << edge.first << "-" << edge.second;
+        EXPECT_NEAR(volumeRatio, 1.0, 0.01);
+        EXPECT_NEAR(interiorRatio, 1.0, 0.05);
     }
 }

@@ -224,7 +224,9 @@ const char* kEveryKeyScene = R"({
                           "unit_length_m": 0.3, "unit_width_m": 0.1, "unit_height_m": 0.1, "joint_thickness_m": 0.012,
                           "unit_length_axis": "y", "unit_bond_pattern": "flemish", "unit_tensile_strength_Pa": 3e6, "unit_fracture_energy_J_per_m2": 60,
                           "unit_shear_strength_Pa": 2.5e6, "unit_friction_coefficient": 0.45,
-                          "compressive_strength_Pa": 3e7, "compressive_fracture_energy_J_per_m2": 20000},
+                          "compressive_strength_Pa": 3e7, "compressive_fracture_energy_J_per_m2": 20000,
+                          "colour_rgb": [0.3, 0.3, 0.25], "interior_colour_rgb": [0.4, 0.35, 0.3], "joint_colour_rgb": [0.5, 0.5, 0.45],
+                          "roughness": 0.8, "transmission": 0.25},
                 "oak": {"unit_length_m": 0, "youngs_modulus_Pa": 1e9, "grain_axis": "y", "along_grain_youngs_modulus_Pa": 12e9,
                         "along_grain_shear_modulus_Pa": 0.8e9, "along_grain_tensile_strength_Pa": 9e7,
                         "along_grain_fracture_energy_J_per_m2": 12000, "along_grain_shear_strength_Pa": 2e7,
@@ -245,7 +247,7 @@ const char* kEveryKeyScene = R"({
   "collisions": {"method": "buckets", "restitution": 0.3, "friction": 0.5, "solver_iterations": 20,
                  "penetration_tolerance_voxels": 0.5},
   "output": {"vdb": false, "fragment_grids": "fog", "level_set_subdivisions": 4, "level_set_smoothing_steps": 2,
-             "fracture_roughness_voxels": 0.1, "density_grid": false, "velocity_grid": true, "history": false, "checkpoint_every_s": 10}
+             "fracture_roughness_voxels": 0.1, "gltf_max_triangles_per_piece": 500, "density_grid": false, "velocity_grid": true, "history": false, "checkpoint_every_s": 10}
 })";
 
 /// Key paths of every leaf value, with list indices and material names as "*".

@@ -1,6 +1,7 @@
 """Build a Blender scene a lighting artist can start from, out of a spall run: the debris as solid
-pieces from OUTDIR/debris.glb (write it with `spall export gltf OUTDIR`), its two materials
-(`outer`, `fracture`), a ground, a sun, and a camera framing the action; Cycles on the CPU.
+pieces from OUTDIR/debris.glb (write it with `spall export gltf OUTDIR`) in its materials (per
+scene material `<name>`, `<name> interior` and for masonry `<name> joint`), the charges as empties,
+a ground, a sun, and a camera framing the action; Cycles on the CPU.
 
     blender -b --python tools/blender_import.py -- OUTDIR [--render FRAME OUT.png] [--save FILE.blend]
         [--check-history]

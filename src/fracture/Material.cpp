@@ -64,6 +64,19 @@ Material withDamping(Material m, double dampingRatio, const std::string& source)
     return m;
 }
 
+/// `m` with the look of its pieces: its own colour, a crack's through it (or through a unit) and,
+/// for masonry, the mortar's along a joint (linear RGB); chosen by eye, not measured.
+Material withLook(Material m, const Eigen::Vector3d& colourRgb, const Eigen::Vector3d& interiorColourRgb, const Eigen::Vector3d& jointColourRgb,
+                  double roughness, double transmission = 0.0)
+{
+    m.colourRgb = colourRgb;
+    m.interiorColourRgb = interiorColourRgb;
+    m.jointColourRgb = jointColourRgb;
+    m.roughness = roughness;
+    m.transmission = transmission;
+    return m;
+}
+
 /// `m` with bonds that scatter in strength, correlated over `correlationLengthM`, and the source.
 Material withScatter(Material m, double coefficientOfVariation, double correlationLengthM, const std::string& source)
 {
@@ -164,10 +177,12 @@ std::pair<double, double> mohrCoulombThrough(double compressiveStrengthPa, doubl
 /// adds half the compression: c = ft, μ = 0.5.
 Material glassPreset()
 {
-    return withDamping(withShear(withElasticity(calibrateMaterial("glass", 2500.0, 3.4e3, 6.9e3, "Clancey 1972: windows shatter at 3.4-6.9 kPa"),
+    const Material glass = withDamping(withShear(withElasticity(calibrateMaterial("glass", 2500.0, 3.4e3, 6.9e3, "Clancey 1972: windows shatter at 3.4-6.9 kPa"),
                                                 70e9, 0.2, 45e6, 8.0, "EN 572-1 (E, strength); Gf = KIc^2/E, KIc 0.75 MPa m^0.5"),
                                  45e6, 0.5, StrengthRateLaw::None, "Rankine (principal tension) linearised: c = ft, mu 0.5"),
                        0.001, "half the flexural loss factor of glass, 0.6-2 x 10^-3 (Cremer & Heckl 1988)");
+    // Clear float glass, its broken edges the green of the pane seen edge-on.
+    return withLook(glass, {0.80, 0.90, 0.87}, {0.35, 0.60, 0.50}, {0.35, 0.60, 0.50}, 0.05, 0.9);
 }
 
 /// Spruce, transversely isotropic about its grain (along z: a post): USDA Wood Handbook
@@ -195,10 +210,12 @@ Material woodPreset()
                      "along the grain: Wood Handbook tables 5-1 (E_L, G_LT) and 5-3a (modulus of rupture as tensile strength); "
                      "Ashby & Jones table 13.1 (Gf across the fibres); Kollmann & Cote 1968 (shear across the fibres)"),
                        0.005, "half the flexural loss factor of wood, about 10^-2 (Cremer & Heckl 1988)");
-    return withCrushing(wood, 4.0e6, kCrushingDuctilityM * 4.0e6,
+    // Weathered spruce outside, paler fresh wood where it splits.
+    return withLook(withCrushing(wood, 4.0e6, kCrushingDuctilityM * 4.0e6,
                         "Wood Handbook table 5-3a, Sitka spruce at 12 % moisture: 4.0 MPa across the grain, 38.7 MPa along it; "
                         "Gc from masonry's ductility index 1.6 mm (Lourenco 2008; no value for wood found)",
-                        38.7e6, kCrushingDuctilityM * 38.7e6);
+                        38.7e6, kCrushingDuctilityM * 38.7e6),
+                    {0.40, 0.24, 0.10}, {0.69, 0.45, 0.21}, {0.69, 0.45, 0.21}, 0.7);
 }
 
 /// Bricks in mortar. The joints (the material's own values): E = 1000 fk with fk 5 MPa (EN
@@ -213,14 +230,16 @@ Material woodPreset()
 /// may set it (docs/materials.md gives fk and Gc = 1.6 mm × fk, Lourenço 2008).
 Material brickMasonryPreset()
 {
-    return withDamping(withUnits(withShear(withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
+    // Red clay brick, its broken interior a paler orange, grey cement mortar in the joints.
+    return withLook(withDamping(withUnits(withShear(withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
                                                                 "Clancey 1972: unreinforced brick panels 8-12 in fail at 48.2-55.1 kPa"),
                                               5e9, 0.2, 0.3e6, 12.0, "EN 1996-1-1 (E = 1000 fk); van der Pluijm via Lourenco 1996 (bond strength, Gf)"),
                                0.3e6, 0.4, StrengthRateLaw::None, "EN 1996-1-1 table 3.4 and eq. 3.5 (fvko 0.3 MPa, 0.4 sigma_d)"),
                      0.215, 0.1025, 0.065, 0.01, 2.0e6, 80.0,
                      "215 x 102.5 x 65 mm bricks, 10 mm joints, running bond; potential cracks in units ft 2.0 MPa, Gf 80 J/m^2 "
                      "(Lourenco & Rots 1997, TU Eindhoven shear walls)"),
-                       0.03, "ENV 1998-6:2003 Annex B, brickwork 3-10 % (the lower end: joints and cracks are resolved)");
+                       0.03, "ENV 1998-6:2003 Annex B, brickwork 3-10 % (the lower end: joints and cracks are resolved)"),
+                    {0.45, 0.09, 0.047}, {0.54, 0.17, 0.08}, {0.48, 0.45, 0.38}, 0.9);
 }
 
 /// Concrete C30/37 with the given density and failure range: fib Model Code 2010 5.1: Eci =
@@ -244,7 +263,9 @@ Material c30ConcretePreset(const std::string& name, double densityKgM3, double f
                        0.3 / 1.645, 0.016,
                        "strength CoV 0.18 from EN 1992-1-1 table 3.1 (fctk,0.05 = 0.7 fctm), correlated over 16 mm (maximum aggregate size)"),
                        0.02, "ENV 1998-6:2003 Annex B, concrete elements 2-7 % (the lower end: cracks are resolved)");
-    return withCrushing(concrete, 38e6, 250.0 * 141.0, "fcm 38 MPa (fib MC2010, C30/37); Gc = 250 Gf (Rijkswaterstaat RTD 1016-1:2017)");
+    // Grey cast concrete; a crack shows the darker, rougher aggregate.
+    return withLook(withCrushing(concrete, 38e6, 250.0 * 141.0, "fcm 38 MPa (fib MC2010, C30/37); Gc = 250 Gf (Rijkswaterstaat RTD 1016-1:2017)"),
+                    {0.34, 0.34, 0.32}, {0.24, 0.23, 0.20}, {0.24, 0.23, 0.20}, 0.95);
 }
 
 /// Reinforced concrete: the same concrete (its steel is not modelled). Its failure range's high
@@ -322,6 +343,11 @@ const std::vector<Field<Material>>& fieldTable<Material>()
         {"along_grain_shear_strength_Pa", &Material::alongGrainShearStrengthPa, closed(0.0, 1e11)},
         {"along_grain_compressive_strength_Pa", &Material::alongGrainCompressiveStrengthPa, closed(0.0, 1e11)},
         {"along_grain_compressive_fracture_energy_J_per_m2", &Material::alongGrainCompressiveFractureEnergyJPerM2, closed(0.0, 1e8)},
+        {"colour_rgb", &Material::colourRgb, closed(0.0, 1.0)},
+        {"interior_colour_rgb", &Material::interiorColourRgb, closed(0.0, 1.0)},
+        {"joint_colour_rgb", &Material::jointColourRgb, closed(0.0, 1.0)},
+        {"roughness", &Material::roughness, closed(0.0, 1.0)},
+        {"transmission", &Material::transmission, closed(0.0, 1.0)},
     };
     return table;
 }
@@ -407,6 +433,11 @@ double acrossCoursesStrengthRatio(const Material& m)
     // ... or, over two courses, a unit and a head joint in tension.
     const double straightPa = (m.unitTensileStrengthPa + m.tensileStrengthPa) * m.unitHeightM / (2.0 * courseM);
     return std::min(steppedPa, straightPa) / m.tensileStrengthPa;
+}
+
+bool acrossJoint(const Material& m, const Eigen::Vector3d& aM, const Eigen::Vector3d& bM)
+{
+    return hasUnits(m) && masonryUnitOf(m, aM.x(), aM.y(), aM.z()) != masonryUnitOf(m, bM.x(), bM.y(), bM.z());
 }
 
 std::array<int64_t, 3> masonryUnitOf(const Material& m, double xM, double yM, double zM)

@@ -261,11 +261,10 @@ void Lattice::classifyUnitBonds(const Material& material)
         return;
     }
     // A voxel's centre where the object was voxelised: its index times h (Voxelise.cpp's transform).
-    const auto unitOf = [&](const openvdb::Coord& v) {
-        return masonryUnitOf(material, mModel.spacingM * v.x(), mModel.spacingM * v.y(), mModel.spacingM * v.z());
-    };
+    const auto centreOf = [&](const openvdb::Coord& v) -> Eigen::Vector3d { return Eigen::Vector3d(v.x(), v.y(), v.z()) * mModel.spacingM; };
     for (LatticeBond& bond : mModel.bonds)
-        if (bond.low < mModel.voxelParticleCount && bond.high < mModel.voxelParticleCount && unitOf(mModel.voxel[bond.low]) == unitOf(mModel.voxel[bond.high]))
+        if (bond.low < mModel.voxelParticleCount && bond.high < mModel.voxelParticleCount &&
+            !acrossJoint(material, centreOf(mModel.voxel[bond.low]), centreOf(mModel.voxel[bond.high])))
             bond.strengthClass = 1;
 }
 

@@ -131,12 +131,12 @@ void roughenFractureFaces(openvdb::FloatGrid& levelSet, const std::vector<VoxelF
 
 }  // namespace
 
-SurfaceMesh meshLevelSet(const openvdb::FloatGrid& levelSet)
+SurfaceMesh meshLevelSet(const openvdb::FloatGrid& levelSet, double adaptivity)
 {
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> triangles;
     std::vector<openvdb::Vec4I> quads;
-    openvdb::tools::volumeToMesh(levelSet, points, triangles, quads, 0.0, 0.0);
+    openvdb::tools::volumeToMesh(levelSet, points, triangles, quads, 0.0, adaptivity);
     SurfaceMesh mesh;
     mesh.pointsM.reserve(points.size());
     for (const openvdb::Vec3s& p : points) mesh.pointsM.emplace_back(p.x(), p.y(), p.z());

@@ -41,8 +41,8 @@ openvdb::Vec3d toVdb(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
 }  // namespace
 
-FrameWriter::FrameWriter(std::string outputDirectory, const OutputSettings& settings)
-    : mDirectory(std::move(outputDirectory)), mSettings(settings)
+FrameWriter::FrameWriter(std::string outputDirectory, const OutputSettings& settings, std::vector<Material> materials)
+    : mDirectory(std::move(outputDirectory)), mSettings(settings), mMaterials(std::move(materials))
 {
 }
 
@@ -62,6 +62,23 @@ openvdb::FloatTree::Ptr FrameWriter::intern(std::unordered_multimap<uint64_t, In
     return pool.emplace(hash, Interned{content, derive()})->second.derived;
 }
 
+namespace {
+
+/// Whether the broken face of `voxel` runs along a joint of its masonry.
+bool acrossJoint(const Material& material, const openvdb::Coord& voxel, int face, double voxelSizeM)
+{
+    const openvdb::Coord other = voxel + faceOffset(face);
+    return spall::acrossJoint(material, Eigen::Vector3d(voxel.x(), voxel.y(), voxel.z()) * voxelSizeM,
+                              Eigen::Vector3d(other.x(), other.y(), other.z()) * voxelSizeM);
+}
+
+}  // namespace
+
+const Material* FrameWriter::materialOf(const Body& body) const
+{
+    return body.materialIndex >= 0 && size_t(body.materialIndex) < mMaterials.size() ? &mMaterials[body.materialIndex] : nullptr;
+}
+
 const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
 {
     auto found = mByBody.find(body.id);
@@ -77,11 +94,14 @@ const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
         openvdb::tree::ValueAccessor<openvdb::FloatTree> out(*voxels), fractured(*fractureFaces);
         for (auto it = body.grid->constTree().cbeginValueOn(); it; ++it) out.setValueOn(it.getCoord() - trees.originIjk, 1.0f);
         auto links = body.grid->getConstAccessor();
+        const Material* material = materialOf(body);
         for (const ExposedFace& f : body.exposedFaces) {
             const openvdb::Coord shifted = f.voxel - trees.originIjk;
             const bool broken = brokenFaceBits(links.getValue(f.voxel)) & (1 << f.face);
             faces.push_back({shifted, f.face, broken});
-            if (broken) fractured.setValueOn(shifted, float(int(fractured.getValue(shifted)) | (1 << f.face)));
+            if (!broken) continue;
+            const int bits = (1 << f.face) | (material && acrossJoint(*material, f.voxel, f.face, body.voxelSizeM) ? 1 << (kJointFaceBit + f.face) : 0);
+            fractured.setValueOn(shifted, float(int(fractured.getValue(shifted)) | bits));
         }
     }
     const uint64_t shapeHash = contentHash(*voxels), fractureHash = contentHash(*fractureFaces);
@@ -131,6 +151,7 @@ openvdb::GridBase::Ptr FrameWriter::fragmentGrid(const FrameInfo& info, const Bo
     const Eigen::Quaterniond& q = body.motion.orientation;
     grid->insertMeta("orientation_xyzw", openvdb::Vec4DMetadata(openvdb::Vec4d(q.x(), q.y(), q.z(), q.w())));
     grid->insertMeta("anchored", openvdb::BoolMetadata(body.anchored));
+    if (const Material* material = materialOf(body)) grid->insertMeta("material", openvdb::StringMetadata(material->name));
     return grid;
 }
 

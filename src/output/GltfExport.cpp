@@ -6,6 +6,7 @@
 #include <spall/output/FragmentSurface.h>
 #include <spall/output/FrameWriter.h>
 #include <spall/output/RunCharges.h>
+#include <spall/scene/Scene.h>
 #include <spall/voxel/VdbIo.h>
 #include <spall/voxel/LinkBits.h>
 
@@ -18,6 +19,7 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <unordered_map>
 
 namespace spall {
@@ -32,9 +34,16 @@ Eigen::Quaternionf toYUp(const Eigen::Quaterniond& q)
     return Eigen::Quaternionf(float(q.w()), float(q.x()), float(q.z()), float(-q.y())).normalized();
 }
 
+/// The surfaces a piece's triangles show, each a glTF material of the piece's own material.
+enum Surface { kOuterSurface, kInteriorSurface, kJointSurface, kSurfaceCount };
+const char* const kSurfaceSuffix[kSurfaceCount] = {"", " interior", " joint"};
+
 struct PieceMesh {
     std::vector<Eigen::Vector3f> positions;  ///< body frame, pivot at the centre of mass, Y-up (unit: m)
-    std::vector<uint32_t> outer, fracture;   ///< triangles, counter-clockwise seen from outside
+    /// Triangles, counter-clockwise seen from outside, by surface: the object's own, a crack
+    /// through the material (or through a masonry unit), a crack along a joint.
+    std::array<std::vector<uint32_t>, kSurfaceCount> triangles;
+    std::string material;                    ///< the scene material's name; "" when the frames do not say
 };
 
 struct Pose {
@@ -57,6 +66,7 @@ struct FragmentPose {
     Eigen::Vector3d centreOfMassM;
     Eigen::Quaterniond orientation;
     double voxelSizeM;
+    std::string material;
 };
 
 FragmentPose poseOf(const openvdb::GridBase& grid, const std::string& path)
@@ -64,18 +74,20 @@ FragmentPose poseOf(const openvdb::GridBase& grid, const std::string& path)
     try {
         const openvdb::Vec3d c = grid.metaValue<openvdb::Vec3d>("centre_of_mass_m");
         const openvdb::Vec4d q = grid.metaValue<openvdb::Vec4d>("orientation_xyzw");
+        const auto material = grid.getMetadata<openvdb::StringMetadata>("material");
         return {grid.metaValue<int64_t>("body_id"), static_cast<uint64_t>(grid.metaValue<int64_t>("mesh_key")), {c.x(), c.y(), c.z()},
-                Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized(), grid.metaValue<double>("voxel_size_m")};
+                Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized(), grid.metaValue<double>("voxel_size_m"),
+                material ? material->value() : std::string()};
     } catch (const std::exception& e) {
         throw InputError(path + ": " + grid.getName() + ": metadata of a spall frame missing (" + e.what() + ")");
     }
 }
 
-/// Whether a mesh triangle lies on a fracture face: the face is that of its normal's largest
-/// component in the body's axes, the voxel the one 0.45 voxel inward from its centroid along that
-/// axis (stepping along the axis, not the tilted normal, keeps a rough face's rim in its voxel).
-bool onFractureFace(const openvdb::FloatGrid& fractureFaces, const Eigen::Vector3d& centroidWorld, const Eigen::Vector3d& normalWorld,
-                    const Eigen::Matrix3d& worldToBody)
+/// The surface a mesh triangle shows: that of its normal's largest component in the body's axes,
+/// of the voxel 0.45 voxel inward from its centroid along that axis (stepping along the axis, not
+/// the tilted normal, keeps a rough face's rim in its voxel), from its bits in fracture_faces.
+Surface surfaceOf(const openvdb::FloatGrid& fractureFaces, const Eigen::Vector3d& centroidWorld, const Eigen::Vector3d& normalWorld,
+                  const Eigen::Matrix3d& worldToBody)
 {
     const Eigen::Vector3d n = worldToBody * normalWorld;
     int axis = 0;
@@ -84,17 +96,39 @@ bool onFractureFace(const openvdb::FloatGrid& fractureFaces, const Eigen::Vector
     openvdb::Vec3d inside = fractureFaces.transform().worldToIndex(openvdb::Vec3d(centroidWorld.x(), centroidWorld.y(), centroidWorld.z()));
     inside[axis] -= 0.45 * faceSign(face);
     // Voxel centres lie at integer indices: round (OpenVDB's "node-centred" floors).
-    return (int(fractureFaces.tree().getValue(openvdb::Coord::round(inside))) >> face) & 1;
+    const int bits = int(fractureFaces.tree().getValue(openvdb::Coord::round(inside)));
+    if (!((bits >> face) & 1)) return kOuterSurface;
+    return (bits >> (kJointFaceBit + face)) & 1 ? kJointSurface : kInteriorSurface;
 }
 
 /// The fragment's level set meshed (adaptivity 0) in its body frame, triangles split by material.
-PieceMesh meshPiece(const openvdb::FloatGrid& levelSet, const openvdb::FloatGrid* fractureFaces, const FragmentPose& pose)
+/// The level set meshed exactly, or where that passes `maxTriangles` (0: no limit) at the least
+/// adaptivity that fits, found to 1/64 by bisection (at most 1, which may still not fit): the
+/// least merging keeps the most of the shape.
+SurfaceMesh meshWithin(const openvdb::FloatGrid& levelSet, int64_t maxTriangles)
 {
-    const SurfaceMesh surface = meshLevelSet(levelSet);
+    SurfaceMesh exact = meshLevelSet(levelSet);
+    if (maxTriangles <= 0 || int64_t(exact.triangles.size()) <= maxTriangles) return exact;
+    double fits = 1.0, tooMany = 0.0;
+    SurfaceMesh best = meshLevelSet(levelSet, fits);
+    if (int64_t(best.triangles.size()) > maxTriangles) return best;
+    for (int i = 0; i < 6; ++i) {
+        const double adaptivity = 0.5 * (fits + tooMany);
+        SurfaceMesh mesh = meshLevelSet(levelSet, adaptivity);
+        if (int64_t(mesh.triangles.size()) <= maxTriangles) fits = adaptivity, best = std::move(mesh);
+        else tooMany = adaptivity;
+    }
+    return best;
+}
+
+PieceMesh meshPiece(const openvdb::FloatGrid& levelSet, const openvdb::FloatGrid* fractureFaces, const FragmentPose& pose, int64_t maxTriangles)
+{
+    const SurfaceMesh surface = meshWithin(levelSet, maxTriangles);
     const std::vector<Eigen::Vector3d>& world = surface.pointsM;
     const bool flip = surface.signedVolumeM3() < 0.0;  // glTF wants triangles wound outward
     const Eigen::Matrix3d worldToBody = pose.orientation.toRotationMatrix().transpose();
     PieceMesh mesh;
+    mesh.material = pose.material;
     mesh.positions.reserve(world.size());
     for (const Eigen::Vector3d& p : world) mesh.positions.push_back(toYUp(worldToBody * (p - pose.centreOfMassM)));
     for (auto t : surface.triangles) {
@@ -102,9 +136,8 @@ PieceMesh meshPiece(const openvdb::FloatGrid& levelSet, const openvdb::FloatGrid
         const Eigen::Vector3d normal = (world[t[1]] - world[t[0]]).cross(world[t[2]] - world[t[0]]);
         if (normal.norm() < 1e-12 * pose.voxelSizeM * pose.voxelSizeM) continue;  // degenerate
         const Eigen::Vector3d centroid = (world[t[0]] + world[t[1]] + world[t[2]]) / 3.0;
-        const bool fracture = fractureFaces && onFractureFace(*fractureFaces, centroid, normal.normalized(), worldToBody);
-        std::vector<uint32_t>& indices = fracture ? mesh.fracture : mesh.outer;
-        indices.insert(indices.end(), t.begin(), t.end());
+        const Surface surface = fractureFaces ? surfaceOf(*fractureFaces, centroid, normal.normalized(), worldToBody) : kOuterSurface;
+        mesh.triangles[surface].insert(mesh.triangles[surface].end(), t.begin(), t.end());
     }
     return mesh;
 }
@@ -161,36 +194,50 @@ private:
     tinygltf::Model& mModel;
 };
 
-int addMaterial(tinygltf::Model& model, const std::string& name, std::vector<double> colour, double roughness)
+/// The glTF material of a scene material's surface: its colour, the interior's or the joint's;
+/// glass lets light through (KHR_materials_transmission).
+int addMaterial(tinygltf::Model& model, const Material& material, Surface surface)
 {
+    const Eigen::Vector3d& colour = surface == kOuterSurface ? material.colourRgb : surface == kJointSurface ? material.jointColourRgb : material.interiorColourRgb;
     tinygltf::Material m;
-    m.name = name;
-    m.pbrMetallicRoughness.baseColorFactor = std::move(colour);
+    m.name = material.name + kSurfaceSuffix[surface];
+    m.pbrMetallicRoughness.baseColorFactor = {colour.x(), colour.y(), colour.z(), 1.0};
     m.pbrMetallicRoughness.metallicFactor = 0.0;
-    m.pbrMetallicRoughness.roughnessFactor = roughness;
+    // A fresh break is rougher than a weathered or glazed face (glass's edges stay fairly smooth).
+    m.pbrMetallicRoughness.roughnessFactor = surface == kOuterSurface ? material.roughness : std::min(1.0, material.roughness + 0.25);
+    if (material.transmission > 0) {
+        m.extensions["KHR_materials_transmission"] = tinygltf::Value(tinygltf::Value::Object{{"transmissionFactor", tinygltf::Value(material.transmission)}});
+        if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), "KHR_materials_transmission") == model.extensionsUsed.end())
+            model.extensionsUsed.push_back("KHR_materials_transmission");
+    }
     model.materials.push_back(m);
     return int(model.materials.size()) - 1;
 }
 
-void addMeshes(tinygltf::Model& model, BufferPacker& packer, const std::vector<PieceMesh>& pieces, GltfExportReport& report)
+/// Each piece a mesh with a primitive per surface it shows, in its material's looks (`looks`:
+/// a scene material by name).
+void addMeshes(tinygltf::Model& model, BufferPacker& packer, const std::vector<PieceMesh>& pieces,
+               const std::function<Material(const std::string&)>& looks, GltfExportReport& report)
 {
-    const int outer = addMaterial(model, "outer", {0.62, 0.36, 0.28, 1.0}, 0.85);
-    const int fracture = addMaterial(model, "fracture", {0.80, 0.70, 0.60, 1.0}, 1.0);
+    std::map<std::pair<std::string, int>, int> materials;  // (material, surface) -> glTF material
     for (size_t i = 0; i < pieces.size(); ++i) {
         const PieceMesh& piece = pieces[i];
         tinygltf::Mesh mesh;
         mesh.name = "piece_" + std::to_string(i);
         const int positions = packer.vec3(piece.positions, TINYGLTF_TARGET_ARRAY_BUFFER);
-        for (const auto& [indices, material] : {std::pair{&piece.outer, outer}, std::pair{&piece.fracture, fracture}}) {
-            if (indices->empty()) continue;
+        for (int surface = 0; surface < kSurfaceCount; ++surface) {
+            const std::vector<uint32_t>& indices = piece.triangles[surface];
+            if (indices.empty()) continue;
+            auto [known, isNew] = materials.emplace(std::pair{piece.material, surface}, -1);
+            if (isNew) known->second = addMaterial(model, looks(piece.material), Surface(surface));
             tinygltf::Primitive primitive;
             primitive.attributes["POSITION"] = positions;
-            primitive.indices = packer.add(*indices, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, indices->size(),
+            primitive.indices = packer.add(indices, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, indices.size(),
                                            TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
-            primitive.material = material;
+            primitive.material = known->second;
             primitive.mode = TINYGLTF_MODE_TRIANGLES;
             mesh.primitives.push_back(primitive);
-            report.triangles += int64_t(indices->size() / 3);
+            report.triangles += int64_t(indices.size() / 3);
         }
         model.meshes.push_back(mesh);
     }
@@ -291,6 +338,26 @@ void addChargeNodes(tinygltf::Model& model, const std::vector<Charge>& charges, 
     report.charges = int(charges.size());
 }
 
+/// The scene the run in OUTDIR resolved (its scene.json), if it has one.
+std::optional<Scene> sceneOfRun(const std::string& outputDirectory)
+{
+    const std::string path = (std::filesystem::path(outputDirectory) / "scene.json").string();
+    if (!std::filesystem::exists(path)) return std::nullopt;
+    return loadScene(path);
+}
+
+/// A material's look by name: the run's scene's, else the preset's of that name, else a plain
+/// grey one named "unnamed" (frames that do not name their material).
+Material lookOf(const std::optional<Scene>& scene, const std::string& name)
+{
+    if (name.empty()) {
+        Material plain;
+        plain.name = "unnamed";
+        return plain;
+    }
+    return scene ? scene->material(name) : findMaterialPreset(name);
+}
+
 openvdb::io::File openFrame(const std::string& path)
 {
     openvdb::io::File file(path);
@@ -325,14 +392,14 @@ FramePoses readFramePoses(const std::string& path)
 }
 
 /// The piece of fragment `pose.id` as frame `path` holds it.
-PieceMesh readPiece(const std::string& path, const FragmentPose& pose)
+PieceMesh readPiece(const std::string& path, const FragmentPose& pose, int64_t maxTriangles)
 {
     openvdb::io::File file = openFrame(path);
     const std::string name = "fragment_" + std::to_string(pose.id), facesName = "fracture_faces_" + std::to_string(pose.id);
     const auto levelSet = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(name));
     if (!levelSet) throw InputError(path + ": " + name + " is not a float grid");
     const auto faces = file.hasGrid(facesName) ? openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(facesName)) : nullptr;
-    return meshPiece(*levelSet, faces.get(), pose);
+    return meshPiece(*levelSet, faces.get(), pose, maxTriangles);
 }
 
 }  // namespace
@@ -352,7 +419,7 @@ GltfExportReport exportGltf(const std::string& outputDirectory, const std::strin
     });
     std::vector<float> frameTimes;
     std::map<int64_t, Track> tracks;
-    std::unordered_map<uint64_t, int> meshByKey;
+    std::map<std::pair<uint64_t, std::string>, int> meshByKey;  // (mesh_key, material): a shape in each material
     std::vector<std::pair<size_t, FragmentPose>> firstOfEachMesh;  // (frame, fragment)
     for (size_t f = 0; f < frames.size(); ++f) {
         frameTimes.push_back(frames[f].timeS);
@@ -360,7 +427,7 @@ GltfExportReport exportGltf(const std::string& outputDirectory, const std::strin
             Track& track = tracks[pose.id];
             if (track.firstFrame < 0) {
                 track.firstFrame = int(f);
-                auto [found, isNew] = meshByKey.emplace(pose.meshKey, int(firstOfEachMesh.size()));
+                auto [found, isNew] = meshByKey.emplace(std::pair{pose.meshKey, pose.material}, int(firstOfEachMesh.size()));
                 if (isNew) firstOfEachMesh.push_back({f, pose});
                 track.mesh = found->second;
             }
@@ -369,8 +436,13 @@ GltfExportReport exportGltf(const std::string& outputDirectory, const std::strin
         }
     }
     if (tracks.empty()) throw InputError(outputDirectory + ": the frames hold no fragments");
+    std::map<std::string, Material> looks;
+    for (const auto& [frame, pose] : firstOfEachMesh) looks.emplace(pose.material, Material());
+    const std::optional<Scene> scene = sceneOfRun(outputDirectory);
+    for (auto& [name, material] : looks) material = lookOf(scene, name);
+    const int64_t maxTriangles = scene ? scene->output.gltfMaxTrianglesPerPiece : OutputSettings().gltfMaxTrianglesPerPiece;
     std::vector<PieceMesh> pieces(firstOfEachMesh.size());
-    forEachIndex(pieces.size(), [&](size_t i) { pieces[i] = readPiece(paths[firstOfEachMesh[i].first], firstOfEachMesh[i].second); });
+    forEachIndex(pieces.size(), [&](size_t i) { pieces[i] = readPiece(paths[firstOfEachMesh[i].first], firstOfEachMesh[i].second, maxTriangles); });
 
     GltfExportReport report;
     report.frames = int(paths.size());
@@ -379,7 +451,7 @@ GltfExportReport exportGltf(const std::string& outputDirectory, const std::strin
     model.asset.version = "2.0";
     model.asset.generator = std::string("spall ") + SPALL_VERSION;
     BufferPacker packer(model);
-    addMeshes(model, packer, pieces, report);
+    addMeshes(model, packer, pieces, [&](const std::string& name) { return looks.at(name); }, report);
     addNodes(model, packer, tracks, frameTimes, report);
     addChargeNodes(model, chargesOfRun(outputDirectory), report);
     writeFileAtomically(glbPath, [&](std::ostream& out) {

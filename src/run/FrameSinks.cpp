@@ -15,7 +15,10 @@ namespace {
 
 class VdbSink : public FrameSink {
 public:
-    VdbSink(const std::string& directory, const OutputSettings& settings) : mWriter(directory, settings) {}
+    VdbSink(const std::string& directory, const OutputSettings& settings, std::vector<Material> materials)
+        : mWriter(directory, settings, std::move(materials))
+    {
+    }
     void write(const Simulation&, const FrameStamp& frame) override { mWriter.write({frame.frame, frame.timeS}, frame.bodies); }
     void finish(const RunEnd&) override {}
 
@@ -146,9 +149,9 @@ private:
 
 }  // namespace
 
-std::unique_ptr<FrameSink> makeVdbSink(const std::string& directory, const OutputSettings& settings)
+std::unique_ptr<FrameSink> makeVdbSink(const std::string& directory, const OutputSettings& settings, std::vector<Material> materials)
 {
-    return std::make_unique<VdbSink>(directory, settings);
+    return std::make_unique<VdbSink>(directory, settings, std::move(materials));
 }
 
 std::unique_ptr<FrameSink> makeHistorySink(std::unique_ptr<HistoryWriter> writer, const Simulation& sim)

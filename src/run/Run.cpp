@@ -32,7 +32,7 @@ std::vector<std::unique_ptr<FrameSink>> frameSinks(const Simulation& sim, const 
 {
     const OutputSettings& output = sim.scene().output;
     std::vector<std::unique_ptr<FrameSink>> sinks;
-    if (output.vdb) sinks.push_back(makeVdbSink(options.outputDirectory, output));
+    if (output.vdb) sinks.push_back(makeVdbSink(options.outputDirectory, output, sim.scene().materials));
     if (history) sinks.push_back(makeHistorySink(std::move(history), sim));
     if (!options.previewPath.empty() && options.previewFrames > 0)
         sinks.push_back(makePreviewSink(options.previewPath, options.previewFrames, frameCount, sim.scene(), options.outputDirectory));

@@ -4,6 +4,8 @@
 #include <spall/core/EnumNames.h>
 #include <spall/core/Fields.h>
 
+#include <Eigen/Core>
+
 #include <array>
 #include <cstdint>
 #include <string>
@@ -119,6 +121,13 @@ struct Material {
     double alongGrainShearStrengthPa = 0.0;          ///< shear across the fibres (unit: Pa)
     double alongGrainCompressiveStrengthPa = 0.0;    ///< crushing along the fibres (unit: Pa)
     double alongGrainCompressiveFractureEnergyJPerM2 = 0.0;  ///< (unit: J/m^2)
+    // The look of its pieces (the glTF's materials, docs/vfx.md): colours are linear RGB in
+    // [0, 1], glTF's baseColorFactor; an artistic choice per preset, not a measurement.
+    Eigen::Vector3d colourRgb = Eigen::Vector3d(0.45, 0.45, 0.45);          ///< its own surface (unit: 1)
+    Eigen::Vector3d interiorColourRgb = Eigen::Vector3d(0.35, 0.35, 0.35);  ///< a crack through it, or through a unit (unit: 1)
+    Eigen::Vector3d jointColourRgb = Eigen::Vector3d(0.45, 0.43, 0.38);     ///< a crack along a joint: the mortar (unit: 1)
+    double roughness = 0.9;     ///< glTF's roughnessFactor (unit: 1)
+    double transmission = 0.0;  ///< light passing through (KHR_materials_transmission; glass) (unit: 1)
     /// Where the numbers come from.
     std::string source;
 };
@@ -142,6 +151,11 @@ FieldProblem structureProblem(const Material& m);
 /// The unit a point lies in, as its indices (along the length axis, across it, course), for a
 /// material built of units; the point in the object's world frame at voxelisation (unit: m).
 std::array<int64_t, 3> masonryUnitOf(const Material& material, double xM, double yM, double zM);
+
+/// Whether two points (the object's frame at voxelisation, unit: m) lie in different units of a
+/// material built of units: a bond or a crack between them runs through a joint. False for a
+/// material without units.
+bool acrossJoint(const Material& material, const Eigen::Vector3d& aM, const Eigen::Vector3d& bM);
 
 /// Whether particles of this size resolve a masonry material's units: no taller than a course
 /// (else it is homogenised masonry: acrossCoursesStrengthRatio).

@@ -52,7 +52,9 @@ struct SurfaceMesh {
     double signedVolumeM3() const;
     double areaM2() const;
 };
-SurfaceMesh meshLevelSet(const openvdb::FloatGrid& levelSet);
+/// The level set's zero crossing meshed by OpenVDB's volume-to-mesh, at `adaptivity` (0 exact,
+/// up to 1: flat regions merged into larger polygons).
+SurfaceMesh meshLevelSet(const openvdb::FloatGrid& levelSet, double adaptivity = 0.0);
 
 /// The voxels' index-to-world map, from the level set's (the inverse of levelSetTransform).
 openvdb::math::Transform::Ptr voxelTransformOf(const openvdb::math::Transform& levelSetTransform, int subdivisions);

@@ -31,9 +31,16 @@ struct FrameInfo {
 /// new bodies) and each tree starts at index (0,0,0) with the offset in its transform, so bodies of
 /// the same shape — debris is full of single voxels — share one tree, which the file stores once
 /// (OpenVDB instancing).
+/// Bits of a `fracture_faces_<id>` voxel's value: 1 << face for each of its faces that broke
+/// (voxel/LinkBits.h Face), and 1 << (kJointFaceBit + face) for those of them that run along a
+/// masonry joint (the voxels either side lie in different units).
+constexpr int kJointFaceBit = 6;
+
 class FrameWriter {
 public:
-    FrameWriter(std::string outputDirectory, const OutputSettings& settings);
+    /// `materials`: each body's material (Body::materialIndex), named in the fragments' metadata;
+    /// a masonry material's broken faces across a joint are marked as such in fracture_faces.
+    FrameWriter(std::string outputDirectory, const OutputSettings& settings, std::vector<Material> materials = {});
     /// Returns the path written.
     std::string write(const FrameInfo& info, const std::vector<Body>& bodies);
     static std::string framePath(const std::string& directory, int frame);
@@ -54,12 +61,14 @@ private:
         openvdb::FloatTree::Ptr derived;  ///< what is written (the content itself, or its level set)
     };
     const FragmentTrees& treesOf(const Body& body);
+    const Material* materialOf(const Body& body) const;
     static openvdb::FloatTree::Ptr intern(std::unordered_multimap<uint64_t, Interned>& pool, const openvdb::FloatTree::Ptr& content,
                                           uint64_t hash, const std::function<openvdb::FloatTree::Ptr()>& derive);
     openvdb::GridBase::Ptr fragmentGrid(const FrameInfo& info, const Body& body, const FragmentTrees& trees,
                                         const openvdb::math::Transform::Ptr& voxelMap) const;
     std::string mDirectory;
     OutputSettings mSettings;
+    std::vector<Material> mMaterials;
     std::unordered_map<int64_t, FragmentTrees> mByBody;
     std::unordered_multimap<uint64_t, Interned> mShapes, mFractureFaces;
 };

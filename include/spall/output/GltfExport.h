@@ -19,10 +19,12 @@ struct GltfExportReport {
 };
 
 /// Reads OUTDIR's level-set frames and writes `glbPath` (under a temporary name, then renamed):
-/// - per distinct mesh_key, the fragment's level set meshed by OpenVDB's volume-to-mesh
-///   (adaptivity 0), in the body's frame with the pivot at its centre of mass, as up to two
-///   primitives: material `outer` (the object's own surface) and `fracture` (faces whose links
-///   broke, from fracture_faces_<id>); no normals, so readers shade it flat;
+/// - per distinct mesh_key and material, the fragment's level set meshed by OpenVDB's
+///   volume-to-mesh (exactly, or adaptively within output.gltf_max_triangles_per_piece of the run's
+///   scene.json), in the body's frame with the pivot at its centre of mass, as up to three
+///   primitives in the scene material's looks: `<material>` (the object's own surface),
+///   `<material> interior` and `<material> joint` (faces whose links broke, through the material
+///   or along a masonry joint, from fracture_faces_<id>); no normals, so readers shade it flat;
 /// - per fragment, a node `fragment_<id>` whose translation and rotation are sampled at every frame
 ///   it lives (LINEAR), with scale 1 while it lives and 0 before and after (STEP);
 /// - per charge in OUTDIR/scene.json, a node `charge_<i>` without a mesh, extras `tnt_kg`;

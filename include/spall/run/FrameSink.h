@@ -40,7 +40,8 @@ public:
 };
 
 /// fragments.NNNN.vdb in `directory`, as output settings say (output/FrameWriter.h).
-std::unique_ptr<FrameSink> makeVdbSink(const std::string& directory, const OutputSettings& settings);
+/// `materials`: the simulation's materials in order (Body::materialIndex), for the frames.
+std::unique_ptr<FrameSink> makeVdbSink(const std::string& directory, const OutputSettings& settings, std::vector<Material> materials);
 
 /// history.h5's rows: per-frame totals and per-body rows, with the fracture events and dust since
 /// the last frame; marked whole when the run completes.

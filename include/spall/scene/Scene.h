@@ -80,6 +80,10 @@ struct OutputSettings {
     /// breaks look rough while the object's own surface stays as modelled (0: flat; at most 0.2,
     /// so every voxel's centre stays on its side of the surface) (unit: voxel edges).
     double fractureRoughnessVoxels = 0.0;
+    /// Triangles a piece of the glTF may have: a piece over it is meshed adaptively (OpenVDB's
+    /// adaptivity, raised until it fits or reaches 1), which merges flat regions (0: every piece
+    /// exact) (unit: triangles).
+    int64_t gltfMaxTrianglesPerPiece = 1000;
     bool densityGrid = true;   ///< world-space `density` grid in each frame
     bool velocityGrid = false; ///< world-space `v` grid (velocity of the material there, m/s) beside `density`
     bool history = true;       ///< history.h5
