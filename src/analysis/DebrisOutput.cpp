@@ -165,7 +165,8 @@ Image densityPlot(const DebrisReport& report)
     std::string title = "hazardous fragment distance " + fixed(report.hazardousFragmentDistanceM) + " m  (sector " +
                         fixed(report.worstSectorHazardousFragmentDistanceM) + " m)";
     if (report.hazardousCount() == 0)
-        title = "no hazardous fragments (none reached " + fixed(report.settings.hazardousEnergyJ, 0) + " joules at impact)";
+        // The plot's font has no j: the hazard energy in newton metres.
+        title = "no hazardous fragments: every impact below " + fixed(report.settings.hazardousEnergyJ, 0) + " newton metres";
     else if (report.worstSectorHazardousFragmentDistanceM == 0)
         title = "hazardous fragments nowhere denser than 1 per " + fixed(report.settings.hazardousAreaM2) + " m2";
     // Densities span decades and the limit is far below the densest rings: a log axis shows both.

@@ -43,13 +43,22 @@ LoadingSpan loadingSpan(const std::vector<ObjectLoads>& objects, const BlastFiel
     return span;
 }
 
+/// An object's name as a key of loads.h5 and loads.vdb: '/' (an HDF5 path separator) made '_', and
+/// `_<index>` appended when an earlier object has it.
+std::string uniqueName(std::string name, size_t index, const std::vector<ObjectLoads>& earlier)
+{
+    std::replace(name.begin(), name.end(), '/', '_');
+    const auto taken = [&](const std::string& n) { return std::any_of(earlier.begin(), earlier.end(), [&](const ObjectLoads& o) { return o.name == n; }); };
+    return taken(name) ? name + "_" + std::to_string(index) : name;
+}
+
 std::vector<ObjectLoads> emptyLoads(const Simulation& simulation)
 {
     std::vector<ObjectLoads> objects;
     for (size_t i = 0; i < simulation.bodies().size(); ++i) {
         const Body& body = simulation.bodies()[i];
         ObjectLoads object;
-        object.name = simulation.scene().objects.at(i).name;
+        object.name = uniqueName(simulation.scene().objects.at(i).name, i, objects);
         object.voxelSizeM = body.voxelSizeM;
         object.indexToWorld = body.indexToWorld();
         object.orientation = body.motion.orientation;
@@ -137,7 +146,7 @@ bool waveArrives(const std::vector<std::vector<double>>& now, const std::vector<
 
 /// The axis direction whose faces took the most impulse, and the hand calculation at its face
 /// nearest a charge in scaled distance.
-FrontFace frontFaceOf(const ObjectLoads& object, const BlastField& field)
+FrontFace frontFaceOf(const ObjectLoads& object, const BlastField& field, size_t sceneCharges)
 {
     FrontFace front;
     double byDirection[6] = {};
@@ -152,7 +161,7 @@ FrontFace frontFaceOf(const ObjectLoads& object, const BlastField& field)
         sum += f.impulsePaS;
         front.maxImpulsePaS = std::max(front.maxImpulsePaS, f.impulsePaS);
         front.maxPeakPressurePa = std::max(front.maxPeakPressurePa, f.peakPressurePa);
-        for (size_t c = 0; c < charges.size(); ++c) {
+        for (size_t c = 0; c < sceneCharges; ++c) {  // the field's ground images follow them
             const double distanceM = (f.centreM - charges[c].positionM).norm();
             const double z = distanceM / std::cbrt(charges[c].tntKg * (charges[c].burst == BurstType::Surface ? 2.0 : 1.0));
             if (z >= nearestZ) continue;
@@ -179,8 +188,9 @@ StructureLoadsReport structureLoads(const Simulation& simulation, const std::fun
     const std::vector<Body>& bodies = simulation.bodies();
     StructureLoadsReport report;
     report.objects = emptyLoads(simulation);
-    for (const Charge& charge : field.charges()) report.chargesM.push_back(charge.positionM);
+    for (const Charge& charge : simulation.scene().charges) report.chargesM.push_back(charge.positionM);
     const LoadingSpan span = loadingSpan(report.objects, field);
+    if (!(span.endS > span.startS)) throw InputError(simulation.scene().sourceName + ": objects: none has a face the blast can load");
     // Impulses are exact over any step (loads/FacePulse.h); steps of 1/20 of the shortest
     // positive phase keep the split into positive and negative impulse sharp. Peaks are the
     // largest mean over a substep of 1/500 of it, taken where a wave arrives: the mean over the
@@ -206,7 +216,7 @@ StructureLoadsReport structureLoads(const Simulation& simulation, const std::fun
         if (onStep) onStep(k + 1, steps);
     }
     report.steps = steps;
-    for (ObjectLoads& object : report.objects) object.front = frontFaceOf(object, field);
+    for (ObjectLoads& object : report.objects) object.front = frontFaceOf(object, field, simulation.scene().charges.size());
     return report;
 }
 

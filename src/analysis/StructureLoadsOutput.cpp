@@ -143,6 +143,7 @@ FaceView faceView(const ObjectLoads& object)
 /// ringed and the charges as orange discs.
 Image frontFacePicture(const ObjectLoads& object, const std::vector<Eigen::Vector3d>& chargesM)
 {
+    if (object.front.faces == 0) return Image(900, 600);
     const FaceView view = faceView(object);
     const Eigen::Vector3d normal = object.orientation * faceNormal(object.front.face);
     const double h = object.voxelSizeM;

@@ -64,9 +64,13 @@ openvdb::FloatTree::Ptr FrameWriter::intern(std::unordered_multimap<uint64_t, In
 
 namespace {
 
-/// Whether the broken face of `voxel` runs along a joint of its masonry.
+/// Whether the broken face of `voxel` runs along a joint of its masonry. Voxels taller than a
+/// course do not resolve the units: then, as the lattice takes it (Lattice::classifyUnitBonds),
+/// faces across z are the bed joints' and the others homogenised masonry's.
 bool acrossJoint(const Material& material, const openvdb::Coord& voxel, int face, double voxelSizeM)
 {
+    if (!hasUnits(material)) return false;
+    if (!unitsResolvedBy(material, voxelSizeM)) return faceAxis(face) == 2;
     const openvdb::Coord other = voxel + faceOffset(face);
     return spall::acrossJoint(material, Eigen::Vector3d(voxel.x(), voxel.y(), voxel.z()) * voxelSizeM,
                               Eigen::Vector3d(other.x(), other.y(), other.z()) * voxelSizeM);

@@ -219,7 +219,10 @@ std::vector<std::pair<double, double>> drawSeries(Image& img, const PlotAxes& a,
         bool havePrevious = false;
         double previousX = 0, previousY = 0;
         for (size_t i = 0; i < s.x.size(); ++i) {
-            if (!a.usable(s.x[i], s.y[i])) continue;
+            if (!a.usable(s.x[i], s.y[i])) {
+                havePrevious = false;  // a gap, not a line across it
+                continue;
+            }
             const double cx = a.px(a.xValue(s.x[i])), cy = a.py(a.yValue(s.y[i]));
             if (havePrevious) {
                 img.line(previousX, previousY, cx, cy, colour, 2);

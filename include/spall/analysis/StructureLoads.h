@@ -46,7 +46,7 @@ struct FrontFace {
 };
 
 struct ObjectLoads {
-    std::string name;
+    std::string name;  ///< the object's, '/' made '_' and `_<index>` appended to a repeated one
     std::vector<FaceLoad> faces;       ///< body.exposedFaces order
     /// Sum over faces of both impulses times the face's area, pushing in (unit: N s).
     Eigen::Vector3d netImpulseNS = Eigen::Vector3d::Zero();
@@ -65,7 +65,8 @@ struct StructureLoadsReport {
 
 /// Steps the blast over the objects of a simulation that has not stepped (each body as its
 /// object was placed), held still, from the first arrival to the end of the last negative phase
-/// at any of them, in steps of 1/200 of the shortest positive phase they meet. `onStep(done,
+/// at any of them, in steps of 1/20 of the shortest positive phase they meet (peaks from substeps
+/// of 1/500 of it where a wave arrives). `onStep(done,
 /// total)` reports progress. Throws InputError when the scene has no charges.
 StructureLoadsReport structureLoads(const Simulation& simulation, const std::function<void(int64_t, int64_t)>& onStep = {});
 
