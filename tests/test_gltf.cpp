@@ -78,6 +78,26 @@ std::map<std::string, double> areaByMaterial(const tinygltf::Model& model, const
     return area;
 }
 
+/// An empty scratch directory of that name.
+std::string freshDirectory(const std::string& name)
+{
+    const std::string dir = (std::filesystem::temp_directory_path() / name).string();
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    return dir;
+}
+
+/// DIR's frames exported to DIR/debris.glb and read back (empty, and a failure, when it does not read).
+tinygltf::Model exportAndRead(const std::string& dir)
+{
+    exportGltf(dir, dir + "/debris.glb");
+    tinygltf::Model model;
+    tinygltf::TinyGLTF loader;
+    std::string error, warning;
+    EXPECT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, dir + "/debris.glb")) << error;
+    return model;
+}
+
 double meshVolume(const tinygltf::Model& model, const tinygltf::Mesh& mesh)
 {
     double volume = 0.0;
@@ -184,17 +204,11 @@ TEST(Gltf, FractureMaterialCoversExactlyTheFacesThatBroke)
                           Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()))),
             1);
         ASSERT_EQ(halves.size(), 2u);
-        const std::string dir = (std::filesystem::temp_directory_path() / "spall_test_gltf_fracture").string();
-        std::filesystem::remove_all(dir);
-        std::filesystem::create_directories(dir);
+        const std::string dir = freshDirectory("spall_test_gltf_fracture");
         OutputSettings settings;
         settings.fractureRoughnessVoxels = roughness;
         FrameWriter(dir, settings, {findMaterialPreset("concrete")}).write({0, 0.0}, halves);
-        exportGltf(dir, dir + "/debris.glb");
-        tinygltf::Model model;
-        tinygltf::TinyGLTF loader;
-        std::string error, warning;
-        ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, dir + "/debris.glb")) << error;
+        const tinygltf::Model model = exportAndRead(dir);
         ASSERT_EQ(model.meshes.size(), 2u);
         for (const tinygltf::Mesh& mesh : model.meshes) {
             std::map<std::string, double> area = areaByMaterial(model, mesh);
@@ -222,15 +236,9 @@ TEST(Gltf, AMasonryCrackShowsMortarAlongAJointAndBrickThroughAUnit)
         std::vector<Body> halves = splitBody(bar);
         ASSERT_EQ(halves.size(), 2u);
         for (size_t i = 0; i < halves.size(); ++i) halves[i].id = int64_t(i);
-        const std::string dir = (std::filesystem::temp_directory_path() / "spall_test_gltf_joint").string();
-        std::filesystem::remove_all(dir);
-        std::filesystem::create_directories(dir);
+        const std::string dir = freshDirectory("spall_test_gltf_joint");
         FrameWriter(dir, OutputSettings{}, {brick}).write({0, 0.0}, halves);
-        exportGltf(dir, dir + "/debris.glb");
-        tinygltf::Model model;
-        tinygltf::TinyGLTF loader;
-        std::string error, warning;
-        ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, dir + "/debris.glb")) << error;
+        const tinygltf::Model model = exportAndRead(dir);
         for (const tinygltf::Mesh& mesh : model.meshes) {
             std::map<std::string, double> area = areaByMaterial(model, mesh);
             EXPECT_NEAR(area[expected], 0.025 * 0.025, 1e-4 * 0.025 * 0.025) << mesh.name << " broken after voxel " << breakAfter;
@@ -286,22 +294,17 @@ TEST(Gltf, APieceOverItsTriangleBudgetIsMeshedAdaptivelyAndStaysAClosedSolid)
     ASSERT_EQ(parts.size(), 2u);
     for (size_t i = 0; i < parts.size(); ++i) parts[i].id = int64_t(i);
     const Body& brick = parts[0].mass.voxelCount == 9 * 4 * 3 ? parts[0] : parts[1];
-    const std::string dir = (std::filesystem::temp_directory_path() / "spall_test_gltf_budget").string();
+
     int64_t exactTriangles = 0;
     for (const int64_t budget : {int64_t{0}, int64_t{1000}}) {
-        std::filesystem::remove_all(dir);
-        std::filesystem::create_directories(dir);
+        const std::string dir = freshDirectory("spall_test_gltf_budget");
         Scene scene = parseScene(R"({"objects": [{"name": "b", "primitive": {"shape": "box", "size_m": [0.1, 0.1, 0.1]},
                                                    "position_m": [0, 0, 0.05], "material": "concrete"}],
                                       "charges": [{"position_m": [1, 0, 0.1], "tnt_kg": 1}]})", "budget", ".");
         scene.output.gltfMaxTrianglesPerPiece = budget;
         std::ofstream(dir + "/scene.json") << sceneToJson(scene).dump();
         FrameWriter(dir, OutputSettings{}, {findMaterialPreset("concrete")}).write({0, 0.0}, {brick});
-        exportGltf(dir, dir + "/debris.glb");
-        tinygltf::Model model;
-        tinygltf::TinyGLTF loader;
-        std::string error, warning;
-        ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, dir + "/debris.glb")) << error;
+        const tinygltf::Model model = exportAndRead(dir);
         ASSERT_EQ(model.meshes.size(), 1u);
         const tinygltf::Mesh& mesh = model.meshes[0];
         const int64_t triangles = triangleCount(model, mesh);

@@ -6,7 +6,7 @@
 #include <spall/core/Error.h>
 #include <spall/output/Png.h>
 #include <spall/output/FrameWriter.h>
-#include <spall/output/RunCharges.h>
+#include <spall/output/RunScene.h>
 #include <spall/voxel/VdbIo.h>
 #include <spall/render/Render.h>
 
@@ -50,7 +50,8 @@ int runRender(const std::string& outDir, int frame, bool all, bool sheet, std::s
               const CameraOptions& cameraOptions)
 {
     spall::RenderSettings settings = parseSize(size);
-    for (const spall::Charge& charge : spall::chargesOfRun(outDir)) settings.chargesM.push_back(charge.positionM);
+    if (const std::optional<spall::Scene> scene = spall::sceneOfRun(outDir))
+        for (const spall::Charge& charge : scene->charges) settings.chargesM.push_back(charge.positionM);
     const std::vector<std::string> paths = spall::listFramePaths(outDir);
     const spall::Camera camera = chooseCamera(paths, settings, cameraOptions);
     if (pictureDir.empty()) pictureDir = outDir;

@@ -3,6 +3,7 @@
 
 #include <spall/output/H5Out.h>
 #include <spall/output/Png.h>
+#include <spall/render/Render.h>
 #include <spall/voxel/LinkBits.h>
 #include <spall/voxel/VdbIo.h>
 
@@ -182,7 +183,7 @@ Image frontFacePicture(const ObjectLoads& object, const std::vector<Eigen::Vecto
     for (const Eigen::Vector3d& c : chargesM) {
         const int x = int(px((c - nearest.centreM).dot(view.right) / h)) + cell / 2, y = int(py((c - nearest.centreM).dot(view.up) / h)) + cell / 2;
         if (x < left || x > left + plotW || y < top || y > top + plotH) continue;
-        img.fillRect(x - 5, y - 5, x + 6, y + 6, {255, 110, 0});
+        img.fillRect(x - 5, y - 5, x + 6, y + 6, kChargeColour);
     }
     // Colour bar, 0 at the bottom.
     const int barX = left + plotW + 30;

@@ -5,8 +5,7 @@
 #include <spall/core/Parallel.h>
 #include <spall/output/FragmentSurface.h>
 #include <spall/output/FrameWriter.h>
-#include <spall/output/RunCharges.h>
-#include <spall/scene/Scene.h>
+#include <spall/output/RunScene.h>
 #include <spall/voxel/VdbIo.h>
 #include <spall/voxel/LinkBits.h>
 
@@ -215,9 +214,9 @@ int addMaterial(tinygltf::Model& model, const Material& material, Surface surfac
 }
 
 /// Each piece a mesh with a primitive per surface it shows, in its material's looks (`looks`:
-/// a scene material by name).
+/// the scene's materials by name).
 void addMeshes(tinygltf::Model& model, BufferPacker& packer, const std::vector<PieceMesh>& pieces,
-               const std::function<Material(const std::string&)>& looks, GltfExportReport& report)
+               const std::map<std::string, Material>& looks, GltfExportReport& report)
 {
     std::map<std::pair<std::string, int>, int> materials;  // (material, surface) -> glTF material
     for (size_t i = 0; i < pieces.size(); ++i) {
@@ -229,7 +228,7 @@ void addMeshes(tinygltf::Model& model, BufferPacker& packer, const std::vector<P
             const std::vector<uint32_t>& indices = piece.triangles[surface];
             if (indices.empty()) continue;
             auto [known, isNew] = materials.emplace(std::pair{piece.material, surface}, -1);
-            if (isNew) known->second = addMaterial(model, looks(piece.material), Surface(surface));
+            if (isNew) known->second = addMaterial(model, looks.at(piece.material), Surface(surface));
             tinygltf::Primitive primitive;
             primitive.attributes["POSITION"] = positions;
             primitive.indices = packer.add(indices, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, indices.size(),
@@ -338,14 +337,6 @@ void addChargeNodes(tinygltf::Model& model, const std::vector<Charge>& charges, 
     report.charges = int(charges.size());
 }
 
-/// The scene the run in OUTDIR resolved (its scene.json), if it has one.
-std::optional<Scene> sceneOfRun(const std::string& outputDirectory)
-{
-    const std::string path = (std::filesystem::path(outputDirectory) / "scene.json").string();
-    if (!std::filesystem::exists(path)) return std::nullopt;
-    return loadScene(path);
-}
-
 /// A material's look by name: the run's scene's, else the preset's of that name, else a plain
 /// grey one named "unnamed" (frames that do not name their material).
 Material lookOf(const std::optional<Scene>& scene, const std::string& name)
@@ -451,9 +442,9 @@ GltfExportReport exportGltf(const std::string& outputDirectory, const std::strin
     model.asset.version = "2.0";
     model.asset.generator = std::string("spall ") + SPALL_VERSION;
     BufferPacker packer(model);
-    addMeshes(model, packer, pieces, [&](const std::string& name) { return looks.at(name); }, report);
+    addMeshes(model, packer, pieces, looks, report);
     addNodes(model, packer, tracks, frameTimes, report);
-    addChargeNodes(model, chargesOfRun(outputDirectory), report);
+    addChargeNodes(model, scene ? scene->charges : std::vector<Charge>(), report);
     writeFileAtomically(glbPath, [&](std::ostream& out) {
         tinygltf::TinyGLTF writer;
         if (!writer.WriteGltfSceneToStream(&model, out, false, true)) throw IoError(glbPath + ": tinygltf could not write the model");
