@@ -84,6 +84,10 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"fracture_roughness_voxels": 0.3}})").find("output.fracture_roughness_voxels"),
               std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"fragment_grids": "fog", "debris_level_set": true}})")
+                  .find("output.debris_level_set: needs output.fragment_grids \"level_set\""),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"first_frame": -1}})").find("output.first_frame"), std::string::npos);
     {
         // 32 free-air charges above the ground are 64 with their images: more than weakening can tell apart.
         std::string charges;
@@ -247,7 +251,8 @@ const char* kEveryKeyScene = R"({
   "collisions": {"method": "buckets", "restitution": 0.3, "friction": 0.5, "solver_iterations": 20,
                  "penetration_tolerance_voxels": 0.5},
   "output": {"vdb": false, "fragment_grids": "fog", "level_set_subdivisions": 4, "level_set_smoothing_steps": 2,
-             "fracture_roughness_voxels": 0.1, "gltf_max_triangles_per_piece": 500, "density_grid": false, "velocity_grid": true, "history": false, "checkpoint_every_s": 10}
+             "fracture_roughness_voxels": 0.1, "gltf_max_triangles_per_piece": 500, "density_grid": false, "debris_level_set": false,
+             "first_frame": 1001, "velocity_grid": true, "history": false, "checkpoint_every_s": 10}
 })";
 
 /// Key paths of every leaf value, with list indices and material names as "*".

@@ -1,94 +1,30 @@
 """Build a Blender scene a lighting artist can start from, out of a spall run: the debris as solid
-pieces from OUTDIR/debris.glb (write it with `spall export gltf OUTDIR`) in its materials (per
-scene material `<name>`, `<name> interior` and for masonry `<name> joint`), the charges as empties,
-a ground, a sun, and a camera framing the action; Cycles on the CPU.
+pieces from OUTDIR/debris.glb (write it with `spall export gltf OUTDIR`) in its materials, or with
+--volumes as one mesh made by Volume to Mesh of the frames' `debris` level set (run the scene with
+"output": {"debris_level_set": true}); the charges as empties, a ground, a sun, and a camera framing
+the debris; Cycles on the CPU. The work is the add-on's (tools/blender/spall_blender/importer.py).
 
-    blender -b --python tools/blender_import.py -- OUTDIR [--render FRAME OUT.png] [--save FILE.blend]
-        [--check-history]
+    blender -b --python tools/blender_import.py -- OUTDIR [--volumes] [--render FRAME OUT.png]
+        [--save FILE.blend] [--check-history] [--check-volumes] [--check-framing]
 
---render renders one frame and exits non-zero if the picture is empty. --check-history compares
-every fragment's position at every frame with OUTDIR/history.h5 (within 1 mm) and exits non-zero
-on a difference. Debian's Blender 3.4: the glTF importer needs import_shading 'FLAT' or 'SMOOTH'
-(its default path uses np.bool, which Debian's numpy 1.24 no longer has), and Cycles needs
-use_denoising off (no OpenImageDenoise).
+--render renders one frame (numbered as the run's files are) and exits non-zero if the picture is
+empty. --check-history compares every fragment's position at every frame with OUTDIR/history.h5
+(within 1 mm); --check-volumes compares the volumes' mesh with the pieces at every frame (their
+boxes within two level-set samples: interpolating the distance cuts corners); --check-framing renders the debris alone and checks
+it fills the picture's middle and is not washed out. Each exits non-zero on a difference.
 """
-import json
 import os
 import sys
 
 import bpy
-from mathutils import Vector
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "blender"))
+from spall_blender import importer  # noqa: E402
 
 
 def fail(message):
     print(f"blender_import: {message}", file=sys.stderr)
     sys.exit(1)
-
-
-def import_debris(outdir):
-    glb = os.path.join(outdir, "debris.glb")
-    if not os.path.exists(glb):
-        fail(f"{glb} does not exist: write it with `spall export gltf {outdir}` (or `spall run --gltf`)")
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    with open(os.path.join(outdir, "scene.json")) as f:
-        spall_scene = json.load(f)
-    scene.render.fps = round(spall_scene["frame_rate_hz"])  # glTF keys are in seconds
-    bpy.ops.import_scene.gltf(filepath=glb, import_shading="FLAT")
-    pieces = [o for o in scene.objects if o.name.startswith("fragment_")]
-    if not pieces:
-        fail(f"{glb}: no fragment_<id> objects")
-    frames = [fc for o in pieces if o.animation_data and o.animation_data.action
-              for fc in o.animation_data.action.fcurves]
-    last = max((k.co.x for fc in frames for k in fc.keyframe_points), default=0)
-    scene.frame_start, scene.frame_end = 0, int(round(last))
-    return scene, pieces, spall_scene
-
-
-def bounds(scene, pieces, frame):
-    scene.frame_set(frame)
-    points = [o.matrix_world @ Vector(c) for o in pieces if o.matrix_world.to_scale().length > 1e-6 for c in o.bound_box]
-    lo = Vector((min(p.x for p in points), min(p.y for p in points), min(p.z for p in points)))
-    hi = Vector((max(p.x for p in points), max(p.y for p in points), max(p.z for p in points)))
-    return lo, hi
-
-
-def stage(scene, pieces):
-    """Ground, sun, sky and a camera that sees the debris at the start and at the end."""
-    lo0, hi0 = bounds(scene, pieces, scene.frame_start)
-    lo1, hi1 = bounds(scene, pieces, scene.frame_end)
-    lo = Vector((min(lo0.x, lo1.x), min(lo0.y, lo1.y), min(lo0.z, lo1.z)))
-    hi = Vector((max(hi0.x, hi1.x), max(hi0.y, hi1.y), max(hi0.z, hi1.z)))
-    centre, radius = (lo + hi) / 2, max((hi - lo).length / 2, 0.5)
-
-    bpy.ops.mesh.primitive_plane_add(size=radius * 8, location=(centre.x, centre.y, 0.0))
-    ground = bpy.context.active_object
-    ground.name = "ground"
-    ground_material = bpy.data.materials.new("ground")
-    ground_material.diffuse_color = (0.35, 0.36, 0.33, 1.0)
-    ground_material.use_nodes = True
-    ground_material.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.35, 0.36, 0.33, 1.0)
-    ground.data.materials.append(ground_material)
-
-    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
-    scene.collection.objects.link(camera)
-    camera.location = centre + Vector((-0.55, -1.0, 0.45)).normalized() * radius * 3.0
-    camera.rotation_euler = (centre - camera.location).to_track_quat("-Z", "Y").to_euler()
-    scene.camera = camera
-    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
-    sun.data.energy = 4.0
-    sun.rotation_euler = (0.7, 0.2, -0.6)
-    scene.collection.objects.link(sun)
-    scene.world = bpy.data.worlds.new("world")
-    scene.world.color = (0.6, 0.65, 0.75)
-
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = 16
-    scene.cycles.use_denoising = False  # Debian's Blender has no OpenImageDenoise
-    scene.render.resolution_x, scene.render.resolution_y = 480, 270
-    scene.render.image_settings.file_format = "PNG"
-    scene.render.image_settings.color_mode = "RGB"
 
 
 def check_history(outdir, scene, pieces):
@@ -103,7 +39,7 @@ def check_history(outdir, scene, pieces):
         fail(f"{len(by_name)} fragment objects, {len(set(ids.tolist()))} bodies in the history")
     worst = 0.0
     for f, t in enumerate(times):
-        scene.frame_set(int(round(t * scene.render.fps)))
+        scene.frame_set(scene.frame_start + int(round(t * scene.render.fps / scene.render.fps_base)))
         for row in range(offsets[f], offsets[f + 1]):
             o = by_name.get(f"fragment_{ids[row]}")
             if o is None:
@@ -114,26 +50,83 @@ def check_history(outdir, scene, pieces):
         fail(f"a fragment is {worst * 1e3:.3f} mm from where history.h5 puts it")
 
 
+def check_volumes(outdir, scene, pieces, debris):
+    """At every frame the volumes' mesh spans the box the pieces' meshes span: a sequence a frame
+    behind, or a piece missing, is off by its motion or its size."""
+    spall_scene = importer.run_scene(outdir)
+    sample = spall_scene["voxel_size_m"] / spall_scene["output"]["level_set_subdivisions"]
+    worst = 0.0
+    for frame in range(scene.frame_start, scene.frame_end + 1):
+        scene.frame_set(frame)
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        points = importer.world_points(debris, depsgraph)
+        if not points:
+            fail(f"frame {frame}: the volumes' mesh is empty")
+        shown = [p for o in pieces if o.matrix_world.to_scale().length > 1e-6 for p in importer.world_points(o, depsgraph)]
+        (lo, hi), (plo, phi) = importer.box_of(points), importer.box_of(shown)
+        worst = max(worst, max((lo - plo).length, (hi - phi).length))
+    print(f"blender_import: the volumes' mesh over {scene.frame_end - scene.frame_start + 1} frames, "
+          f"largest difference from the pieces' box {worst * 1e3:.1f} mm (a sample is {sample * 1e3:.1f} mm)")
+    if worst > 2 * sample:
+        fail(f"the volumes' mesh is {worst * 1e3:.1f} mm from the pieces: the sequence does not play with the glTF")
+
+
+def render(scene, frame, path):
+    scene.frame_set(frame)
+    scene.render.filepath = os.path.abspath(path)
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(scene.render.filepath)
+    pixels = list(image.pixels)
+    bpy.data.images.remove(image)
+    return pixels
+
+
+def check_framing(scene, frame, path):
+    """The debris alone (no ground, a transparent sky): its pixels' box is centred in the picture
+    and spans at least a third of it, and in the full render under 5 % of them are clipped white."""
+    ground = bpy.data.objects["ground"]
+    ground.hide_render, scene.render.film_transparent = True, True
+    alpha = render(scene, frame, path)[3::4]
+    ground.hide_render, scene.render.film_transparent = False, False
+    width, height = scene.render.resolution_x, scene.render.resolution_y
+    covered = [i for i, a in enumerate(alpha) if a > 0.5]
+    if not covered:
+        fail("no debris in the picture")
+    xs, ys = [i % width for i in covered], [i // width for i in covered]
+    centre = ((min(xs) + max(xs)) / 2 / width, (min(ys) + max(ys)) / 2 / height)
+    span = max((max(xs) - min(xs)) / width, (max(ys) - min(ys)) / height)
+    colour = render(scene, frame, path)
+    clipped = sum(1 for i in covered if min(colour[4 * i:4 * i + 3]) > 0.98) / len(covered)
+    print(f"blender_import: debris spans {span:.2f} of the picture, centred at ({centre[0]:.2f}, {centre[1]:.2f}), "
+          f"{clipped * 100:.1f} % of its pixels clipped")
+    if not (0.3 <= centre[0] <= 0.7 and 0.3 <= centre[1] <= 0.7) or span < 1 / 3 or clipped > 0.05:
+        fail("the camera does not frame the debris, or the light washes it out")
+
+
 def main(argv):
     if not argv:
-        fail("usage: blender -b --python blender_import.py -- OUTDIR [--render FRAME OUT.png] [--save FILE.blend] [--check-history]")
+        fail("usage: blender -b --python blender_import.py -- OUTDIR [--volumes] [--render FRAME OUT.png] [--save FILE.blend] "
+             "[--check-history] [--check-volumes] [--check-framing]")
     outdir = os.path.abspath(argv[0])
-    scene, pieces, _ = import_debris(outdir)
+    try:
+        scene, pieces, debris = importer.build(outdir, volumes="--volumes" in argv or "--check-volumes" in argv)
+    except importer.ImportFailed as e:
+        fail(str(e))
     if "--check-history" in argv:
         check_history(outdir, scene, pieces)
-    stage(scene, pieces)
+    if "--check-volumes" in argv:
+        check_volumes(outdir, scene, pieces, debris)
     if "--save" in argv:
         bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(argv[argv.index("--save") + 1]))
     if "--render" in argv:
         i = argv.index("--render")
-        scene.frame_set(int(argv[i + 1]))
-        scene.render.filepath = os.path.abspath(argv[i + 2])
-        bpy.ops.render.render(write_still=True)
-        image = bpy.data.images.load(scene.render.filepath)
-        reds = list(image.pixels)[0::4]
+        frame, path = int(argv[i + 1]), argv[i + 2]
+        if "--check-framing" in argv:
+            check_framing(scene, frame, path)
+        reds = render(scene, frame, path)[0::4]
         if max(reds) - min(reds) < 0.05:
-            fail(f"{scene.render.filepath}: the render is empty")
-        print(f"rendered frame {argv[i + 1]} to {scene.render.filepath}")
+            fail(f"{path}: the render is empty")
+        print(f"rendered frame {frame} to {os.path.abspath(path)}")
 
 
 main(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])

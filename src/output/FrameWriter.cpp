@@ -5,6 +5,7 @@
 
 #include <spall/core/Error.h>
 #include <spall/core/Hash.h>
+#include <spall/core/Parallel.h>
 
 #include <algorithm>
 #include <cmath>
@@ -46,10 +47,10 @@ FrameWriter::FrameWriter(std::string outputDirectory, const OutputSettings& sett
 {
 }
 
-std::string FrameWriter::framePath(const std::string& directory, int frame)
+std::string FrameWriter::framePath(const std::string& directory, int frameNumber)
 {
     char name[64];
-    std::snprintf(name, sizeof name, "fragments.%04d.vdb", frame);
+    std::snprintf(name, sizeof name, "fragments.%04d.vdb", frameNumber);
     return (std::filesystem::path(directory) / name).string();
 }
 
@@ -141,7 +142,7 @@ openvdb::GridBase::Ptr FrameWriter::fragmentGrid(const FrameInfo& info, const Bo
         grid->setGridClass(openvdb::GRID_FOG_VOLUME);
     }
     grid->setName("fragment_" + std::to_string(body.id));
-    grid->insertMeta("frame", openvdb::Int32Metadata(info.frame));
+    grid->insertMeta("frame", openvdb::Int32Metadata(mSettings.firstFrame + info.frame));
     grid->insertMeta("time_s", openvdb::DoubleMetadata(info.timeS));
     grid->insertMeta("body_id", openvdb::Int64Metadata(body.id));
     grid->insertMeta("parent_id", openvdb::Int64Metadata(body.parentId));
@@ -161,7 +162,9 @@ openvdb::GridBase::Ptr FrameWriter::fragmentGrid(const FrameInfo& info, const Bo
 
 std::string FrameWriter::write(const FrameInfo& info, const std::vector<Body>& bodies)
 {
+    const int number = mSettings.firstFrame + info.frame;
     openvdb::GridPtrVec grids;
+    std::vector<openvdb::FloatGrid::ConstPtr> levelSets;
     std::unordered_set<int64_t> alive;
     for (const Body& body : bodies) {
         alive.insert(body.id);
@@ -170,6 +173,7 @@ std::string FrameWriter::write(const FrameInfo& info, const std::vector<Body>& b
         auto voxelMap = body.indexToWorld();
         voxelMap->preTranslate(trees.originIjk.asVec3d());
         grids.push_back(fragmentGrid(info, body, trees, voxelMap));
+        if (mSettings.debrisLevelSet) levelSets.push_back(openvdb::gridConstPtrCast<openvdb::FloatGrid>(grids.back()));
         if (!trees.fractureFaces) continue;
         auto faces = openvdb::FloatGrid::create(trees.fractureFaces);
         faces->setTransform(voxelMap);
@@ -183,25 +187,55 @@ std::string FrameWriter::write(const FrameInfo& info, const std::vector<Body>& b
             const long heldByPool = it->second.derived == it->second.content ? 2 : 1;
             it = it->second.derived.use_count() > heldByPool ? std::next(it) : pool->erase(it);
         }
+    const size_t firstWorldGrid = grids.size();
     if ((mSettings.densityGrid || mSettings.velocityGrid) && !bodies.empty()) {
         const WorldGrids world = rasteriseBodies(bodies, bodies.front().voxelSizeM, mSettings.velocityGrid);
-        const auto add = [&](const openvdb::GridBase::Ptr& grid) {
-            grid->insertMeta("frame", openvdb::Int32Metadata(info.frame));
-            grid->insertMeta("time_s", openvdb::DoubleMetadata(info.timeS));
-            grids.push_back(grid);
-        };
-        if (mSettings.densityGrid) add(world.density);
-        if (world.velocity) add(world.velocity);
+        if (mSettings.densityGrid) grids.push_back(world.density);
+        if (world.velocity) grids.push_back(world.velocity);
+    }
+    if (mSettings.debrisLevelSet && !bodies.empty()) {
+        grids.push_back(debrisLevelSet(bodies, levelSets));
+        grids.back()->setName("debris");
+    }
+    for (size_t g = firstWorldGrid; g < grids.size(); ++g) {
+        grids[g]->insertMeta("frame", openvdb::Int32Metadata(number));
+        grids[g]->insertMeta("time_s", openvdb::DoubleMetadata(info.timeS));
     }
     openvdb::MetaMap fileMeta;
-    fileMeta.insertMeta("frame", openvdb::Int32Metadata(info.frame));
+    fileMeta.insertMeta("frame", openvdb::Int32Metadata(number));
+    fileMeta.insertMeta("first_frame", openvdb::Int32Metadata(mSettings.firstFrame));
+    if (info.frameRateHz > 0) fileMeta.insertMeta("frame_rate_hz", openvdb::DoubleMetadata(info.frameRateHz));
     fileMeta.insertMeta("time_s", openvdb::DoubleMetadata(info.timeS));
     fileMeta.insertMeta("spall_version", openvdb::StringMetadata(SPALL_VERSION));
     fileMeta.insertMeta("spall_frame_format", openvdb::Int32Metadata(mSettings.fragmentGrids == FragmentGrids::LevelSet ? kFrameFormatVersion : 1));
     fileMeta.insertMeta("fragment_grids", openvdb::StringMetadata(enumName(mSettings.fragmentGrids)));
-    const std::string path = framePath(mDirectory, info.frame);
+    const std::string path = framePath(mDirectory, number);
     writeGridsAtomically(path, grids, fileMeta);
     return path;
+}
+
+openvdb::FloatGrid::Ptr FrameWriter::debrisLevelSet(const std::vector<Body>& bodies, const std::vector<openvdb::FloatGrid::ConstPtr>& levelSets)
+{
+    // Sampled as finely as the pieces' own level sets.
+    const double sampleM = bodies.front().voxelSizeM / mSettings.levelSetSubdivisions;
+    std::unordered_map<int64_t, WorldPiece> pieces;
+    std::vector<size_t> stale;  // the bodies that moved or changed since the last frame
+    for (size_t i = 0; i < bodies.size(); ++i) {
+        WorldPiece now{levelSets[i]->constTreePtr(), levelSets[i]->transform().baseMap()->getAffineMap()->getMat4(), nullptr};
+        const auto cached = mWorldPieces.find(bodies[i].id);
+        if (cached != mWorldPieces.end() && cached->second.surface == now.surface && cached->second.indexToWorld == now.indexToWorld)
+            now.inWorld = cached->second.inWorld;
+        else
+            stale.push_back(i);
+        pieces.emplace(bodies[i].id, std::move(now));
+    }
+    std::vector<openvdb::FloatGrid::ConstPtr> resampled(stale.size());
+    forEachIndex(stale.size(), [&](size_t s) { resampled[s] = levelSetInWorld(*levelSets[stale[s]], sampleM, kLevelSetHalfWidthSamples); });
+    for (size_t s = 0; s < stale.size(); ++s) pieces.at(bodies[stale[s]].id).inWorld = resampled[s];
+    mWorldPieces = std::move(pieces);
+    std::vector<openvdb::FloatGrid::ConstPtr> inWorld;
+    for (const Body& body : bodies) inWorld.push_back(mWorldPieces.at(body.id).inWorld);
+    return levelSetUnion(inWorld, sampleM, kLevelSetHalfWidthSamples);
 }
 
 std::vector<std::string> listFramePaths(const std::string& outputDirectory)
@@ -218,7 +252,9 @@ std::vector<std::string> listFramePaths(const std::string& outputDirectory)
         if (!digits.empty() && std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
             paths.push_back(entry.path().string());
     }
-    std::sort(paths.begin(), paths.end());
+    // By number: past 9999 the names grow a digit and no longer sort as text.
+    const auto numberOf = [](const std::string& path) { return std::stoll(std::filesystem::path(path).stem().extension().string().substr(1)); };
+    std::sort(paths.begin(), paths.end(), [&](const std::string& a, const std::string& b) { return numberOf(a) < numberOf(b); });
     if (paths.empty()) throw InputError(outputDirectory + ": holds no fragments.NNNN.vdb frames (is it a spall run's output?)");
     return paths;
 }

@@ -19,7 +19,10 @@ public:
         : mWriter(directory, settings, std::move(materials))
     {
     }
-    void write(const Simulation&, const FrameStamp& frame) override { mWriter.write({frame.frame, frame.timeS}, frame.bodies); }
+    void write(const Simulation& sim, const FrameStamp& frame) override
+    {
+        mWriter.write({frame.frame, frame.timeS, sim.scene().frameRateHz}, frame.bodies);
+    }
     void finish(const RunEnd&) override {}
 
 private:

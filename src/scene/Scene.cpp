@@ -50,6 +50,8 @@ const std::vector<Field<OutputSettings>>& fieldTable<OutputSettings>()
         {"output.fracture_roughness_voxels", &OutputSettings::fractureRoughnessVoxels, closed(0.0, 0.2)},
         {"output.gltf_max_triangles_per_piece", &OutputSettings::gltfMaxTrianglesPerPiece, closed(0, 1e9)},
         {"output.density_grid", &OutputSettings::densityGrid},
+        {"output.debris_level_set", &OutputSettings::debrisLevelSet},
+        {"output.first_frame", &OutputSettings::firstFrame, closed(0, 999000)},
         {"output.velocity_grid", &OutputSettings::velocityGrid},
         {"output.history", &OutputSettings::history},
         {"output.checkpoint_every_s", &OutputSettings::checkpointEveryS, closed(0, 1e9)},
@@ -201,6 +203,8 @@ void completeScene(ObjectReader& r, Scene& scene)
     if (scene.timeStep.minTimeStepS > scene.timeStep.maxTimeStepS)
         r.fail("solver.min_time_step_s", "must not exceed solver.max_time_step_s");
     if (scene.objects.empty()) r.fail("objects", "the scene has no objects");
+    if (scene.output.debrisLevelSet && scene.output.fragmentGrids != FragmentGrids::LevelSet)
+        r.fail("output.debris_level_set", "needs output.fragment_grids \"level_set\": it is the union of the pieces' level sets");
 }
 
 }  // namespace

@@ -20,8 +20,9 @@ inline constexpr int kFrameFormatVersion = 2;
 inline constexpr float kLevelSetHalfWidthSamples = 3.0f;
 
 struct FrameInfo {
-    int frame = 0;
+    int frame = 0;  ///< the run's frame index, from 0 (the file's number adds output.first_frame)
     double timeS = 0;
+    double frameRateHz = 0;  ///< written to the file's metadata when known (unit: 1/s)
 };
 
 /// Writes OUTDIR/fragments.NNNN.vdb: per body a FloatGrid `fragment_<id>` (a level set of its voxel
@@ -30,7 +31,8 @@ struct FrameInfo {
 /// `density` and `v` grids. A body's trees are built once (bodies never change shape: a split makes
 /// new bodies) and each tree starts at index (0,0,0) with the offset in its transform, so bodies of
 /// the same shape — debris is full of single voxels — share one tree, which the file stores once
-/// (OpenVDB instancing).
+/// (OpenVDB instancing). With output.debris_level_set, a world-space level set `debris` holds
+/// every piece's surface at once.
 /// Bits of a `fracture_faces_<id>` voxel's value: 1 << face for each of its faces that broke
 /// (voxel/LinkBits.h Face), and 1 << (kJointFaceBit + face) for those of them that run along a
 /// masonry joint (the voxels either side lie in different units).
@@ -43,7 +45,8 @@ public:
     FrameWriter(std::string outputDirectory, const OutputSettings& settings, std::vector<Material> materials = {});
     /// Returns the path written.
     std::string write(const FrameInfo& info, const std::vector<Body>& bodies);
-    static std::string framePath(const std::string& directory, int frame);
+    /// OUTDIR/fragments.NNNN.vdb, NNNN the frame's number (its index plus output.first_frame).
+    static std::string framePath(const std::string& directory, int frameNumber);
 
 private:
     struct FragmentTrees {
@@ -71,9 +74,18 @@ private:
     std::vector<Material> mMaterials;
     std::unordered_map<int64_t, FragmentTrees> mByBody;
     std::unordered_multimap<uint64_t, Interned> mShapes, mFractureFaces;
+    /// Per body, its level set in the world frame as last resampled, with the surface and the
+    /// pose it was made from: a body at rest is not resampled again (output.debris_level_set).
+    struct WorldPiece {
+        openvdb::FloatTree::ConstPtr surface;
+        openvdb::math::Mat4d indexToWorld;
+        openvdb::FloatGrid::ConstPtr inWorld;
+    };
+    std::unordered_map<int64_t, WorldPiece> mWorldPieces;
+    openvdb::FloatGrid::Ptr debrisLevelSet(const std::vector<Body>& bodies, const std::vector<openvdb::FloatGrid::ConstPtr>& levelSets);
 };
 
-/// Sorted paths of OUTDIR/fragments.NNNN.vdb. Throws InputError when the directory is missing or
+/// Paths of OUTDIR/fragments.NNNN.vdb in the order of their numbers. Throws InputError when the directory is missing or
 /// holds no frames.
 std::vector<std::string> listFramePaths(const std::string& outputDirectory);
 
@@ -85,5 +97,13 @@ struct WorldGrids {
     openvdb::Vec3SGrid::Ptr velocity;
 };
 WorldGrids rasteriseBodies(const std::vector<Body>& bodies, double voxelSizeM, bool withVelocity);
+
+/// A level set in its own (turned, moved) frame resampled into a world-aligned grid of samples
+/// `sampleM` apart, as far apart as its own: the piece's band interpolated (trilinear) at the
+/// world samples near it, which a rigid motion keeps a signed distance, then signed flood fill.
+openvdb::FloatGrid::Ptr levelSetInWorld(const openvdb::FloatGrid& piece, double sampleM, float halfWidthSamples);
+/// The union (CSG, the minimum) of world-aligned level sets of one sample spacing, copied: the
+/// frame's `debris` grid.
+openvdb::FloatGrid::Ptr levelSetUnion(const std::vector<openvdb::FloatGrid::ConstPtr>& pieces, double sampleM, float halfWidthSamples);
 
 }  // namespace spall

@@ -85,6 +85,14 @@ struct OutputSettings {
     /// exact) (unit: triangles).
     int64_t gltfMaxTrianglesPerPiece = 1000;
     bool densityGrid = true;   ///< world-space `density` grid in each frame
+    /// World-space `debris` level set in each frame: every piece's surface in one grid, for a
+    /// single Volume to Mesh in Blender (the per-fragment grids stay beside it). Costs a
+    /// resampling of each piece every frame, so only when asked.
+    bool debrisLevelSet = false;
+    /// The number of the run's first frame, in the file names and the frames' metadata: a
+    /// scene's time t is frame first_frame + t × frame_rate_hz (1001 is the film convention)
+    /// (unit: frames).
+    int firstFrame = 0;
     bool velocityGrid = false; ///< world-space `v` grid (velocity of the material there, m/s) beside `density`
     bool history = true;       ///< history.h5
     /// OUTDIR/checkpoint.spall, for `spall run --resume`: after the first frame that ends this
