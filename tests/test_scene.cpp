@@ -80,7 +80,10 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"level_set_subdivisions": 1}})").find("output.level_set_subdivisions"),
               std::string::npos);
-    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"level_set_smoothing_steps": -1}})").find("output.level_set_smoothing_steps"),
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"fracture_smoothing_steps": -1}})").find("output.fracture_smoothing_steps"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"level_set_smoothing_steps": 4}})")
+                  .find("output.level_set_smoothing_steps: unknown key, replaced by output.fracture_smoothing_steps"),
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "output": {"fracture_roughness_voxels": 0.3}})").find("output.fracture_roughness_voxels"),
               std::string::npos);
@@ -250,7 +253,7 @@ const char* kEveryKeyScene = R"({
   "loads": {"model": "paper"},
   "collisions": {"method": "buckets", "restitution": 0.3, "friction": 0.5, "solver_iterations": 20,
                  "penetration_tolerance_voxels": 0.5},
-  "output": {"vdb": false, "fragment_grids": "fog", "level_set_subdivisions": 4, "level_set_smoothing_steps": 2,
+  "output": {"vdb": false, "fragment_grids": "fog", "level_set_subdivisions": 4, "fracture_smoothing_steps": 2,
              "fracture_roughness_voxels": 0.1, "gltf_max_triangles_per_piece": 500, "density_grid": false, "debris_level_set": false,
              "first_frame": 1001, "velocity_grid": true, "history": false, "checkpoint_every_s": 10}
 })";

@@ -93,21 +93,47 @@ constexpr double kNoiseLatticeVoxels = 0.5;
 /// Within this distance of the object's own surface the noise fades out (unit: voxel edges).
 constexpr double kNoiseFadeVoxels = 0.5;
 
+/// The unsigned distance to the object's own faces (not fracture surface) on the level set's
+/// samples, out to a sample beyond kNoiseFadeVoxels (unit: m); null when it has none.
+openvdb::FloatGrid::Ptr distanceToOwnFaces(const openvdb::FloatGrid& levelSet, const std::vector<VoxelFace>& faces, double voxelSizeM,
+                                           int subdivisions)
+{
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec4I> quads;
+    faceQuads(faces, voxelSizeM, [](const VoxelFace& f) { return !f.fracture; }, points, quads);
+    if (quads.empty()) return nullptr;
+    const std::vector<openvdb::Vec3I> noTriangles;
+    return openvdb::tools::meshToUnsignedDistanceField<openvdb::FloatGrid>(levelSet.transform(), points, noTriangles, quads,
+                                                                           float(kNoiseFadeVoxels * subdivisions) + 1.0f);
+}
+
+/// Mean-curvature flow of the fracture surface alone: the flow's step is blended out toward the
+/// object's own faces (OpenVDB's alpha mask: a smoothstep of the distance to them, 0 on them, 1
+/// half a voxel away), so a box stays a box and its cracks lose their staircase; then the solid
+/// is grown back to its voxels' volume by moving the fracture surface alone, by the missing
+/// volume over the fracture faces' area, measured on the mesh readers make (three times, as the
+/// area changes with it). No own faces: the whole surface flows.
+void smoothFractureFaces(openvdb::FloatGrid& levelSet, const std::vector<VoxelFace>& faces, double voxelSizeM, const SurfaceStyle& style)
+{
+    const openvdb::FloatGrid::Ptr own = distanceToOwnFaces(levelSet, faces, voxelSizeM, style.subdivisions);
+    openvdb::tools::LevelSetFilter<openvdb::FloatGrid, openvdb::FloatGrid> filter(levelSet);
+    if (own) filter.setMaskRange(0.0f, float(kNoiseFadeVoxels * voxelSizeM));
+    for (int i = 0; i < style.smoothingSteps; ++i) filter.meanCurvature(own.get());
+    const double voxelVolume = enclosedVolume(faces) * std::pow(voxelSizeM, 3);
+    const double fractureAreaM2 = double(std::count_if(faces.begin(), faces.end(), [](const VoxelFace& f) { return f.fracture; })) * voxelSizeM * voxelSizeM;
+    for (int i = 0; i < 3; ++i) {
+        const double volume = std::abs(meshLevelSet(levelSet).signedVolumeM3());
+        filter.offset(float(-(voxelVolume - volume) / fractureAreaM2), own.get());  // a negative offset grows the solid
+    }
+}
+
 /// Moves the zero surface outward by roughness * voxelSizeM * noise * fade, where fade rises from
 /// 0 on the object's own faces to 1 half a voxel away (smoothstep of the distance to them), then
 /// restores the distance property. No own faces: the noise applies everywhere.
 void roughenFractureFaces(openvdb::FloatGrid& levelSet, const std::vector<VoxelFace>& faces, double voxelSizeM, double roughness,
                           int subdivisions)
 {
-    std::vector<openvdb::Vec3s> points;
-    std::vector<openvdb::Vec4I> quads;
-    faceQuads(faces, voxelSizeM, [](const VoxelFace& f) { return !f.fracture; }, points, quads);
-    openvdb::FloatGrid::Ptr ownDistance;
-    const float fadeSamples = float(kNoiseFadeVoxels * subdivisions);
-    const std::vector<openvdb::Vec3I> noTriangles;
-    if (!quads.empty())
-        ownDistance = openvdb::tools::meshToUnsignedDistanceField<openvdb::FloatGrid>(levelSet.transform(), points, noTriangles, quads,
-                                                                                       fadeSamples + 1);
+    const openvdb::FloatGrid::Ptr ownDistance = distanceToOwnFaces(levelSet, faces, voxelSizeM, subdivisions);
     const double amplitudeM = roughness * voxelSizeM;
     const double fadeM = kNoiseFadeVoxels * voxelSizeM;
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(levelSet.tree());
@@ -195,22 +221,9 @@ openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces
     const std::vector<openvdb::Vec3I> noTriangles;
     SPALL_CHECK(style.halfWidthSamples <= kSampleIndexOffset);  // the band fits the index offset
     auto levelSet = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*shapeSpace, points, noTriangles, quads, style.halfWidthSamples);
-    if (style.smoothingSteps > 0) {
-        openvdb::tools::LevelSetFilter<openvdb::FloatGrid> filter(*levelSet);
-        for (int i = 0; i < style.smoothingSteps; ++i) filter.meanCurvature();
-        // Mean-curvature flow shrinks the solid: grow it back to the voxels' volume, moving the
-        // surface by the missing volume over its area, measured on the mesh readers will make
-        // (OpenVDB's levelSetVolume, from a smeared delta, is 25 % off on a single voxel); three
-        // times, as the area changes with it.
-        const double voxelVolume = enclosedVolume(faces) * std::pow(voxelSizeM, 3);
-        for (int i = 0; i < 3; ++i) {
-            const SurfaceMesh mesh = meshLevelSet(*levelSet);
-            const double volume = std::abs(mesh.signedVolumeM3()), area = mesh.areaM2();
-            if (!(area > 0.0)) break;
-            filter.offset(float(-(voxelVolume - volume) / area));  // a negative offset grows the solid
-        }
-    }
-    if (style.fractureRoughness > 0.0 && std::any_of(faces.begin(), faces.end(), [](const VoxelFace& f) { return f.fracture; }))
+    const bool broken = std::any_of(faces.begin(), faces.end(), [](const VoxelFace& f) { return f.fracture; });
+    if (style.smoothingSteps > 0 && broken) smoothFractureFaces(*levelSet, faces, voxelSizeM, style);
+    if (style.fractureRoughness > 0.0 && broken)
         roughenFractureFaces(*levelSet, faces, voxelSizeM, style.fractureRoughness, style.subdivisions);
     return levelSet->treePtr();
 }
@@ -221,9 +234,11 @@ openvdb::FloatGrid::Ptr voxelsOfLevelSet(const openvdb::FloatGrid& levelSet, int
     auto voxels = openvdb::FloatGrid::create(0.0f);
     voxels->setTransform(voxelTransformOf(levelSet.transform(), subdivisions));
     voxels->setGridClass(openvdb::GRID_FOG_VOLUME);
-    // A centre inside lies at least half a voxel within the surface (k even), or is the mean of
-    // corners on or within it (k odd, where it is no sample); one outside, at least half a voxel out.
-    const float threshold = 0.25f * float(levelSet.voxelSize()[0] * k);
+    // Unsmoothed, a centre inside lies at least half a voxel within the surface (k even), or at a
+    // third of one (k odd, where it is no sample: the mean of samples a third of a voxel in); one
+    // outside, at least half a voxel out. Rough (at most 0.2 of a voxel) or smoothed fracture
+    // faces move less than that, so the sign at the centre still tells.
+    const float threshold = 0.0f;
     // The sampler keeps a pointer to the accessor: it must outlive the sampler.
     const openvdb::FloatGrid::ConstAccessor levelSetAccess = levelSet.getConstAccessor();
     openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler(levelSetAccess, levelSet.transform());

@@ -112,7 +112,7 @@ const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
     const uint64_t shapeHash = contentHash(*voxels), fractureHash = contentHash(*fractureFaces);
     const OutputSettings& s = mSettings;
     const bool levelSet = s.fragmentGrids == FragmentGrids::LevelSet;
-    const SurfaceStyle style{s.levelSetSubdivisions, s.levelSetSmoothingSteps, s.fractureRoughnessVoxels, kLevelSetHalfWidthSamples};
+    const SurfaceStyle style{s.levelSetSubdivisions, s.fractureSmoothingSteps, s.fractureRoughnessVoxels, kLevelSetHalfWidthSamples};
     // A rough surface depends on which faces broke too: its key is the voxels with their masks.
     const bool rough = levelSet && style.fractureRoughness > 0.0 && !fractureFaces->empty();
     openvdb::FloatTree::Ptr surfaceKey = voxels;

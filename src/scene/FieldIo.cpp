@@ -107,6 +107,7 @@ void ObjectReader::finish() const
 {
     static const std::map<std::string, std::string> renamed = {
         {"checkpoint_every_frames", "output.checkpoint_every_s (wall-clock seconds between checkpoints)"},
+        {"level_set_smoothing_steps", "output.fracture_smoothing_steps (smooths the fracture surface; the object's own stays as modelled)"},
         {"reflected_pressure", "loads.model (\"paper-reflected\" for true, \"paper\" for false)"}};
     for (auto it = mValue.begin(); it != mValue.end(); ++it) {
         if (mUsed.count(it.key())) continue;

@@ -46,7 +46,7 @@ const std::vector<Field<OutputSettings>>& fieldTable<OutputSettings>()
         {"output.vdb", &OutputSettings::vdb},
         {"output.fragment_grids", choice(&OutputSettings::fragmentGrids)},
         {"output.level_set_subdivisions", &OutputSettings::levelSetSubdivisions, closed(2, 8)},
-        {"output.level_set_smoothing_steps", &OutputSettings::levelSetSmoothingSteps, closed(0, 100)},
+        {"output.fracture_smoothing_steps", &OutputSettings::fractureSmoothingSteps, closed(0, 100)},
         {"output.fracture_roughness_voxels", &OutputSettings::fractureRoughnessVoxels, closed(0.0, 0.2)},
         {"output.gltf_max_triangles_per_piece", &OutputSettings::gltfMaxTrianglesPerPiece, closed(0, 1e9)},
         {"output.density_grid", &OutputSettings::densityGrid},

@@ -23,7 +23,8 @@ struct VoxelFace {
 struct SurfaceStyle {
     /// Samples per voxel edge, one on every voxel face (from 2 up).
     int subdivisions = 3;
-    /// Mean-curvature flow steps, the volume restored after (0: the exact voxel surface).
+    /// Mean-curvature flow steps of the fracture surface, the volume restored after (0: the
+    /// exact voxel surface).
     int smoothingSteps = 0;
     /// Largest displacement of fracture faces by smooth value noise, as a fraction of the voxel
     /// edge (0: flat; below 0.25 each voxel's centre stays on its side, which voxelsOfLevelSet needs).
@@ -35,7 +36,8 @@ struct SurfaceStyle {
 /// in a narrow band of `halfWidthSamples` samples each side. Samples lie `subdivisions` per voxel
 /// edge with one on every voxel face (sample u at voxel index u / subdivisions - 0.5), so the zero
 /// surface passes through the faces' corners and volume-to-mesh rebuilds the voxel surface exactly
-/// (no bevelled edges). Smoothing steps then round the staircase, keeping the volume; fracture
+/// (no bevelled edges). Smoothing steps then round the fracture surface's staircase, keeping the
+/// volume and the object's own surface; fracture
 /// roughness then moves fracture faces in and out by value noise that fades to nothing within
 /// half a voxel of the object's own surface, which stays as it was (docs/file-formats.md).
 openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces, double voxelSizeM, const SurfaceStyle& style);
@@ -60,7 +62,8 @@ SurfaceMesh meshLevelSet(const openvdb::FloatGrid& levelSet, double adaptivity =
 openvdb::math::Transform::Ptr voxelTransformOf(const openvdb::math::Transform& levelSetTransform, int subdivisions);
 
 /// The voxels of a level set written by voxelSurfaceLevelSet: those whose centres lie inside, as
-/// fog (1 in each) in the voxels' own index space. Exact for an unsmoothed level set.
+/// fog (1 in each) in the voxels' own index space. Exact for an unsmoothed level set; smoothed,
+/// the voxels whose centres the smoothed surface still holds.
 openvdb::FloatGrid::Ptr voxelsOfLevelSet(const openvdb::FloatGrid& levelSet, int subdivisions);
 
 }  // namespace spall

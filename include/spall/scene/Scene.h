@@ -73,9 +73,10 @@ struct OutputSettings {
     /// back the voxel surface exactly (at 1 a concave corner, all of whose samples lie on the
     /// surface, would fill in); more samples only matter for smoothing (unit: 1).
     int levelSetSubdivisions = 3;
-    /// Mean-curvature smoothing iterations of each fragment's level set (0: the exact voxel
-    /// surface). Rounds the staircase and shrinks small pieces (docs/file-formats.md) (unit: 1).
-    int levelSetSmoothingSteps = 0;
+    /// Mean-curvature flow iterations of each fragment's fracture surface, the volume restored
+    /// after (0: the voxel staircase). The object's own surface stays as modelled
+    /// (docs/file-formats.md) (unit: 1).
+    int fractureSmoothingSteps = 4;
     /// Fracture faces moved in and out by smooth noise, at most this fraction of a voxel edge, so
     /// breaks look rough while the object's own surface stays as modelled (0: flat; at most 0.2,
     /// so every voxel's centre stays on its side of the surface) (unit: voxel edges).

@@ -14,6 +14,7 @@ class SpallJob:
         self.command = list(command)
         self.duration_s = duration_s
         self.fraction = 0.0
+        self.fractions = []  # every progress the run reported, in order
         self.status = ""
         self.messages = []  # what spall said besides its progress bar (notes, errors)
         self.cancelled = False
@@ -46,6 +47,7 @@ class SpallJob:
                 self.status = f"frame {match.group(1)}/{match.group(2)}"
                 if self.duration_s > 0:
                     self.fraction = max(self.fraction, min(1.0, float(match.group(3)) / self.duration_s))
+                    self.fractions.append(self.fraction)
             elif not line.startswith("["):
                 self.messages.append(line)
 
