@@ -228,6 +228,18 @@ TEST(Deformable, PiecesAreLookedAtForQuietnessOncePerCheckInterval)
 
 namespace {
 
+/// The small scene's wall broken by the lattice over an eighth of a second, a checkpoint written
+/// `checkpointEveryS` of wall-clock time apart.
+Scene latticeWallScene(double checkpointEveryS)
+{
+    nlohmann::json j = nlohmann::json::parse(kSmallScene);
+    j["duration_s"] = 0.125;
+    j["fracture"] = {{"algorithm", "lattice"}};
+    j["lattice"] = {{"max_vibration_s", 0.02}};
+    j["output"] = {{"checkpoint_every_s", checkpointEveryS}};
+    return parseScene(j.dump(), "small", ".");
+}
+
 /// Asks to stop on its nth question, once.
 struct StopOnce : Interrupter {
     explicit StopOnce(int n) : remaining(n) {}
@@ -282,12 +294,7 @@ TEST(Checkpoint, RunStoppedWithinAFrameResumesAndEndsAsTheUninterruptedOne)
     // A frame of the deformable phase can take minutes, so a stop request (SIGTERM at a time
     // limit) is answered between two steps, not at the frame's end: the checkpoint then holds
     // a state within a frame, and the resumed run must end as the uninterrupted one.
-    nlohmann::json j = nlohmann::json::parse(kSmallScene);
-    j["duration_s"] = 0.125;
-    j["fracture"] = {{"algorithm", "lattice"}};
-    j["lattice"] = {{"max_vibration_s", 0.02}};
-    j["output"] = {{"checkpoint_every_s", 1000.0}};
-    const Scene scene = parseScene(j.dump(), "small", ".");
+    const Scene scene = latticeWallScene(1000.0);
     const std::string whole = testing::TempDir() + "/spall-whole", cut = testing::TempDir() + "/spall-cut";
     for (const std::string& dir : {whole, cut}) std::filesystem::remove_all(dir);
     RunOptions options;
@@ -313,6 +320,47 @@ TEST(Checkpoint, RunStoppedWithinAFrameResumesAndEndsAsTheUninterruptedOne)
     EXPECT_EQ(resumed.totalSteps, straight.totalSteps);
     EXPECT_EQ(resumed.finalBodies, straight.finalBodies);
     EXPECT_FALSE(std::filesystem::exists(cut + "/" + kCheckpointFileName));
+}
+
+TEST(Checkpoint, AStepGivenUpWithinItsLatticeStepsResumesFromTheLastCheckpointAndEndsAsTheUninterruptedOne)
+{
+    // A step of a large lattice can take a minute: a stop that waits too long gives the step up
+    // between two lattice steps (Interrupter::mustAbandonStep). Its half-done state is not saved;
+    // the checkpoint of the last frame stands, and the run resumed from it ends as the
+    // uninterrupted one.
+    struct GiveUpAtLatticeStep : Interrupter {
+        explicit GiveUpAtLatticeStep(int n) : remaining(n) {}
+        bool mustAbandonStep() override
+        {
+            ++asked;
+            return --remaining <= 0;
+        }
+        int remaining, asked = 0;
+    } giveUp(400);
+    const Scene scene = latticeWallScene(1e-9);  // a checkpoint after every frame
+    const std::string whole = testing::TempDir() + "/spall-whole-abandon", cut = testing::TempDir() + "/spall-cut-abandon";
+    for (const std::string& dir : {whole, cut}) std::filesystem::remove_all(dir);
+    RunOptions options;
+    options.outputDirectory = whole;
+    const RunReport straight = runScene(scene, options, {});
+    ASSERT_TRUE(straight.complete);
+
+    options.outputDirectory = cut;
+    options.interrupter = &giveUp;
+    const RunReport first = runScene(scene, options, {});
+    ASSERT_FALSE(first.complete);
+    EXPECT_TRUE(first.stepAbandoned);
+    EXPECT_EQ(giveUp.asked, 400) << "no lattice step after the one that was refused";
+    ASSERT_GE(first.framesWritten, 1) << "the test wants a frame and its checkpoint before the step given up";
+    const Checkpoint saved = readCheckpoint(cut + "/" + kCheckpointFileName);
+    EXPECT_EQ(saved.framesDone, first.framesWritten);
+    EXPECT_DOUBLE_EQ(saved.state.timeS, (saved.framesDone - 1) / scene.frameRateHz) << "the checkpoint is the last frame's, not the step's";
+
+    options.interrupter = nullptr;
+    const RunReport resumed = resumeRun(options, {});
+    ASSERT_TRUE(resumed.complete);
+    EXPECT_EQ(resumed.totalSteps, straight.totalSteps);
+    EXPECT_EQ(resumed.finalBodies, straight.finalBodies);
 }
 
 TEST(Run, ASecondRunIntoTheSameDirectoryIsRefused)

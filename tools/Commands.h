@@ -17,10 +17,15 @@ using CommandAction = std::function<int()>;
 /// stays readable instead of dying mid-write.
 void stopOnSignals();
 bool stopRequested();
+bool stopRequestedLongerThan(double seconds);
 
-/// The library's interrupter for the same flag.
+/// The library's interrupter for the same flag: a step still running this long after the
+/// request is given up (a step of a large lattice can take a minute; the run then goes on from
+/// its last checkpoint when resumed).
 struct StopRequest : spall::Interrupter {
+    static constexpr double kStepGraceS = 2.0;
     bool wasInterrupted(int) override { return stopRequested(); }
+    bool mustAbandonStep() override { return stopRequestedLongerThan(kStepGraceS); }
 };
 
 /// An enum-valued option; a bad value is an error naming the option.

@@ -90,12 +90,15 @@ void printRunSummary(const spall::RunReport& report, const std::string& outDir)
     std::printf("open: Blender: File > Import > OpenVDB (the sequence); Houdini: File SOP on fragments.$F4.vdb;\n"
                 "      Python: h5py.File('%s/history.h5') (see docs/file-formats.md)\n", outDir.c_str());
     if (report.complete) return;
+    if (report.stepAbandoned)
+        std::fprintf(stderr, "spall run: the step in progress took too long to wait for and was given up; --resume goes on from the "
+                             "last checkpoint and writes again the frames after it\n");
     if (std::filesystem::exists(std::filesystem::path(outDir) / spall::kCheckpointFileName))
         std::fprintf(stderr, "spall run: interrupted after %d frames; they are complete and readable; continue with: spall run --resume %s\n",
                      report.framesWritten, outDir.c_str());
     else
         std::fprintf(stderr, "spall run: interrupted after %d frames; they are complete and readable; no checkpoint "
-                             "(output.checkpoint_every_s is 0), so finishing means running the scene again\n",
+                             "(none written yet, or output.checkpoint_every_s is 0), so spall run --resume runs the scene again\n",
                      report.framesWritten);
 }
 

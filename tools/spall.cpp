@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <csignal>
+#include <ctime>
 #include <iostream>
 #include <memory>
 
@@ -17,14 +18,24 @@
 namespace {
 
 std::atomic<bool> gStopRequested{false};
-static_assert(std::atomic<bool>::is_always_lock_free, "a signal handler may touch only lock-free atomics");
+std::atomic<int64_t> gStopRequestedAtNs{0};  ///< CLOCK_MONOTONIC
+static_assert(std::atomic<bool>::is_always_lock_free && std::atomic<int64_t>::is_always_lock_free,
+              "a signal handler may touch only lock-free atomics");
+
+int64_t monotonicNs()
+{
+    timespec now{};
+    ::clock_gettime(CLOCK_MONOTONIC, &now);  // async-signal-safe (POSIX)
+    return int64_t(now.tv_sec) * 1000000000 + now.tv_nsec;
+}
 
 /// Says at once that the stop is heard (write(2) is async-signal-safe where stdio is not; the
 /// flag is a lock-free atomic), once however often it is asked.
 extern "C" void requestStop(int)
 {
     if (gStopRequested.exchange(true)) return;
-    static const char kHeard[] = "\nspall: stopping: the current step finishes and what is written stays readable\n";
+    gStopRequestedAtNs.store(monotonicNs());
+    static const char kHeard[] = "\nspall: stopping: the current step finishes (or is given up after 2 s) and what is written stays readable\n";
     [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, kHeard, sizeof kHeard - 1);
 }
 
@@ -37,6 +48,8 @@ void stopOnSignals()
 }
 
 bool stopRequested() { return gStopRequested.load(); }
+
+bool stopRequestedLongerThan(double seconds) { return gStopRequested.load() && double(monotonicNs() - gStopRequestedAtNs.load()) > 1e9 * seconds; }
 
 void addBenchCommands(CLI::App& app, CommandAction& action)
 {

@@ -184,7 +184,7 @@ int64_t catchUpDeformable(DeformableBody& deformable)
     return static_cast<int64_t>(lattice.particleCount());
 }
 
-int64_t advanceDeformable(DeformableBody& deformable, double dtS)
+int64_t advanceDeformable(DeformableBody& deformable, double dtS, const std::function<bool()>& abandon)
 {
     Lattice& lattice = deformable.lattice;
     const size_t n = lattice.particleCount();
@@ -198,7 +198,11 @@ int64_t advanceDeformable(DeformableBody& deformable, double dtS)
     const int64_t steps = static_cast<int64_t>(std::floor(deformable.pendingS / stableS * (1.0 + 1e-12)));
     if (steps == 0) return 0;
     applyGatheredForces(deformable);
-    for (int64_t i = 0; i < steps; ++i) lattice.step(stableS);
+    for (int64_t i = 0; i < steps; ++i) {
+        if (abandon && abandon()) throw StepAbandoned("a step of the deformable phase was given up after " + std::to_string(i) + " of its " +
+                                                      std::to_string(steps) + " lattice steps");
+        lattice.step(stableS);
+    }
     const double leftS = deformable.pendingS - double(steps) * stableS;
     if (leftS <= 1e-12 * stableS) {
         deformable.pendingS = 0.0;

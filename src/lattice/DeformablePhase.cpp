@@ -52,7 +52,8 @@ void DeformablePhase::enter(std::vector<Body>& bodies, const ReachedByBlast& rea
 }
 
 int64_t DeformablePhase::deform(std::vector<Body>& bodies, const std::vector<std::vector<Eigen::Vector3d>>& faceForcesN,
-                                const Eigen::Vector3d& gravityMS2, const ReachedByBlast& reached, double timeS, double dtS)
+                                const Eigen::Vector3d& gravityMS2, const ReachedByBlast& reached, double timeS, double dtS,
+                                const std::function<bool()>& abandon)
 {
     int64_t particleSteps = 0;
     for (size_t k = 0; k < lattices.size(); ++k) {
@@ -60,7 +61,7 @@ int64_t DeformablePhase::deform(std::vector<Body>& bodies, const std::vector<std
         const size_t i = bodyIndex(k, bodies);
         Body& body = bodies[i];
         setExternalForces(d, body, faceForcesN[i], gravityMS2);
-        particleSteps += advanceDeformable(d, dtS);
+        particleSteps += advanceDeformable(d, dtS, abandon);
         followLattice(body, d.lattice);
         if (reached(body)) d.lastLoadedS = timeS + dtS;
     }

@@ -1,5 +1,7 @@
 #include <spall/run/Run.h>
 
+#include <spall/core/Error.h>
+
 #include <spall/core/AtomicFile.h>
 #include <spall/output/History.h>
 #include <spall/run/FrameSink.h>
@@ -97,7 +99,14 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
             const int64_t steps = report.totalSteps + sim.state().stepStats.steps;
             onFrame(progressOf(sim, f, frameCount, sim.timeS(), steps, elapsedS(now), false, latticeStepsDone + sim.state().stepStats.latticeParticleSteps));
         };
-        if (!sim.advanceTo(t, options.interrupter, reportWithinFrame)) {
+        bool reached = false;
+        try {
+            reached = sim.advanceTo(t, options.interrupter, reportWithinFrame);
+        } catch (const StepAbandoned&) {
+            report.stepAbandoned = true;  // the state is part of a step: the last checkpoint stands
+            break;
+        }
+        if (!reached) {
             // Asked to stop within the frame (a frame of the deformable phase can take minutes):
             // the state between two steps is saved, frame f still to write.
             if (scene.output.checkpointEveryS > 0) saveCheckpoint(f);

@@ -22,6 +22,8 @@ StepStats Simulation::takeStepStats()
 
 bool Simulation::advanceTo(double targetS, Interrupter* interrupter, const std::function<void()>& afterStep)
 {
+    mInterrupter = interrupter;
+    const std::unique_ptr<Interrupter*, void (*)(Interrupter**)> forget(&mInterrupter, [](Interrupter** i) { *i = nullptr; });
     while (mState.timeS < targetS) {
         if (interrupter && interrupter->wasInterrupted()) return false;
         step(targetS);
@@ -193,8 +195,9 @@ void Simulation::deformBodies(const FaceForces& faces, const std::vector<OpenWin
 {
     if (mState.deformable.empty()) return;
     const auto reached = [&](const Body& body) { return bodyInWindows(body, *mField, windows); };
+    const auto abandon = [this] { return mInterrupter && mInterrupter->mustAbandonStep(); };
     mState.stepStats.latticeParticleSteps +=
-        mState.deformable.deform(mState.bodies, faces.forceN, mScene.world.gravityMS2, reached, mState.timeS, dtS);
+        mState.deformable.deform(mState.bodies, faces.forceN, mScene.world.gravityMS2, reached, mState.timeS, dtS, abandon);
 }
 
 void Simulation::solveContactsWithLattices(const ContactSet& contacts, double dtS)

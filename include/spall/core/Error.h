@@ -50,6 +50,16 @@ struct Interrupter {
     virtual ~Interrupter() = default;
     /// Returns true when the work should stop; `percent` is in [0, 100] or negative when unknown.
     virtual bool wasInterrupted(int percent = -1) { (void)percent; return false; }
+    /// Returns true when a stop has waited longer than the step in progress should take (a
+    /// step of a large lattice can take a minute): the step is given up (StepAbandoned).
+    virtual bool mustAbandonStep() { return false; }
+};
+
+/// Thrown from within a simulation step that an interrupter gave up (mustAbandonStep): the state
+/// is then part of a step and must not be saved; a run goes on from its last checkpoint.
+class StepAbandoned : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
 };
 
 }  // namespace spall

@@ -8,6 +8,7 @@
 #include <spall/lattice/Settings.h>
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace spall {
@@ -70,8 +71,9 @@ void setExternalForces(DeformableBody& deformable, const Body& body, const std::
 /// many whole stable steps as the gathered time holds, under the gathered impulse's mean force;
 /// the rest (less than a stable step, with its share of the impulse) waits for the next. So a
 /// lattice steps no more often than it must while the blast front holds the rigid step short,
-/// lagging the simulation by less than a stable step. Returns the particle-steps taken.
-int64_t advanceDeformable(DeformableBody& deformable, double dtS);
+/// lagging the simulation by less than a stable step. Returns the particle-steps taken. Before
+/// each lattice step it asks `abandon`, and throws StepAbandoned when it says so.
+int64_t advanceDeformable(DeformableBody& deformable, double dtS, const std::function<bool()>& abandon = {});
 
 /// Steps what a lattice has gathered (advanceDeformable), so that its state is that of the
 /// simulation's time. Returns the particle-steps taken.

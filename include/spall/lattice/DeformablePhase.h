@@ -60,9 +60,10 @@ public:
     void enter(std::vector<Body>& bodies, const ReachedByBlast& reached, const std::vector<Material>& materials,
                const LatticeSettings& settings, const StaticWorld& supports, uint64_t seed, double timeS);
     /// Each lattice through a step of dtS under its faces' forces (per body, FaceForces::forceN)
-    /// and gravity; its body follows it. Returns the particle-steps taken.
+    /// and gravity; its body follows it. Returns the particle-steps taken. `abandon` is asked
+    /// before each lattice step (advanceDeformable).
     int64_t deform(std::vector<Body>& bodies, const std::vector<std::vector<Eigen::Vector3d>>& faceForcesN, const Eigen::Vector3d& gravityMS2,
-                   const ReachedByBlast& reached, double timeS, double dtS);
+                   const ReachedByBlast& reached, double timeS, double dtS, const std::function<bool()>& abandon = {});
     /// Bodies the blast has passed, looked at once per lattice.handoff_check_interval_s (in the
     /// step of length dtS that reaches a multiple of it) or when their time is up: their quiet
     /// pieces leave as rigid bodies (leaveQuietPieces, Deformable.h). A body that leaves whole is

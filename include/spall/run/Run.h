@@ -69,6 +69,9 @@ struct RunProgress {
 struct RunReport {
     int framesWritten = 0;
     bool complete = false;  ///< false when interrupted
+    /// Stopped within a step that took too long to wait for (Interrupter::mustAbandonStep): the
+    /// step's work is lost, no checkpoint was written for it, and a resume goes on from the last one.
+    bool stepAbandoned = false;
     int64_t totalSteps = 0;
     size_t finalBodies = 0;
     int64_t fractureEvents = 0;

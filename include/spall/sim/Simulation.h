@@ -82,6 +82,8 @@ public:
 
     /// Steps (adaptively) until time t exactly; returns false, between two steps and before t,
     /// when `interrupter` asks to stop (the state is then a whole step's, fit for a checkpoint).
+    /// Throws StepAbandoned from within a step when it says to give the step up (its lattices
+    /// ask between their own steps): the state is then part of a step, not to be saved.
     bool advanceTo(double timeS, Interrupter* interrupter = nullptr, const std::function<void()>& afterStep = {});
 
     /// One step toward `targetS` (landing on it when it is near; by default the step is the one
@@ -185,6 +187,7 @@ private:
     SimulationState mState;  ///< everything carried from step to step (what a checkpoint saves)
     std::function<void(const Simulation&, const StepRecord&)> mObserver;
     StepRecord mRecord;  ///< filled while a step runs, for the observer
+    Interrupter* mInterrupter = nullptr;  ///< advanceTo's, while it runs: the lattices ask it whether to give up the step
     std::vector<std::string> mNotes;
 };
 
