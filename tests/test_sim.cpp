@@ -355,6 +355,12 @@ TEST(Checkpoint, AStepGivenUpWithinItsLatticeStepsResumesFromTheLastCheckpointAn
     const Checkpoint saved = readCheckpoint(cut + "/" + kCheckpointFileName);
     EXPECT_EQ(saved.framesDone, first.framesWritten);
     EXPECT_DOUBLE_EQ(saved.state.timeS, (saved.framesDone - 1) / scene.frameRateHz) << "the checkpoint is the last frame's, not the step's";
+    // Resumed and given up again before a frame: it still reports the frames on disk.
+    GiveUpAtLatticeStep atOnce(1);
+    options.interrupter = &atOnce;
+    const RunReport again = resumeRun(options, {});
+    EXPECT_TRUE(again.stepAbandoned);
+    EXPECT_EQ(again.framesWritten, saved.framesDone);
 
     options.interrupter = nullptr;
     const RunReport resumed = resumeRun(options, {});

@@ -82,6 +82,7 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
     const std::filesystem::path checkpointPath = dir / kCheckpointFileName;
     const std::string checkpointScene = sceneToJson(scene).dump();
     RunReport report;
+    report.framesWritten = firstFrame;  // a resumed run's frames before its checkpoint are written too
     const auto sinks = frameSinks(sim, options, frameCount, std::move(historyWriter), report.gltf);
     report.totalSteps = stepsSoFar;
     const auto saveCheckpoint = [&](int framesDone) {
