@@ -1,7 +1,8 @@
 """The Blender add-on driven through bpy in `blender -b` (tests/blender_addon.sh): installed from its
 zip as a user would, a wall marked with a material and anchor, a charge added, spall run in the
-background and followed to the end, the debris imported from the film's first frame; a second run
-stopped with Cancel keeps its frames and imports nothing; the add-on's presets are spall's.
+background and followed to the end, the debris imported from the film's first frame; run again, the
+new debris replaces the old; a run stopped with Cancel keeps its frames and imports nothing; the
+add-on's presets are spall's.
 
     blender -b --factory-startup --python tests/blender_addon_test.py -- ADDON.zip SPALL WORKDIR
 """
@@ -104,6 +105,14 @@ check(min(keys) == 1001 and scene.frame_start == 1001, f"the debris starts at fr
 check(wall.hide_render and wall.hide_get(), "the marked wall is still shown over its debris")
 check(not [o for o in scene.objects if o.name.startswith("charge_")], "the run's charge was imported beside the scene's own")
 print(f"blender_addon_test: {len(pieces)} pieces from frame {int(min(keys))}, {len(job.fractions)} progress reports")
+
+# Run again: the new debris replaces the old (in the collection `spall debris`), not beside it.
+check(bpy.ops.spall.run() == {"FINISHED"}, "starting the run again failed")
+follow("the second run")
+again = [o for o in scene.objects if o.name.startswith("fragment_")]
+check(len(again) == len(pieces) and all("." not in o.name for o in again),
+      f"the second run left {len(again)} pieces ({sorted(o.name for o in again)[:4]} …), the first {len(pieces)}")
+check(all(o.users_collection[0].name == "spall debris" for o in again), "the debris is not in its collection")
 
 # A longer run stopped with Cancel: its frames stay, readable, with a checkpoint; nothing imported.
 settings.duration_s = 30.0

@@ -143,13 +143,28 @@ def follow_run(context):
     return False
 
 
+DEBRIS_COLLECTION = "spall debris"
+
+
 def import_result(context):
-    """The debris into the present scene; the marked objects hidden (their debris stands for them)."""
+    """The debris into the present scene, in the collection `spall debris` in place of an earlier
+    run's; the marked objects hidden (their debris stands for them)."""
     scene = context.scene
+    debris = bpy.data.collections.get(DEBRIS_COLLECTION)
+    if debris is None:
+        debris = bpy.data.collections.new(DEBRIS_COLLECTION)
+        scene.collection.children.link(debris)
+    for o in list(debris.objects):
+        bpy.data.objects.remove(o)
     before = set(bpy.data.objects)
     importer.import_debris(os.path.join(_output_dir(scene), "out"), scene)
-    for o in [o for o in bpy.data.objects if o not in before and o.name.startswith("charge_")]:
-        bpy.data.objects.remove(o)  # the scene's own charge empties stay
+    for o in [o for o in bpy.data.objects if o not in before]:
+        if o.name.startswith("charge_"):
+            bpy.data.objects.remove(o)  # the scene's own charge empties stay
+            continue
+        for collection in list(o.users_collection):
+            collection.objects.unlink(o)
+        debris.objects.link(o)
     for o in scene_export.spall_objects(scene):
         o.hide_render = True
         o.hide_set(True)
