@@ -72,6 +72,7 @@ def check_volumes(outdir, scene, pieces, debris):
 
 
 def render(scene, frame, path):
+    """Renders `frame` to `path` and returns its pixels (RGBA, flat)."""
     scene.frame_set(frame)
     scene.render.filepath = os.path.abspath(path)
     bpy.ops.render.render(write_still=True)

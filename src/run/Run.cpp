@@ -69,6 +69,20 @@ RunProgress progressOf(const Simulation& sim, int frame, int frameCount, double 
             sim.state().deformable.particleStepsLeftAtMost(sim.timeS(), sim.scene().lattice.maxVibrationS)};
 }
 
+/// How stepping to a frame's time ended.
+enum class FrameAdvance { Reached, Stopped, Abandoned };
+
+/// Simulation::advanceTo, its StepAbandoned an outcome: Stopped leaves the state between two
+/// steps (fit for a checkpoint), Abandoned within one (the last checkpoint stands).
+FrameAdvance advanceToFrame(Simulation& sim, double timeS, Interrupter* interrupter, const std::function<void()>& afterStep)
+{
+    try {
+        return sim.advanceTo(timeS, interrupter, afterStep) ? FrameAdvance::Reached : FrameAdvance::Stopped;
+    } catch (const StepAbandoned&) {
+        return FrameAdvance::Abandoned;
+    }
+}
+
 /// Writes frames firstFrame .. frameCount-1 of a simulation that stands at firstFrame's start.
 /// After each frame's outputs, a checkpoint when output.checkpoint_every_s of wall-clock time
 /// has passed since the last, or when the callback asks to stop.
@@ -100,14 +114,10 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
             const int64_t steps = report.totalSteps + sim.state().stepStats.steps;
             onFrame(progressOf(sim, f, frameCount, sim.timeS(), steps, elapsedS(now), false, latticeStepsDone + sim.state().stepStats.latticeParticleSteps));
         };
-        bool reached = false;
-        try {
-            reached = sim.advanceTo(t, options.interrupter, reportWithinFrame);
-        } catch (const StepAbandoned&) {
-            report.stepAbandoned = true;  // the state is part of a step: the last checkpoint stands
-            break;
-        }
-        if (!reached) {
+        const FrameAdvance advance = advanceToFrame(sim, t, options.interrupter, reportWithinFrame);
+        report.stepAbandoned = advance == FrameAdvance::Abandoned;
+        if (report.stepAbandoned) break;
+        if (advance == FrameAdvance::Stopped) {
             // Asked to stop within the frame (a frame of the deformable phase can take minutes):
             // the state between two steps is saved, frame f still to write.
             if (scene.output.checkpointEveryS > 0) saveCheckpoint(f);

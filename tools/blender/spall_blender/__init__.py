@@ -25,6 +25,9 @@ bl_info = {
 # spall's presets (`spall run` names them when a scene asks for another; the add-on's test checks
 # this list against it).
 MATERIAL_PRESETS = ["brick-masonry", "concrete", "reinforced-concrete", "glass", "wood"]
+MATERIAL_ITEMS = [(m, m, "") for m in MATERIAL_PRESETS]
+ANCHOR_ITEMS = [("NONE", "None", "free"), ("GROUND", "Ground", "bonded to the ground where it touches it"),
+                ("SUPPORTS", "Supports", "bonded to the ground and colliders")]
 TNT_DENSITY_KG_M3 = 1600.0
 
 _jobs = {}  # per scene name: the run in progress
@@ -42,10 +45,8 @@ class SpallPreferences(bpy.types.AddonPreferences):
 class SpallObjectSettings(bpy.types.PropertyGroup):
     role: bpy.props.EnumProperty(name="Role", items=[("NONE", "None", ""), ("OBJECT", "Object", "blown up by spall"),
                                                      ("CHARGE", "Charge", "a charge of TNT")], default="NONE")
-    material: bpy.props.EnumProperty(name="Material", items=[(m, m, "") for m in MATERIAL_PRESETS], default="brick-masonry")
-    anchor: bpy.props.EnumProperty(name="Anchor", items=[("NONE", "None", "free"),
-                                                         ("GROUND", "Ground", "bonded to the ground where it touches it"),
-                                                         ("SUPPORTS", "Supports", "bonded to the ground and colliders")], default="GROUND")
+    material: bpy.props.EnumProperty(name="Material", items=MATERIAL_ITEMS, default="brick-masonry")
+    anchor: bpy.props.EnumProperty(name="Anchor", items=ANCHOR_ITEMS, default="GROUND")
     tnt_kg: bpy.props.FloatProperty(name="TNT (kg)", min=1e-4, max=1e6, default=1.0, update=lambda self, context: _size_charge(self.id_data))
 
 
@@ -70,9 +71,8 @@ class SPALL_OT_mark_object(bpy.types.Operator):
     bl_idname = "spall.mark_object"
     bl_label = "Mark as Object"
     bl_options = {"REGISTER", "UNDO"}
-    material: bpy.props.EnumProperty(name="Material", items=[(m, m, "") for m in MATERIAL_PRESETS], default="brick-masonry")
-    anchor: bpy.props.EnumProperty(name="Anchor", items=[("NONE", "None", ""), ("GROUND", "Ground", ""), ("SUPPORTS", "Supports", "")],
-                                   default="GROUND")
+    material: bpy.props.EnumProperty(name="Material", items=MATERIAL_ITEMS, default="brick-masonry")
+    anchor: bpy.props.EnumProperty(name="Anchor", items=ANCHOR_ITEMS, default="GROUND")
 
     def execute(self, context):
         meshes = [o for o in context.selected_objects if o.type == "MESH"]

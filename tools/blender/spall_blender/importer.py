@@ -33,10 +33,6 @@ def run_scene(outdir):
         return json.load(f)
 
 
-def first_frame_of(spall_scene):
-    return int(spall_scene.get("output", {}).get("first_frame", 0))
-
-
 def import_debris(outdir, scene):
     """Imports debris.glb into `scene`, its animation starting at the run's first frame.
     Returns the fragment objects."""
@@ -52,7 +48,7 @@ def import_debris(outdir, scene):
     pieces = [o for o in imported if o.name.startswith("fragment_")]
     if not pieces:
         raise ImportFailed(f"{glb}: no fragment_<id> objects")
-    first = first_frame_of(spall_scene)
+    first = int(spall_scene.get("output", {}).get("first_frame", 0))
     actions = {o.animation_data.action for o in pieces if o.animation_data and o.animation_data.action}
     for action in actions:
         for curve in action.fcurves:
