@@ -319,6 +319,14 @@ void BM_Lattice_Step(benchmark::State& state)
 }
 BENCHMARK(BM_Lattice_Step)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+/// Building the block's lattice (its strength scatter included), which a body pays once when it
+/// enters the phase: its ratio to a step says how many steps it costs.
+void BM_Lattice_Build(benchmark::State& state)
+{
+    for (auto _ : state) benchmark::DoNotOptimize(vibratingBlock().particleCount());
+}
+BENCHMARK(BM_Lattice_Build)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 /// The same without crushing: what crushing's reading of each compressed bond costs.
 void BM_Lattice_StepWithoutCrushing(benchmark::State& state)
 {
@@ -427,6 +435,7 @@ public:
             {"BM_Voxelise_TorusWindingNumber", "BM_Voxelise_TorusLevelSet"},
             {"BM_Lattice_Step", "BM_Lattice_TrivialPass"},
             {"BM_Lattice_Step", "BM_Lattice_StepWithoutCrushing"},
+            {"BM_Lattice_Build", "BM_Lattice_Step"},
             {"BM_Integrate_FlightWithAirDrag", "BM_Integrate_Flight"},
             {"BM_Contacts_SlabOnGround", "BM_Contacts_BoundaryPass"},
             {"BM_Contacts_SlabOnSlab", "BM_Contacts_BoundaryPass"},

@@ -186,6 +186,22 @@ TEST(Lattice, MasonryPulledAcrossItsBedJointsBreaksInAJointAtTheJointsStrength)
     for (const LatticeBond& bond : coarse.model().bonds) EXPECT_EQ(bond.strengthClass, bond.axis == 2 ? 0 : 1);
 }
 
+TEST(Lattice, StrengthScatterFieldOnAGridIsTheFieldsCosineSum)
+{
+    // The tables' products against the cosines summed directly, at grid points spread over a
+    // box with negative and positive indices and an odd step.
+    const GaussianRandomField field(7, 0.03);
+    const double stepM = 0.0125;
+    const GaussianRandomFieldOnGrid grid(field, stepM, Eigen::Vector3i(-40, -3, 0), Eigen::Vector3i(90, 17, 400));
+    double worst = 0.0;
+    for (int i = 0; i < 2000; ++i) {
+        const Eigen::Vector3i n(-40 + (i * 37) % 131, -3 + (i * 11) % 21, (i * 101) % 401);
+        worst = std::max(worst, std::abs(grid.at(n) - field.at(stepM * n.cast<double>())));
+    }
+    std::printf("largest difference from the cosine sum: %.2e\n", worst);
+    EXPECT_LT(worst, 1e-11);
+}
+
 TEST(Lattice, StrengthScatterFieldHasUnitVarianceAndItsCorrelation)
 {
     // The field: zero mean, unit variance and correlation exp(-1/2) at one correlation length,

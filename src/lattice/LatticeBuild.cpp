@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace spall {
 
@@ -325,14 +326,21 @@ void Lattice::condenseVolumetricModulus()
 void Lattice::scatterStrengths(const Material& material, uint64_t seed)
 {
     const double h = mModel.spacingM, l = material.strengthCorrelationLengthM;
-    const GaussianRandomField field(seed, l);
+    // The bonds' midpoints in half spacings: twice the low particle's index, one more along the axis.
+    Eigen::Vector3i lowest = Eigen::Vector3i::Constant(std::numeric_limits<int>::max()), highest = -lowest;
+    for (const openvdb::Coord& ijk : mModel.voxel) {
+        const Eigen::Vector3i twice(2 * ijk.x(), 2 * ijk.y(), 2 * ijk.z());
+        lowest = lowest.cwiseMin(twice);
+        highest = highest.cwiseMax(twice + Eigen::Vector3i::Ones());
+    }
+    const GaussianRandomFieldOnGrid field(GaussianRandomField(seed, l), 0.5 * h, lowest, highest);
     // The face average's variance: the variance function along each of its two sides.
     const double cov = material.strengthCoefficientOfVariation * varianceFunction(h, l);
     const double sigma = std::sqrt(std::log(1.0 + cov * cov));
     forEach(mModel.bonds.size(), [&](size_t b) {
         const openvdb::Coord lo = mModel.voxel[mModel.bonds[b].low];
-        Eigen::Vector3d mid = Eigen::Vector3d(lo.x(), lo.y(), lo.z()) * h;
-        mid[mModel.bonds[b].axis] += 0.5 * h;
+        Eigen::Vector3i mid(2 * lo.x(), 2 * lo.y(), 2 * lo.z());
+        ++mid[mModel.bonds[b].axis];
         state.bondHistory[b].strengthScale = std::exp(sigma * field.at(mid) - 0.5 * sigma * sigma);
     });
 }

@@ -60,16 +60,24 @@ void Lattice::listContactCandidates()
         std::vector<std::pair<uint32_t, uint32_t>>& found = perBlock[block];
         for (uint32_t p = uint32_t(block * kListingBlock); p < std::min(n, (block + 1) * kListingBlock); ++p)
             for (int dx = -1; dx <= 1; ++dx)
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dz = -1; dz <= 1; ++dz) {
-                        const uint64_t key = cellKey(cell[p][0] + dx, cell[p][1] + dy, cell[p][2] + dz);
-                        auto it = std::lower_bound(byCell.begin(), byCell.end(), std::make_pair(key, p + 1));
-                        for (; it != byCell.end() && it->first == key; ++it) {
+                for (int dy = -1; dy <= 1; ++dy) {
+                    // A column's three cells are one run of keys, searched once (unless z wraps:
+                    // then a cell at a time).
+                    std::array<uint64_t, 3> column{};
+                    for (int dz = -1; dz <= 1; ++dz) column[size_t(dz + 1)] = cellKey(cell[p][0] + dx, cell[p][1] + dy, cell[p][2] + dz);
+                    const bool oneRun = column[0] < column[2];
+                    for (size_t run = 0; run < (oneRun ? 1u : 3u); ++run) {
+                        const uint64_t lo = column[run], hi = oneRun ? column[2] : column[run];
+                        auto it = std::lower_bound(byCell.begin(), byCell.end(), std::make_pair(lo, uint32_t(0)));
+                        for (; it != byCell.end() && it->first <= hi; ++it) {
                             const uint32_t q = it->second;
-                            if ((mModel.held[p] && mModel.held[q]) || (state.positionM[q] - state.positionM[p]).squaredNorm() >= reach2 || shareABond(p, q)) continue;
+                            if (q <= p || (mModel.held[p] && mModel.held[q]) || (state.positionM[q] - state.positionM[p]).squaredNorm() >= reach2 ||
+                                shareABond(p, q))
+                                continue;
                             found.emplace_back(p, q);
                         }
                     }
+                }
         std::sort(found.begin(), found.end());
     });
     mContactCandidates.clear();
