@@ -109,4 +109,12 @@ std::vector<StaticContact> findStaticContacts(const Body& body, const WorldSetti
     return reduceStaticContacts(corners, done, group, points);
 }
 
+double fastestClosingSpeedMS(const Body& body, const std::vector<StaticContact>& contacts)
+{
+    double fastestMS = 0.0;
+    for (const StaticContact& c : contacts)
+        fastestMS = std::max(fastestMS, -c.normal.dot(body.motion.linearVelocityMS + body.motion.angularVelocityRadS.cross(c.arm)));
+    return fastestMS;
+}
+
 }  // namespace spall

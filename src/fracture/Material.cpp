@@ -421,6 +421,14 @@ void validateMaterial(const Material& m)
         throw InputError("material '" + m.name + "': " + problem.key + " " + problem.reason);
 }
 
+double pWaveSpeedMS(const Material& m)
+{
+    const double nu = m.poissonRatio;
+    return std::sqrt(m.youngsModulusPa * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu) * m.densityKgM3));
+}
+
+double crackingImpactSpeedMS(const Material& m) { return 0.125 * m.tensileStrengthPa / (m.densityKgM3 * pWaveSpeedMS(m)); }
+
 double acrossCoursesStrengthRatio(const Material& m)
 {
     const double courseM = m.unitHeightM + m.jointThicknessM, lengthPitchM = m.unitLengthM + m.jointThicknessM;

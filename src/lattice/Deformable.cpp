@@ -4,6 +4,7 @@
 #include <spall/core/Error.h>
 #include <spall/fracture/Fracture.h>
 #include <spall/lattice/ParticleBlocks.h>
+#include <spall/voxel/LinkBits.h>
 
 #include <Eigen/SVD>
 
@@ -112,6 +113,21 @@ DeformableBody enterDeformablePhase(const Body& body, const Material& material, 
                                     const StaticWorld& supports, uint64_t seed, double timeS)
 {
     return latticeInBlocks(body, blocksFor(body, settings.particleVoxels), material, settings, supports, seed, timeS);
+}
+
+double crackingImpactSpeedMS(const Body& body, const Material& material, int particleVoxels)
+{
+    if (!hasUnits(material) || !unitsResolvedBy(material, particleVoxels * body.voxelSizeM) || material.unitTensileStrengthPa <= material.tensileStrengthPa)
+        return crackingImpactSpeedMS(material);
+    // A voxel's centre where the object was voxelised: its index times h (classifyUnitBonds).
+    const auto centreOf = [&](const openvdb::Coord& v) { return Eigen::Vector3d(v.x(), v.y(), v.z()) * body.voxelSizeM; };
+    for (auto voxel = body.grid->cbeginValueOn(); voxel; ++voxel)
+        for (const int face : {kPosX, kPosY, kPosZ})
+            if ((*voxel & (1 << face)) && acrossJoint(material, centreOf(voxel.getCoord()), centreOf(voxel.getCoord() + faceOffset(face))))
+                return crackingImpactSpeedMS(material);
+    Material units = material;
+    units.tensileStrengthPa = material.unitTensileStrengthPa;
+    return crackingImpactSpeedMS(units);
 }
 
 void restoreDeformable(DeformableBody& saved, const Body& body, const Material& material, const LatticeSettings& settings,

@@ -37,12 +37,12 @@ int64_t DeformablePhase::particleStepsLeftAtMost(double timeS, double maxVibrati
     return steps;
 }
 
-void DeformablePhase::enter(std::vector<Body>& bodies, const ReachedByBlast& reached, const std::vector<Material>& materials,
+void DeformablePhase::enter(std::vector<Body>& bodies, const std::vector<char>& entering, const std::vector<Material>& materials,
                             const LatticeSettings& settings, const StaticWorld& supports, uint64_t seed, double timeS)
 {
     for (size_t i = 0; i < bodies.size(); ++i) {
         Body& body = bodies[i];
-        if (body.motion.deformable || (body.linkCount == 0 && !body.anchored) || !reached(body)) continue;
+        if (body.motion.deformable || (body.linkCount == 0 && !body.anchored) || !entering[i]) continue;
         lattices.push_back(enterDeformablePhase(body, materials[body.materialIndex], settings, supports, seed, timeS));
         mBodyIndex.push_back(i);
         body.motion.deformable = true;

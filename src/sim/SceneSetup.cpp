@@ -389,8 +389,7 @@ double Simulation::shallowestSpallZoneM(size_t bodyIndex) const
     // the spalled zone, about L / 2 deep once σ0 is well above ft. None when σ0 stays below ft.
     const Body& body = mState.bodies[bodyIndex];
     const Material& m = mScene.materials[body.materialIndex];
-    const double nu = m.poissonRatio;
-    const double waveSpeedMS = std::sqrt(m.youngsModulusPa * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu) * m.densityKgM3));
+    const double waveSpeedMS = pWaveSpeedMS(m);
     double shallowestM = 0.0;
     for (const Charge& charge : mScene.charges) {
         const double distanceM = nearestVoxelDistanceM(body, charge.positionM);

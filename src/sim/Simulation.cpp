@@ -59,7 +59,8 @@ void Simulation::step(double targetS)
     integrateBodies(mState.bodies, blastWrenches, mScene.world, airOf(mScene.blast.atmosphere), mScene.timeStep.integrator, mState.timeS, dt);
     deformBodies(faces, windows, dt);
 
-    const ContactSet contacts = detectContacts(mState.bodies, mScene.world, mScene.collisions, mScene.sleep);
+    ContactSet contacts = detectContacts(mState.bodies, mScene.world, mScene.collisions, mScene.sleep);
+    enterOnImpact(contacts, dt);
     const double closingPenetrationM = deepestClosingPenetrationM(mState.bodies, contacts, tunnellingSpeedMS(mScene.world, dt, mScene.voxelSizeM));
     solveContactsWithLattices(contacts, dt);
     correctPositions(mState.bodies, contacts, mScene.world);
@@ -187,8 +188,42 @@ void Simulation::replaceWithParts(std::vector<std::vector<Body>>& parts)
 void Simulation::enterDeformablePhase(const std::vector<OpenWindow>& windows)
 {
     if (mScene.fracture.algorithm != FractureAlgorithm::Lattice || windows.empty()) return;
-    const auto reached = [&](const Body& body) { return bodyInWindows(body, *mField, windows); };
+    std::vector<char> reached(mState.bodies.size());
+    for (size_t i = 0; i < reached.size(); ++i) reached[i] = bodyInWindows(mState.bodies[i], *mField, windows);
     mState.deformable.enter(mState.bodies, reached, mScene.materials, mScene.lattice, mStaticWorld, mScene.seed, mState.timeS);
+}
+
+void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
+{
+    if (mScene.fracture.algorithm != FractureAlgorithm::Lattice || !mScene.lattice.impactFracture) return;
+    std::vector<char> striking(mState.bodies.size(), 0);
+    bool any = false;
+    for (size_t i = 0; i < mState.bodies.size(); ++i) {
+        const Body& body = mState.bodies[i];
+        if (body.motion.deformable || body.linkCount == 0 || contacts.statics[i].empty()) continue;
+        // A contact that rests (impactSpeedMS) strikes nothing, however weak the material.
+        const double closingMS = fastestClosingSpeedMS(body, contacts.statics[i]);
+        striking[i] = closingMS > std::max(impactSpeedMS(mScene.world, dtS), body.motion.survivedImpactMS) &&
+                      closingMS >= crackingImpactSpeedMS(body, mScene.materials[body.materialIndex], mScene.lattice.particleVoxels);
+        if (striking[i]) mState.bodies[i].motion.survivedImpactMS = closingMS;
+        any = any || striking[i];
+    }
+    if (!any) return;
+    const size_t before = mState.deformable.lattices.size();
+    // The bodies are where the step's end puts them.
+    mState.deformable.enter(mState.bodies, striking, mScene.materials, mScene.lattice, mStaticWorld, mScene.seed, mState.timeS + dtS);
+    // The impact loads it for as long as a bar striking a rigid wall stays in contact, 2 L / c
+    // (Kolsky 1963, ch. 4), L its largest extent: no hand-off before the impact has played out.
+    for (size_t k = before; k < mState.deformable.lattices.size(); ++k) {
+        const Body& body = mState.bodies[mState.deformable.bodyIndex(k, mState.bodies)];
+        mState.deformable.lattices[k].lastLoadedS += 4.0 * body.boundingRadiusM / pWaveSpeedMS(mScene.materials[body.materialIndex]);
+    }
+    for (size_t i = 0; i < striking.size(); ++i) {
+        if (!striking[i]) continue;
+        contacts.staticContacts -= int64_t(contacts.statics[i].size());
+        contacts.solverContacts -= int64_t(contacts.statics[i].size());
+        contacts.statics[i].clear();
+    }
 }
 
 void Simulation::deformBodies(const FaceForces& faces, const std::vector<OpenWindow>& windows, double dtS)

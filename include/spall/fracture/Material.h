@@ -170,6 +170,17 @@ inline bool unitsResolvedBy(const Material& m, double particleM) { return partic
 /// stays the joints'.
 double acrossCoursesStrengthRatio(const Material& material);
 
+/// The P-wave speed, √(E (1 − ν) / ((1 + ν)(1 − 2ν) ρ)): a plane wave's in the bulk (unit: m/s).
+double pWaveSpeedMS(const Material& m);
+
+/// The slowest normal impact on a rigid surface that may damage a piece of the material: a flat
+/// impact at v puts σ = ρ c v into the face that strikes (c the P-wave speed: the one-dimensional
+/// impact of elastic wave theory, Kolsky, Stress Waves in Solids, 1963, ch. 4); an edge or a corner
+/// that strikes first concentrates it, so this is an eighth of ft / (ρ c) (a concrete slab 3° off
+/// flat takes no damage at it and some at twice it, tests/test_impact.cpp). ft is the weakest
+/// tension the material carries (masonry's joints, wood across the grain) (unit: m/s).
+double crackingImpactSpeedMS(const Material& m);
+
 /// The named presets: glass, wood, brick-masonry, concrete, reinforced-concrete.
 const std::vector<Material>& materialPresets();
 

@@ -55,6 +55,12 @@ void nameParts(DeformableBody& deformable, std::vector<Body>& parts, int64_t* ne
 DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
                                     const StaticWorld& supports, uint64_t seed, double timeS);
 
+/// The slowest normal impact on a rigid surface that may crack a body (lattice.impact_fracture):
+/// crackingImpactSpeedMS of its material at the weakest tension its links carry, a masonry
+/// piece's units' when none of its links crosses a joint (particles of `particleVoxels` voxels
+/// resolving the units), else the material's (unit: m/s).
+double crackingImpactSpeedMS(const Body& body, const Material& material, int particleVoxels);
+
 /// Rebuilds a saved lattice (a checkpoint holds only its particles' state, the bond forces velocity
 /// Verlet carries, and its bonds' stretch and strength) from its body; throws InputError when the saved arrays do not fit the body.
 void restoreDeformable(DeformableBody& saved, const Body& body, const Material& material, const LatticeSettings& settings,

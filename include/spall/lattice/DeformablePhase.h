@@ -56,8 +56,9 @@ public:
     /// still acts it moves that time on: the bound leaves out what remains of the loading, a few
     /// milliseconds against the tenth of a second of `maxVibrationS`.
     int64_t particleStepsLeftAtMost(double timeS, double maxVibrationS) const;
-    /// Bodies with links or anchors that the blast reaches become lattices.
-    void enter(std::vector<Body>& bodies, const ReachedByBlast& reached, const std::vector<Material>& materials,
+    /// Bodies marked `entering` (per body: the blast reaches them, or they strike something hard
+    /// enough to crack) that have links or anchors become lattices.
+    void enter(std::vector<Body>& bodies, const std::vector<char>& entering, const std::vector<Material>& materials,
                const LatticeSettings& settings, const StaticWorld& supports, uint64_t seed, double timeS);
     /// Each lattice through a step of dtS under its faces' forces (per body, FaceForces::forceN)
     /// and gravity; its body follows it. Returns the particle-steps taken. `abandon` is asked

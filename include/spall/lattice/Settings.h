@@ -52,6 +52,12 @@ struct LatticeSettings {
     /// How bonds' damage grows: the crack band's softening line, or Davison–Stevens in rate form
     /// above it, its B and C fitted to the material's strain-rate law (lattice/RateDamage.h).
     LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;
+    /// A rigid body with links that strikes the ground or a collider faster than its material
+    /// may take undamaged (crackingImpactSpeedMS) becomes a lattice for the impact, as a body the
+    /// blast reaches does, and leaves the phase as any other once quiet. Off by default while
+    /// the lattice's ground contact, a velocity projection at each particle, pulls the layer that
+    /// struck apart from the rest as the body rebounds (docs/accuracy.md) (unit: none).
+    bool impactFracture = false;
     /// The edge of a lattice particle, in voxels (lattice/ParticleBlocks.h): 1, a particle per
     /// voxel; k > 1, blocks of k³ voxels, k⁴ times less work, cracks and fragments as a lattice of
     /// k h resolves them, pieces in the voxels' shape (unit: voxels).

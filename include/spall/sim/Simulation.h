@@ -134,6 +134,11 @@ private:
     void replaceWithParts(std::vector<std::vector<Body>>& parts);
     /// Bodies the blast reaches become lattices (fracture.algorithm "lattice").
     void enterDeformablePhase(const std::vector<OpenWindow>& windows);
+    /// Rigid bodies with links whose contacts with the ground or a collider close faster than
+    /// their material may take without cracking (crackingImpactSpeedMS) become lattices
+    /// (lattice.impact_fracture): their particles take the impact in the next deform phase, so
+    /// their contacts with the static world leave this step's solve (of length dtS).
+    void enterOnImpact(ContactSet& contacts, double dtS);
     /// Pieces of deformable bodies the blast has passed leave the phase once their vibration has
     /// died down (all of them after lattice.max_vibration_s) and become rigid bodies again;
     /// looked for once per lattice.handoff_check_interval_s, in the step of length dtS that

@@ -76,6 +76,10 @@ struct BodyMotion {
     /// leave it alone.
     bool deformable = false;
     double restTimeS = 0.0;  ///< how long the body has been below the sleep thresholds (unit: s)
+    /// The fastest impact it has taken as a lattice (lattice.impact_fracture), which its parts
+    /// inherit: one no faster grows no damage (a bond's damage follows the largest strain it has
+    /// reached), so it stays rigid (unit: m/s).
+    double survivedImpactMS = 0.0;
 };
 
 /// No body: a parent id of a body the scene made, or a part's id before the simulation gives it one.
