@@ -93,6 +93,10 @@ double Lattice::crushingShorteningM(size_t b, double normalM) const
     const double compressionPa =
         -(mModel.stiffness.normalModulusPa[size_t(a)] * normalM / mModel.spacingM + 0.5 * (mUncrushedLambdaTracePa[bond.low] + mUncrushedLambdaTracePa[bond.high]));
     if (compressionPa <= 0.0) return 0.0;
+    // Confinement only strengthens (σ1 ≥ fc for σ3 ≥ 0): a compression that could not pass the
+    // largest shortening so far even unconfined grows nothing, and needs no confinement read.
+    const double unconfinedM = compressionPa / strength.compressiveStrengthPa * strength.crushingPeakShorteningM;
+    if (unconfinedM <= state.bondHistory[b].maxCrushingShorteningM) return unconfinedM;
     const double fc = strength.compressiveStrengthPa, lateralPa = 0.5 * (confinementPa(bond.low, a) + confinementPa(bond.high, a));
     const double strengthPa = lateralPa + fc * std::sqrt(strength.confinementM * lateralPa / fc + 1.0);
     return compressionPa / strengthPa * strength.crushingPeakShorteningM;

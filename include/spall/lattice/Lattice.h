@@ -289,7 +289,9 @@ private:
     /// How near a bond is to crushing, as a shortening: its compression as its uncrushed
     /// material would carry it (its own normal strain `normalM` / h times d, and its
     /// particles' λ tr ε) over the Hoek–Brown strength at the confinement across it, times fc h
-    /// / E (1 on the strength surface; its shortening in uniaxial compression) (unit: m).
+    /// / E (1 on the strength surface; its shortening in uniaxial compression). Where even the
+    /// unconfined strength leaves it within the bond's largest shortening so far, that unconfined
+    /// shortening, an upper bound that changes nothing (unit: m).
     double crushingShorteningM(size_t b, double normalM) const;
     /// The compression across axis `a` at a particle: of its normal stresses along the two axes
     /// across, each its bonds' mean, the lesser; 0 in tension or at a free face (unit: Pa).
