@@ -197,18 +197,20 @@ void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
 {
     if (mScene.fracture.algorithm != FractureAlgorithm::Lattice || !mScene.lattice.impactFracture) return;
     std::vector<char> striking(mState.bodies.size(), 0);
-    bool any = false;
     for (size_t i = 0; i < mState.bodies.size(); ++i) {
-        const Body& body = mState.bodies[i];
+        Body& body = mState.bodies[i];
         if (body.motion.deformable || body.linkCount == 0 || contacts.statics[i].empty()) continue;
         // A contact that rests (impactSpeedMS) strikes nothing, however weak the material.
         const double closingMS = fastestClosingSpeedMS(body, contacts.statics[i]);
         striking[i] = closingMS > std::max(impactSpeedMS(mScene.world, dtS), body.motion.survivedImpactMS) &&
                       closingMS >= crackingImpactSpeedMS(body, mScene.materials[body.materialIndex], mScene.lattice.particleVoxels);
-        if (striking[i]) mState.bodies[i].motion.survivedImpactMS = closingMS;
-        any = any || striking[i];
+        if (!striking[i]) continue;
+        body.motion.survivedImpactMS = closingMS;
+        // Its particles take the impact: the solver must not stop it as a rigid body first.
+        contacts.staticContacts -= int64_t(contacts.statics[i].size());
+        contacts.solverContacts -= int64_t(contacts.statics[i].size());
+        contacts.statics[i].clear();
     }
-    if (!any) return;
     const size_t before = mState.deformable.lattices.size();
     // The bodies are where the step's end puts them.
     mState.deformable.enter(mState.bodies, striking, mScene.materials, mScene.lattice, mStaticWorld, mScene.seed, mState.timeS + dtS);
@@ -217,12 +219,6 @@ void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
     for (size_t k = before; k < mState.deformable.lattices.size(); ++k) {
         const Body& body = mState.bodies[mState.deformable.bodyIndex(k, mState.bodies)];
         mState.deformable.lattices[k].lastLoadedS += 4.0 * body.boundingRadiusM / pWaveSpeedMS(mScene.materials[body.materialIndex]);
-    }
-    for (size_t i = 0; i < striking.size(); ++i) {
-        if (!striking[i]) continue;
-        contacts.staticContacts -= int64_t(contacts.statics[i].size());
-        contacts.solverContacts -= int64_t(contacts.statics[i].size());
-        contacts.statics[i].clear();
     }
 }
 
