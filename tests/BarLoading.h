@@ -19,6 +19,7 @@ struct BarPull {
     int brokenAnywhere = 0;  ///< bonds along any axis, anywhere
     int crushedAcross = 0;   ///< bonds across the middle crushed through
     bool fellPastPeak = false;  ///< the stress fell to half its peak
+    double firstDamageStressPa = 0.0;  ///< the stress when a bond first took damage (BarSpec::watchFirstDamage)
 };
 
 /// A bar loaded in direct tension (pullMS > 0) or compression (pullMS < 0): `material`, length ×
@@ -29,6 +30,8 @@ struct BarSpec {
     double lengthM = 0.04, sideM = 0.02, h = 0.01, pullMS = 0.05, notch = 0.8;
     LatticeDamageLaw law = LatticeDamageLaw::Softening;
     double bulkViscosity = LatticeSettings().bulkViscosity;
+    uint64_t seed = 1;  ///< draws the material's strength scatter, if it has one
+    bool watchFirstDamage = false;  ///< look for the first damaged bond every step (BarPull::firstDamageStressPa)
 };
 
 /// What a bar of the material loaded along x should show: along the grain when it lies along x.
@@ -46,7 +49,7 @@ inline TensionTarget tensionTargetOf(const Material& m)
 /// uniform strain rate, so no shock runs ahead) for loadTimeS. Held layers cannot contract or
 /// spread sideways, which concentrates stress at the grips' corners (more sharply the finer h):
 /// the quarters next to the grips are 50 % stronger, as a dog-bone specimen's are thicker; the
-/// bonds across the middle are `notch` times as strong. Energy balance: work done on the held
+/// bonds across the middle are `notch` times as strong (each as drawn, for a material that scatters). Energy balance: work done on the held
 /// ends minus what is left as kinetic and strain energy is what the cracks and crushing took. E
 /// is the stress over the mean strain between the grips when the stress first reaches
 /// `modulusAtPa`. The stress is positive in the load's sense (tension pulled, compression
@@ -62,7 +65,7 @@ inline BarPull loadBar(const BarSpec& spec, double loadTimeS, double modulusAtPa
     LatticeSettings settings;
     settings.damageLaw = spec.law;
     settings.bulkViscosity = spec.bulkViscosity;
-    Lattice lattice = Lattice::fromBody(body, material, StaticWorld(), settings);
+    Lattice lattice = Lattice::fromBody(body, material, StaticWorld(), settings, VoxelBlocks(), spec.seed);
     const double x0 = lattice.state.positionM[0].x(), gaugeM = (nx - 1) * h;
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
         lattice.state.velocityMS[p] = Eigen::Vector3d(pullMS * (lattice.state.positionM[p].x() - x0) / gaugeM, 0, 0);
@@ -70,8 +73,8 @@ inline BarPull loadBar(const BarSpec& spec, double loadTimeS, double modulusAtPa
     }
     for (size_t b = 0; b < lattice.bondCount(); ++b) {
         const int x = lattice.model().voxel[lattice.model().bonds[b].low].x();
-        if (x < nx / 4 || x >= nx - nx / 4) lattice.state.bondHistory[b].strengthScale = 1.5;
-        if (lattice.model().bonds[b].axis == 0 && x == nx / 2 - 1) lattice.state.bondHistory[b].strengthScale = spec.notch;
+        if (x < nx / 4 || x >= nx - nx / 4) lattice.state.bondHistory[b].strengthScale *= 1.5;
+        if (lattice.model().bonds[b].axis == 0 && x == nx / 2 - 1) lattice.state.bondHistory[b].strengthScale *= spec.notch;
     }
     const double energy0 = lattice.kineticEnergyJ() + lattice.strainEnergyJ();
     const double dt = lattice.stableTimeStepS(), speedMS = std::abs(pullMS);
@@ -83,15 +86,23 @@ inline BarPull loadBar(const BarSpec& spec, double loadTimeS, double modulusAtPa
             if (lattice.model().held[p]) power -= lattice.state.bondForceN[p].dot(lattice.state.velocityMS[p]);
         return power;
     };
+    const auto anyDamaged = [&] {
+        for (size_t b = 0; b < lattice.bondCount(); ++b)
+            if (lattice.bondDamage(b) > 0.0) return true;
+        return false;
+    };
+    double lastStressPa = 0.0;
     for (double t = 0.0; t < loadTimeS; t += dt) {
         const double before = heldPower();
         lattice.step(dt);
+        if (spec.watchFirstDamage && result.firstDamageStressPa == 0.0 && anyDamaged()) result.firstDamageStressPa = lastStressPa;
         workJ += 0.5 * (before + heldPower()) * dt;
         const double stressPa = heldPower() / speedMS / (sideM * sideM);
         if (result.youngsModulusPa == 0.0 && stressPa >= modulusAtPa) result.youngsModulusPa = stressPa / (speedMS * (t + dt) / gaugeM);
         // The failure's peak: a crushed band's rubble carries again once squeezed through.
         if (stressPa < 0.5 * result.peakStressPa) result.fellPastPeak = true;
         if (!result.fellPastPeak) result.peakStressPa = std::max(result.peakStressPa, stressPa);
+        lastStressPa = stressPa;
     }
     result.dissipatedJ = workJ - (lattice.kineticEnergyJ() + lattice.strainEnergyJ() - energy0);
     for (size_t b = 0; b < lattice.bondCount(); ++b) {

@@ -27,6 +27,15 @@ inline Material latticeConcrete()
     return m;
 }
 inline const Material kConcrete = latticeConcrete();
+
+/// A material's mean properties: every bond alike (its strength scatter has its own tests).
+inline Material withoutStrengthScatter(Material m)
+{
+    m.strengthDistribution = StrengthDistribution::Lognormal;
+    m.strengthCoefficientOfVariation = 0.0;
+    m.unitStrengthCoefficientOfVariation = 0.0;
+    return m;
+}
 inline constexpr double kH = 0.01;  ///< the voxel size of latticeOfBox (unit: m)
 
 inline Lattice latticeOfBox(int nx, int ny, int nz, const Material& material = kConcrete, const LatticeSettings& settings = LatticeSettings())

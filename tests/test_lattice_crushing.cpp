@@ -39,9 +39,8 @@ std::vector<std::pair<std::string, Material>> presetsInCompression()
 {
     std::vector<std::pair<std::string, Material>> out;
     for (const char* name : {"concrete", "brick-masonry", "wood"}) {
-        Material m = findMaterialPreset(name);
+        Material m = withoutStrengthScatter(findMaterialPreset(name));
         m.strengthRateLaw = StrengthRateLaw::None;
-        m.strengthCoefficientOfVariation = 0.0;
         m.unitLengthM = 0.0;
         out.push_back({name, m});
     }
@@ -145,9 +144,8 @@ TEST(Lattice, ConfinementStrengthensAgainstCrushingAndPressureAloneCrushesNothin
     // ν) of the axial stress), Hoek–Brown with m = fc / ft puts the crushing stress σ1 where
     // σ1 (1 − r) = fc √(m r σ1 / fc + 1), r = ν / (1 − ν): 6.1 fc for C30/37 (fc 38, ft 2.9 MPa,
     // ν 0.2); the lattice, whose held sides also crack in tension at the corners, within 15 %.
-    Material concrete = findMaterialPreset("concrete");
+    Material concrete = withoutStrengthScatter(findMaterialPreset("concrete"));
     concrete.strengthRateLaw = StrengthRateLaw::None;
-    concrete.strengthCoefficientOfVariation = 0.0;
     const auto [hydrostaticPeakPa, hydrostaticCrushed] = squeezeHeldBlock(concrete, true, 10 * concrete.compressiveStrengthPa / concrete.youngsModulusPa);
     const double fc = concrete.compressiveStrengthPa, m = fc / concrete.tensileStrengthPa, r = concrete.poissonRatio / (1 - concrete.poissonRatio);
     // (1 − r)² x² = m r x + 1 for x = σ1 / fc.

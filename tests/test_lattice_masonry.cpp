@@ -21,8 +21,7 @@ namespace {
 BarPull pullAlongTheCourses(double h, double sideM)
 {
     BarSpec spec;
-    spec.material = findMaterialPreset("brick-masonry");
-    spec.material.strengthCoefficientOfVariation = 0.0;
+    spec.material = withoutStrengthScatter(findMaterialPreset("brick-masonry"));
     spec.h = h;
     spec.lengthM = 0.9;  // four bricks
     spec.sideM = sideM;

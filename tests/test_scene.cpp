@@ -153,13 +153,19 @@ TEST(Scene, MaterialAndLatticeErrorsNameTheKeyAndReason)
                                   R"("unit_length_m": -0.2)", R"("joint_thickness_m": 2)", R"("unit_tensile_strength_Pa": -1)",
                                   R"("unit_friction_coefficient": 20)", R"("strength_cov": 1.5)", R"("strength_correlation_length_m": 0)",
                                   R"("damping_ratio": -0.1)", R"("damping_ratio": 0.5)", R"("compressive_strength_Pa": -1)",
-                                  R"("compressive_fracture_energy_J_per_m2": -5)"}) {
+                                  R"("compressive_fracture_energy_J_per_m2": -5)", R"("unit_strength_cov": 2)", R"("strength_weibull_modulus": -1)",
+                                  R"("strength_reference_area_m2": 0)"}) {
         const std::string key = bad.substr(1, bad.find('"', 1) - 1);
         EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + bad + "}}}").find("materials.stone." + key + ": must be"), std::string::npos) << bad;
     }
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("strength_rate_law": "fast"}}})").find("materials.stone.strength_rate_law"),
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("unit_length_axis": "z"}}})").find("materials.stone.unit_length_axis"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("strength_distribution": "gumbel"}}})").find("materials.stone.strength_distribution"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("strength_distribution": "weibull"}}})")
+                  .find("materials.stone.strength_weibull_modulus: must be above 0 when strength_distribution is weibull"),
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + stone + R"("unit_bond_pattern": "herringbone"}}})").find("materials.stone.unit_bond_pattern"),
               std::string::npos);
@@ -227,14 +233,15 @@ const char* kEveryKeyScene = R"({
                           "orientation_factor": 0.05, "damage_rate_per_s": 200, "damage_stress_scale_per_Pa": 1e-5,
                           "youngs_modulus_Pa": 2e10, "poisson_ratio": 0.25, "tensile_strength_Pa": 4e6, "fracture_energy_J_per_m2": 90,
                           "shear_strength_Pa": 5e6, "friction_coefficient": 0.6, "strength_rate_law": "fib-mc2010",
-                          "strength_cov": 0.15, "strength_correlation_length_m": 0.03, "damping_ratio": 0.04,
+                          "strength_cov": 0.15, "strength_correlation_length_m": 0.03, "unit_strength_cov": 0.2, "damping_ratio": 0.04,
                           "unit_length_m": 0.3, "unit_width_m": 0.1, "unit_height_m": 0.1, "joint_thickness_m": 0.012,
                           "unit_length_axis": "y", "unit_bond_pattern": "flemish", "unit_tensile_strength_Pa": 3e6, "unit_fracture_energy_J_per_m2": 60,
                           "unit_shear_strength_Pa": 2.5e6, "unit_friction_coefficient": 0.45,
                           "compressive_strength_Pa": 3e7, "compressive_fracture_energy_J_per_m2": 20000,
                           "colour_rgb": [0.3, 0.3, 0.25], "interior_colour_rgb": [0.4, 0.35, 0.3], "joint_colour_rgb": [0.5, 0.5, 0.45],
                           "roughness": 0.8, "transmission": 0.25},
-                "oak": {"unit_length_m": 0, "youngs_modulus_Pa": 1e9, "grain_axis": "y", "along_grain_youngs_modulus_Pa": 12e9,
+                "oak": {"unit_length_m": 0, "youngs_modulus_Pa": 1e9, "strength_distribution": "weibull", "strength_weibull_modulus": 9,
+                        "strength_reference_area_m2": 0.5, "grain_axis": "y", "along_grain_youngs_modulus_Pa": 12e9,
                         "along_grain_shear_modulus_Pa": 0.8e9, "along_grain_tensile_strength_Pa": 9e7,
                         "along_grain_fracture_energy_J_per_m2": 12000, "along_grain_shear_strength_Pa": 2e7,
                         "along_grain_compressive_strength_Pa": 4e7, "along_grain_compressive_fracture_energy_J_per_m2": 60000}},

@@ -77,11 +77,24 @@ Material withLook(Material m, const Eigen::Vector3d& colourRgb, const Eigen::Vec
     return m;
 }
 
-/// `m` with bonds that scatter in strength, correlated over `correlationLengthM`, and the source.
-Material withScatter(Material m, double coefficientOfVariation, double correlationLengthM, const std::string& source)
+/// `m` with bonds that scatter in strength (masonry's units by a CoV of their own), correlated over
+/// `correlationLengthM`, and the source.
+Material withScatter(Material m, double coefficientOfVariation, double correlationLengthM, const std::string& source, double unitCoefficientOfVariation = 0.0)
 {
     m.strengthCoefficientOfVariation = coefficientOfVariation;
+    m.unitStrengthCoefficientOfVariation = unitCoefficientOfVariation;
     m.strengthCorrelationLengthM = correlationLengthM;
+    m.source += "; " + source;
+    return m;
+}
+
+/// `m` with bonds each the weakest link of its face (Weibull of modulus `modulus`, its
+/// strengths the median of `referenceAreaM2` in uniform tension), and the source.
+Material withWeakestLink(Material m, double modulus, double referenceAreaM2, const std::string& source)
+{
+    m.strengthDistribution = StrengthDistribution::Weibull;
+    m.strengthWeibullModulus = modulus;
+    m.strengthReferenceAreaM2 = referenceAreaM2;
     m.source += "; " + source;
     return m;
 }
@@ -174,12 +187,18 @@ std::pair<double, double> mohrCoulombThrough(double compressiveStrengthPa, doubl
 /// EN 572-1 (E 70 GPa, ν 0.2, characteristic bending strength 45 MPa), Gf = KIc²/E with KIc =
 /// 0.75 MPa m^0.5 (soda-lime glass, e.g. Wiederhorn 1969): 8 J/m². Glass fails by principal
 /// tension, so in pure shear at τ = ft, and Rankine's criterion linearised at no normal stress
-/// adds half the compression: c = ft, μ = 0.5.
+/// adds half the compression: c = ft, μ = 0.5. Its strength is a surface flaw's, so it scatters
+/// as a weakest link: Weibull modulus 7 and k = 2.86e-53 N^-7 m^12 for a 60 s load (ASTM E1300's
+/// glass failure prediction model, Beason & Morgan 1984, J. Struct. Eng. 110(2)), a median of
+/// (ln 2 / k)^(1/7) = 30.4 MPa over 1 m². Static fatigue (σ^16 t constant, E1300's load
+/// duration rule) raises it to 45 MPa for a load of 0.12 s, so EN 572-1's 45 MPa is kept as the
+/// median of 1 m²; a blast's 1-30 ms would give 61-49 MPa (the preset has no rate law).
 Material glassPreset()
 {
-    const Material glass = withDamping(withShear(withElasticity(calibrateMaterial("glass", 2500.0, 3.4e3, 6.9e3, "Clancey 1972: windows shatter at 3.4-6.9 kPa"),
+    const Material glass = withDamping(withWeakestLink(withShear(withElasticity(calibrateMaterial("glass", 2500.0, 3.4e3, 6.9e3, "Clancey 1972: windows shatter at 3.4-6.9 kPa"),
                                                 70e9, 0.2, 45e6, 8.0, "EN 572-1 (E, strength); Gf = KIc^2/E, KIc 0.75 MPa m^0.5"),
                                  45e6, 0.5, StrengthRateLaw::None, "Rankine (principal tension) linearised: c = ft, mu 0.5"),
+                       7.0, 1.0, "Weibull m 7 (ASTM E1300 glass failure prediction model); ft the median of 1 m^2, E1300's for a 0.12 s load"),
                        0.001, "half the flexural loss factor of glass, 0.6-2 x 10^-3 (Cremer & Heckl 1988)");
     // Clear float glass, its broken edges the green of the pane seen edge-on.
     return withLook(glass, {0.80, 0.90, 0.87}, {0.35, 0.60, 0.50}, {0.35, 0.60, 0.50}, 0.05, 0.9);
@@ -197,7 +216,11 @@ Material glassPreset()
 /// TL; Stanzl-Tschegg, Tan & Tschegg 1995, Wood Sci. Technol. 29); shear parallel to the grain
 /// 7.9 MPa (table 5-3b, Sitka spruce, 12 % moisture), no friction (the handbook gives none).
 /// Crushing: table 5-3a's compression perpendicular and parallel to the grain; for Gc no
-/// published value for wood was found, so it takes masonry's ductility index Gc / fc.
+/// published value for wood was found, so it takes masonry's ductility index Gc / fc. Scatter:
+/// CoV 0.25, table 5-6's for clear wood in tension along the grain (the JCSS Probabilistic Model
+/// Code, part 3.5, puts tension across it at 2.5 times density's 0.10, the same), correlated over
+/// 0.48 m, the mean length of a weak section along a Nordic spruce board (JCSS 3.5 after
+/// Isaksson 1999).
 Material woodPreset()
 {
     constexpr double kAlongGrainPa = 10e9;
@@ -210,8 +233,11 @@ Material woodPreset()
                      "along the grain: Wood Handbook tables 5-1 (E_L, G_LT) and 5-3a (modulus of rupture as tensile strength); "
                      "Ashby & Jones table 13.1 (Gf across the fibres); Kollmann & Cote 1968 (shear across the fibres)"),
                        0.005, "half the flexural loss factor of wood, about 10^-2 (Cremer & Heckl 1988)");
+    const Material scattered = withScatter(wood, 0.25, 0.48,
+                                           "strength CoV 0.25 (Wood Handbook table 5-6, tension parallel; JCSS PMC 3.5 across), correlated over 0.48 m "
+                                           "(JCSS PMC 3.5 after Isaksson 1999: weak sections along a board)");
     // Weathered spruce outside, paler fresh wood where it splits.
-    return withLook(withCrushing(wood, 4.0e6, kCrushingDuctilityM * 4.0e6,
+    return withLook(withCrushing(scattered, 4.0e6, kCrushingDuctilityM * 4.0e6,
                         "Wood Handbook table 5-3a, Sitka spruce at 12 % moisture: 4.0 MPa across the grain, 38.7 MPa along it; "
                         "Gc from masonry's ductility index 1.6 mm (Lourenco 2008; no value for wood found)",
                         38.7e6, kCrushingDuctilityM * 38.7e6),
@@ -227,11 +253,15 @@ Material woodPreset()
 /// J. Eng. Mech. 123(7), the potential cracks in the units of the TU Eindhoven shear walls).
 /// No crushing (compressive_strength_Pa 0): with its fk, 5 MPa, the house wall of issue 47
 /// carrying its floors collapses where it stands without (docs/accuracy.md, "Crushing"); a scene
-/// may set it (docs/materials.md gives fk and Gc = 1.6 mm × fk, Lourenço 2008).
+/// may set it (docs/materials.md gives fk and Gc = 1.6 mm × fk, Lourenço 2008). Scatter (JCSS
+/// Probabilistic Model Code, part 3 "Masonry", lognormal): the joints' CoV 0.30, the code's for
+/// flexural tensile strength parallel to the bed joints (35 % across them, 40 % for cohesion);
+/// the units' 0.24, its clay bricks' tensile strength; correlated over a course (65 mm), as a
+/// wall's joints are nearly independent of each other (a modelling choice).
 Material brickMasonryPreset()
 {
     // Red clay brick, its broken interior a paler orange, grey cement mortar in the joints.
-    return withLook(withDamping(withUnits(withShear(withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
+    return withLook(withScatter(withDamping(withUnits(withShear(withElasticity(calibrateMaterial("brick-masonry", 1900.0, 48.2e3, 55.1e3,
                                                                 "Clancey 1972: unreinforced brick panels 8-12 in fail at 48.2-55.1 kPa"),
                                               5e9, 0.2, 0.3e6, 12.0, "EN 1996-1-1 (E = 1000 fk); van der Pluijm via Lourenco 1996 (bond strength, Gf)"),
                                0.3e6, 0.4, StrengthRateLaw::None, "EN 1996-1-1 table 3.4 and eq. 3.5 (fvko 0.3 MPa, 0.4 sigma_d)"),
@@ -239,6 +269,7 @@ Material brickMasonryPreset()
                      "215 x 102.5 x 65 mm bricks, 10 mm joints, running bond; potential cracks in units ft 2.0 MPa, Gf 80 J/m^2 "
                      "(Lourenco & Rots 1997, TU Eindhoven shear walls)"),
                        0.03, "ENV 1998-6:2003 Annex B, brickwork 3-10 % (the lower end: joints and cracks are resolved)"),
+                    0.30, 0.065, "strength CoV 0.30 in joints, 0.24 in units (JCSS PMC part 3, masonry), correlated over a course (65 mm)", 0.24),
                     {0.45, 0.09, 0.047}, {0.54, 0.17, 0.08}, {0.48, 0.45, 0.38}, 0.9);
 }
 
@@ -324,6 +355,10 @@ const std::vector<Field<Material>>& fieldTable<Material>()
         {"strength_rate_law", choice(&Material::strengthRateLaw)},
         {"strength_cov", &Material::strengthCoefficientOfVariation, closed(0.0, 1.0)},
         {"strength_correlation_length_m", &Material::strengthCorrelationLengthM, aboveZeroUpTo(100.0)},
+        {"unit_strength_cov", &Material::unitStrengthCoefficientOfVariation, closed(0.0, 1.0)},
+        {"strength_distribution", choice(&Material::strengthDistribution)},
+        {"strength_weibull_modulus", &Material::strengthWeibullModulus, closed(0.0, 100.0)},
+        {"strength_reference_area_m2", &Material::strengthReferenceAreaM2, aboveZeroUpTo(1e6)},
         {"damping_ratio", &Material::dampingRatio, closed(0.0, 0.3)},
         {"unit_length_m", &Material::unitLengthM, closed(0.0, 100.0)},
         {"unit_width_m", &Material::unitWidthM, closed(0.0, 100.0)},
@@ -385,10 +420,19 @@ FieldProblem crushingProblem(const Material& m)
     return {};
 }
 
+/// A Weibull scatter needs its modulus.
+FieldProblem scatterProblem(const Material& m)
+{
+    if (m.strengthDistribution == StrengthDistribution::Weibull && !(m.strengthWeibullModulus > 0.0))
+        return {"strength_weibull_modulus", "must be above 0 when strength_distribution is weibull (glass: 7, ASTM E1300)"};
+    return {};
+}
+
 }  // namespace
 
 FieldProblem structureProblem(const Material& m)
 {
+    if (const FieldProblem problem = scatterProblem(m); !problem.key.empty()) return problem;
     if (hasUnits(m) && hasGrain(m)) return {"grain_axis", "must be none for a material built of units (unit_length_m above 0)"};
     std::vector<std::pair<const char*, double>> needed;
     std::string reason;

@@ -500,21 +500,19 @@ void nameParts(DeformableBody& deformable, std::vector<Body>& parts, int64_t* ne
 {
     std::vector<std::vector<uint32_t>> particles;
     for (const Body& part : parts) particles.push_back(particlesOfPart(deformable.lattice, part));
-    // Per id shown, the part holding most of its particles (the first such part on a tie).
-    std::map<int64_t, std::pair<size_t, size_t>> heir;  // id -> (particles held, part)
+    // Bonds only break, so a part lies within one piece shown; it is that piece when it holds all
+    // of the piece's particles.
     const std::vector<int64_t>& shown = deformable.shownIdOfParticle;
+    std::map<int64_t, size_t> shownSize;
+    for (const int64_t id : shown) ++shownSize[id];
     for (size_t k = 0; k < parts.size(); ++k) {
-        std::map<int64_t, size_t> held;
-        if (!shown.empty())
-            for (const uint32_t p : particles[k]) ++held[shown[p]];
-        for (const auto& [id, count] : held) {
-            auto [it, isNew] = heir.emplace(id, std::make_pair(count, k));
-            if (!isNew && count > it->second.first) it->second = {count, k};
-        }
+        parts[k].id = kNoBodyId;
+        if (shown.empty() || particles[k].empty()) continue;
+        const int64_t id = shown[particles[k].front()];
+        const bool whole = std::all_of(particles[k].begin(), particles[k].end(), [&](uint32_t p) { return shown[p] == id; }) &&
+                           particles[k].size() == shownSize[id];
+        if (id != kNoBodyId && whole) parts[k].id = id;
     }
-    for (Body& part : parts) part.id = kNoBodyId;
-    for (const auto& [id, held] : heir)
-        if (id != kNoBodyId && parts[held.second].id == kNoBodyId) parts[held.second].id = id;
     if (!nextId) return;
     deformable.shownIdOfParticle.assign(deformable.lattice.model().voxelParticleCount, kNoBodyId);
     for (size_t k = 0; k < parts.size(); ++k) {

@@ -5,6 +5,8 @@
 #include <spall/lattice/RandomField.h>
 
 #include <spall/core/Error.h>
+#include <spall/core/Hash.h>
+#include <spall/fracture/Fracture.h>
 #include <spall/loads/Exposure.h>
 #include <spall/voxel/LinkBits.h>
 
@@ -155,7 +157,7 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
     if (hasUnits(material)) lattice.classifyUnitBonds(material);
     if (hasGrain(material)) lattice.classifyGrainBonds(material);
     lattice.state.bondHistory.assign(lattice.mModel.bonds.size(), BondHistory());
-    if (material.strengthCoefficientOfVariation > 0.0) lattice.scatterStrengths(material, seed);
+    if (scattersInStrength(material)) lattice.scatterStrengths(material, seed);
     if (wholeBody.linkDamage) lattice.takeOverLinkDamage(wholeBody);
     const LatticeStiffness& k = lattice.mModel.stiffness;
     const double stiffestPa = *std::max_element(k.normalModulusPa.begin(), k.normalModulusPa.end());
@@ -325,7 +327,22 @@ void Lattice::condenseVolumetricModulus()
 
 void Lattice::scatterStrengths(const Material& material, uint64_t seed)
 {
-    const double h = mModel.spacingM, l = material.strengthCorrelationLengthM;
+    if (material.strengthDistribution == StrengthDistribution::Weibull) return drawWeakestLinkStrengths(material, seed);
+    // Masonry's units scatter on their own (a brick's strength is not its joint's); particles
+    // taller than a course have no unit bonds, their homogenised bonds following the joints.
+    const bool units = hasUnits(material) && unitsResolvedBy(material, mModel.spacingM);
+    const auto isUnitBond = [&](size_t b) { return units && mModel.bonds[b].strengthClass == 1; };
+    const double l = material.strengthCorrelationLengthM;
+    if (material.strengthCoefficientOfVariation > 0.0)
+        scatterLognormal(material.strengthCoefficientOfVariation, l, seed, [&](size_t b) { return !isUnitBond(b); });
+    if (units && material.unitStrengthCoefficientOfVariation > 0.0)
+        scatterLognormal(material.unitStrengthCoefficientOfVariation, l, splitmix64(seed), isUnitBond);
+}
+
+template <class Picks>
+void Lattice::scatterLognormal(double coefficientOfVariation, double correlationLengthM, uint64_t seed, const Picks& scatters)
+{
+    const double h = mModel.spacingM;
     // The bonds' midpoints in half spacings: twice the low particle's index, one more along the axis.
     Eigen::Vector3i lowest = Eigen::Vector3i::Constant(std::numeric_limits<int>::max()), highest = -lowest;
     for (const openvdb::Coord& ijk : mModel.voxel) {
@@ -333,15 +350,37 @@ void Lattice::scatterStrengths(const Material& material, uint64_t seed)
         lowest = lowest.cwiseMin(twice);
         highest = highest.cwiseMax(twice + Eigen::Vector3i::Ones());
     }
-    const GaussianRandomFieldOnGrid field(GaussianRandomField(seed, l), 0.5 * h, lowest, highest);
+    const GaussianRandomFieldOnGrid field(GaussianRandomField(seed, correlationLengthM), 0.5 * h, lowest, highest);
     // The face average's variance: the variance function along each of its two sides.
-    const double cov = material.strengthCoefficientOfVariation * varianceFunction(h, l);
+    const double cov = coefficientOfVariation * varianceFunction(h, correlationLengthM);
     const double sigma = std::sqrt(std::log(1.0 + cov * cov));
     forEach(mModel.bonds.size(), [&](size_t b) {
+        if (!scatters(b)) return;
         const openvdb::Coord lo = mModel.voxel[mModel.bonds[b].low];
         Eigen::Vector3i mid(2 * lo.x(), 2 * lo.y(), 2 * lo.z());
         ++mid[mModel.bonds[b].axis];
         state.bondHistory[b].strengthScale = std::exp(sigma * field.at(mid) - 0.5 * sigma * sigma);
+    });
+}
+
+void Lattice::drawWeakestLinkStrengths(const Material& material, uint64_t seed)
+{
+    // Weakest link (Weibull 1951, J. Appl. Mech. 18:293; the law of ASTM E1300's glass failure
+    // prediction model): an area A under a uniform tension σ survives with probability
+    // exp(−ln 2 (A / A_ref) (σ / ft)^m), ft the median strength of A_ref. A bond stands for its
+    // face, a = h², and draws its strength from the law at that area, by inverting it at a
+    // uniform survival u: σ / ft = (−ln u A_ref / (ln 2 a))^(1/m). Bonds under one stress then
+    // survive together with the law at their summed area, at any h.
+    const double h = mModel.spacingM, m = material.strengthWeibullModulus;
+    const double areaRatio = material.strengthReferenceAreaM2 / (std::log(2.0) * h * h);
+    const uint64_t weibullSeed = splitmix64(seed ^ 0x57454942554C4Cull);  // not the paper's rules' draws from the same seed
+    forEach(mModel.bonds.size(), [&](size_t b) {
+        const LatticeBond& bond = mModel.bonds[b];
+        // u in (0, 1): linkRandom is in [0, 1), shifted by half its resolution.
+        // An anchor's bond draws apart from the link bond of its voxel along the same axis.
+        const int anchor = std::max(bond.low, bond.high) >= mModel.voxelParticleCount ? 3 : 0;
+        const double survival = 1.0 - linkRandom(weibullSeed, mModel.voxel[bond.low], bond.axis + anchor) - 0x1p-54;
+        state.bondHistory[b].strengthScale = std::pow(-std::log(survival) * areaRatio, 1.0 / m);
     });
 }
 

@@ -26,6 +26,21 @@ struct EnumNames<StrengthRateLaw> {
                                                                          {StrengthRateLaw::FibModelCode2010, "fib-mc2010"}};
 };
 
+/// How the deformable phase's bonds scatter in strength (Material::strengthDistribution).
+enum class StrengthDistribution {
+    /// A lognormal field correlated in space (lattice/RandomField.h): strength set by a
+    /// material's structure at some scale, as concrete's by its aggregate.
+    Lognormal,
+    /// Independent bonds, each the weakest link of its face (Weibull): strength set by the
+    /// worst flaw, as glass's by surface flaws.
+    Weibull,
+};
+template <>
+struct EnumNames<StrengthDistribution> {
+    static constexpr std::pair<StrengthDistribution, const char*> kNames[] = {{StrengthDistribution::Lognormal, "lognormal"},
+                                                                              {StrengthDistribution::Weibull, "weibull"}};
+};
+
 /// Which horizontal axis a masonry unit's length lies along (its courses are along z).
 enum class UnitLengthAxis { X, Y };
 template <>
@@ -83,12 +98,20 @@ struct Material {
     double compressiveStrengthPa = 0.0;
     double compressiveFractureEnergyJPerM2 = 0.0;
     StrengthRateLaw strengthRateLaw = StrengthRateLaw::None;
-    /// The deformable phase's bonds scatter in strength (tension and shear together) about the
-    /// values above: a lognormal of this coefficient of variation at the scale of the
-    /// correlation length, correlated in space (lattice/RandomField.h); 0: every bond alike
-    /// (unit: fraction).
+    /// The deformable phase's bonds scatter in strength (tension, shear and crushing together)
+    /// about the values above, drawn from the scene's seed.
+    StrengthDistribution strengthDistribution = StrengthDistribution::Lognormal;
+    /// Lognormal: the coefficient of variation at the scale of the correlation length, the
+    /// joints' for masonry; 0: every bond alike (unit: fraction) ...
     double strengthCoefficientOfVariation = 0.0;
-    double strengthCorrelationLengthM = 0.02;  ///< (unit: m)
+    double strengthCorrelationLengthM = 0.02;  ///< ... (unit: m)
+    /// ... and masonry's units', from a field of their own (unit: fraction).
+    double unitStrengthCoefficientOfVariation = 0.0;
+    /// Weibull: the modulus m, and the area whose median strength in uniform tension the
+    /// strengths above are: an area A fails under a uniform σ with probability
+    /// 1 − exp(−ln 2 (A / A_ref) (σ / ft)^m) (unit: 1, m^2).
+    double strengthWeibullModulus = 0.0;
+    double strengthReferenceAreaM2 = 1.0;
     /// The material's own damping as a fraction of critical, at a piece's fundamental mode: in
     /// the deformable phase each piece's vibration about its rigid motion decays at this ratio
     /// (Lattice::dampVibration); cracks and joints dissipate on their own, so it is the
@@ -134,6 +157,12 @@ struct Material {
 
 /// Whether a material is built of units (Material's masonry fields).
 inline bool hasUnits(const Material& m) { return m.unitLengthM > 0.0; }
+
+/// Whether the deformable phase's bonds of a material scatter in strength.
+inline bool scattersInStrength(const Material& m)
+{
+    return m.strengthDistribution == StrengthDistribution::Weibull || m.strengthCoefficientOfVariation > 0.0 || m.unitStrengthCoefficientOfVariation > 0.0;
+}
 
 /// Whether a material has a grain (Material's wood fields).
 inline bool hasGrain(const Material& m) { return m.grainAxis != GrainAxis::None; }

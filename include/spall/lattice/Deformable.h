@@ -44,10 +44,11 @@ struct DeformableBody {
 };
 
 /// Gives each of a body's parts (handOff's, in the body's lattice's index space) the id of the
-/// piece shown before (DeformableBody::shownIdOfParticle) that it holds most particles of; a
-/// piece shown whose particles went to several parts names the one holding most of them. A part
-/// left without one gets a new id from `nextId` when `nextId` is given (and the shown ids are
-/// updated: showing), otherwise kNoBodyId (leaving: the simulation names it).
+/// piece shown before (DeformableBody::shownIdOfParticle) that it is, whole: a body changes shape
+/// only by splitting, and a piece shown that cracked since goes on as new ids, as a rigid body's
+/// parts do (a frame's mesh for an id is that id's at every frame). A part left without one gets
+/// a new id from `nextId` when `nextId` is given (and the shown ids are updated: showing),
+/// otherwise kNoBodyId (leaving: the simulation names it).
 void nameParts(DeformableBody& deformable, std::vector<Body>& parts, int64_t* nextId);
 
 /// The lattice of a body entering the phase, moving with the body: a particle per voxel, or per

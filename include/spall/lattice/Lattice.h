@@ -40,7 +40,7 @@ public:
     /// neither is held.
     /// Its settings are taken here, once: the bulk viscosity and the damage law from `settings`,
     /// the damping ratio from the material, and the scene's `seed`, which draws the strength
-    /// scatter (Material::strengthCoefficientOfVariation); with `blocks` of more than one voxel, a
+    /// scatter (Material::strengthDistribution); with `blocks` of more than one voxel, a
     /// particle per block (ParticleBlocks.h).
     static Lattice fromBody(const Body& body, const Material& material, const StaticWorld& supports = StaticWorld(),
                             const LatticeSettings& settings = LatticeSettings(), const VoxelBlocks& blocks = VoxelBlocks(), uint64_t seed = 1);
@@ -328,11 +328,16 @@ private:
     /// Bonds along the grain of a material with one take its strength along the grain.
     void classifyGrainBonds(const Material& material);
     void condenseVolumetricModulus();
-    /// Each bond's strength scale: a lognormal of mean 1 whose CoV is the material's, reduced
-    /// by averaging over the bond's h x h face (the variance function, squared), drawn from a
-    /// Gaussian random field at the bond's midpoint in the body's index space (so pieces keep
-    /// their strengths through splits).
+    /// Each bond's strength scale, by the material's distribution, keyed on the bond's place in
+    /// the body's index space (so pieces keep their strengths through splits).
     void scatterStrengths(const Material& material, uint64_t seed);
+    /// Lognormal: mean 1, the CoV reduced by averaging over the bond's h x h face (the variance
+    /// function, squared), from a Gaussian random field at the bond's midpoint; for the bonds
+    /// `scatters` picks.
+    template <class Picks>
+    void scatterLognormal(double coefficientOfVariation, double correlationLengthM, uint64_t seed, const Picks& scatters);
+    /// Weibull: each bond the weakest link of its h x h face, independently.
+    void drawWeakestLinkStrengths(const Material& material, uint64_t seed);
     /// f(i) for i < count: in parallel for large lattices, in order for small ones.
     template <typename F>
     void forEach(size_t count, const F& f) const;
