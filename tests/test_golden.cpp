@@ -37,5 +37,5 @@ TEST(Golden, TheDefaultSceneEndsInItsRecordedState)
 
 TEST(Golden, TheGlassSceneEndsInItsRecordedState)
 {
-    EXPECT_EQ(hex(lastFrameStateHash("glass-pane.json")), "0x595efac624c2b877");
+    EXPECT_EQ(hex(lastFrameStateHash("glass-pane.json")), "0xc77c7fe6d5afcbc2");
 }
