@@ -376,9 +376,9 @@ void Lattice::drawWeakestLinkStrengths(const Material& material, uint64_t seed)
     const uint64_t weibullSeed = splitmix64(seed ^ 0x57454942554C4Cull);  // not the paper's rules' draws from the same seed
     forEach(mModel.bonds.size(), [&](size_t b) {
         const LatticeBond& bond = mModel.bonds[b];
-        // u in (0, 1): linkRandom is in [0, 1), shifted by half its resolution.
         // An anchor's bond draws apart from the link bond of its voxel along the same axis.
         const int anchor = std::max(bond.low, bond.high) >= mModel.voxelParticleCount ? 3 : 0;
+        // u in (0, 1): linkRandom is in [0, 1), shifted by half its resolution.
         const double survival = 1.0 - linkRandom(weibullSeed, mModel.voxel[bond.low], bond.axis + anchor) - 0x1p-54;
         state.bondHistory[b].strengthScale = std::pow(-std::log(survival) * areaRatio, 1.0 / m);
     });
