@@ -378,8 +378,8 @@ TEST(Lattice, APinnedEdgePushedAlongItsPinStopsAtTheFrame)
     // stop a pane's edge driven into it. A row of four glass voxels along x, its first pinned to
     // a box beyond its -x face, pushed toward the box by a hundred times its weight per voxel:
     // it slides until its first cube sinks a quarter voxel into the box (Lattice::keepOutOf),
-    // then stops there. Without the box's contact it slid in without limit (a shard of the glass
-    // pane scene came out through its frame at 157 m/s).
+    // then the box's elastic push stops it there. Without the box's contact it slid in without
+    // limit (a shard of the glass pane scene came out through its frame at 157 m/s).
     const Material glass = findMaterialPreset("glass");
     const double h = 0.005;
     Body body = test::boxBody(4, 1, 1, h, glass.densityKgM3);
@@ -404,7 +404,7 @@ TEST(Lattice, APinnedEdgePushedAlongItsPinStopsAtTheFrame)
     std::printf("pinned edge pushed into its frame: deepest %.3f voxel into the box, at the end moving %.2e m/s\n", deepestM / h,
                 lattice.state.velocityMS[first].x());
     EXPECT_GT(deepestM, 0.2 * h) << "the pin does not stop it";
-    EXPECT_LE(deepestM, 0.25 * h + 1e-12);
+    EXPECT_LE(deepestM, 0.26 * h) << "the box's spring gives a hundredth of a voxel at most";
     // Stopped, but for one step's push of the whole row on it.
     EXPECT_LE(std::abs(lattice.state.velocityMS[first].x()), dt * 4.0 * push.norm() / lattice.model().particleMassKg);
 }

@@ -173,14 +173,8 @@ void setExternalForces(DeformableBody& deformable, const Body& body, const std::
     // The body's weight, over its particles (blocks at the surface are heavier than its voxels).
     const Eigen::Vector3d weight = body.mass.massKg / double(lattice.model().voxelParticleCount) * gravityMS2;
     for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = lattice.model().held[p] ? Eigen::Vector3d::Zero() : weight;
-    // A support bears on its voxel while they touch, its bond broken or not (a floor rests on a
-    // cracked head): while the voxel lies within a quarter voxel of where the support held it.
-    const double reachM = 1.25 * lattice.model().spacingM;
-    for (const LatticeModel::BearingLoad& load : lattice.model().bearingLoads) {
-        const LatticeBond& bond = lattice.model().bonds[load.bond];
-        const uint32_t voxel = std::min(bond.low, bond.high), support = std::max(bond.low, bond.high);
-        if ((lattice.state.positionM[voxel] - lattice.state.positionM[support]).norm() <= reachM) lattice.externalForceN[voxel] += load.forceN;
-    }
+    for (const LatticeModel::BearingLoad& load : lattice.model().bearingLoads)
+        if (lattice.bears(load)) lattice.externalForceN[load.voxel(lattice.model().bonds)] += load.forceN;
     if (faceForcesN.empty()) return;
     SPALL_CHECK(deformable.particleOfFace.size() == faceForcesN.size());  // the lattice's own body's faces
     for (size_t f = 0; f < faceForcesN.size(); ++f) {

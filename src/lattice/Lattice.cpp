@@ -56,6 +56,7 @@ void Lattice::refreshForces()
     mListedAtM.clear();  // the state may have been written from outside
     updateContactCandidates();
     addContactForces();
+    addSurfaceForces(stableTimeStepS());
 }
 
 void Lattice::step(double dtS)
@@ -72,9 +73,7 @@ void Lattice::step(double dtS)
         kick(p);
         state.positionM[p] += dtS * state.velocityMS[p];
         state.orientation[p] = (rotationOf(dtS * state.angularVelocityRadS[p]) * state.orientation[p]).normalized();
-        if (mModel.held[p]) return;
-        if (mModel.ground.enabled && !bondedToGround(p)) keepAboveGround(p);
-        if (!mModel.keptOut.empty()) keepOutOfColliders(p);
+        if (!mModel.elasticSurfaces && !mModel.held[p]) keepOutPlastically(p);
     });
     // Damage first, from the new positions (and the velocities half-way through the step, for
     // the strain rate), then the forces from the state.
@@ -88,6 +87,7 @@ void Lattice::step(double dtS)
     forEach(particleCount(), [&](size_t p) { gatherBondForces(p); });
     updateContactCandidates();
     addContactForces();
+    addSurfaceForces(dtS);
     forEach(particleCount(), kick);
     // At the step's end, where velocity Verlet's energy is counted.
     if (events.load() & kSnapped) releaseSnapEnergies();

@@ -128,6 +128,7 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
     lattice.mModel.blocks = blocks;
     lattice.mModel.bulkViscosity = settings.bulkViscosity;
     lattice.mModel.handOffResidualStrength = settings.handoffResidualStrength;
+    lattice.mModel.elasticSurfaces = settings.impactFracture;
     // Davison–Stevens is the material's rate law in damage's terms; without one it has nothing
     // to add to the softening line (SceneSetup notes it).
     const bool rateDamage = settings.damageLaw == LatticeDamageLaw::DavisonStevens && material.strengthRateLaw != StrengthRateLaw::None;
@@ -154,6 +155,7 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
             lattice.mModel.ground.offsetM = std::min(lattice.mModel.ground.offsetM, lattice.mModel.ground.normal.dot(x) - 0.5 * h);
     lattice.addLinkBonds(body);
     lattice.addSupportBonds(body, supports);
+    lattice.measureColliderSlack();
     if (hasUnits(material)) lattice.classifyUnitBonds(material);
     if (hasGrain(material)) lattice.classifyGrainBonds(material);
     lattice.state.bondHistory.assign(lattice.mModel.bonds.size(), BondHistory());
@@ -241,7 +243,8 @@ void Lattice::addSupportBonds(const Body& body, const StaticWorld& supports)
         if (hold.box < 0) mModel.groundBond[p] = int32_t(mModel.bonds.size() - 1);
         else if (size_t(hold.box) < supports.pinned.size()) mModel.bonds.back().pinned = supports.pinned[size_t(hold.box)];
         if (hold.box >= 0 && size_t(hold.box) < supports.bearingPressurePa.size())
-            recordBearingLoad(mModel.bonds.size() - 1, face, supports.bearingPressurePa[size_t(hold.box)], body.motion.orientation);
+            recordBearingLoad(mModel.bonds.size() - 1, face, supports.bearingPressurePa[size_t(hold.box)],
+                              size_t(hold.box) < supports.friction.size() ? supports.friction[size_t(hold.box)] : 0.0, body.motion.orientation);
     }
 }
 

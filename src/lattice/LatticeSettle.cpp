@@ -38,12 +38,12 @@ std::vector<double> solveTridiagonal(const std::vector<double>& lower, std::vect
 
 }  // namespace
 
-void Lattice::recordBearingLoad(size_t supportBond, int face, double pressurePa, const Eigen::Quaterniond& bodyToWorld)
+void Lattice::recordBearingLoad(size_t supportBond, int face, double pressurePa, double friction, const Eigen::Quaterniond& bodyToWorld)
 {
     if (pressurePa <= 0.0) return;
     // Into the body across the held face, over the particle's face.
     const Eigen::Vector3d forceN = bodyToWorld * (-faceNormal(face)) * pressurePa * mModel.spacingM * mModel.spacingM;
-    mModel.bearingLoads.push_back({uint32_t(supportBond), forceN});
+    mModel.bearingLoads.push_back({uint32_t(supportBond), forceN, friction});
 }
 
 bool Lattice::settleUnderDeadLoads(const Eigen::Vector3d& weightPerParticleN)

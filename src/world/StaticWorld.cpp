@@ -74,6 +74,7 @@ StaticWorld buildStaticWorld(const GroundPlane& ground, const std::vector<Static
         world.boxes.push_back({box.centreM, box.halfExtentM, box.orientation});
         world.pinned.push_back(box.holds == SupportHold::Pinned ? 1 : 0);
         world.friction.push_back(box.friction);
+        world.restitution.push_back(box.restitution);
         world.bearingPressurePa.push_back(box.bearingPressurePa);
     }
     return world;

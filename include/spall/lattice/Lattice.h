@@ -22,6 +22,8 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <optional>
 #include <vector>
 
 namespace spall {
@@ -108,6 +110,9 @@ public:
 
     /// What it was built with (fromBody), unchanged since.
     const LatticeModel& model() const { return mModel; }
+    /// Whether a support bears on its voxel: while they touch, its bond broken or not (a floor
+    /// rests on a cracked head), the voxel within a quarter voxel of where the support held it.
+    bool bears(const LatticeModel::BearingLoad& load) const;
 
 private:
     LatticeModel mModel;
@@ -223,7 +228,7 @@ private:
     /// in its particles' volumetric terms, at its failure surface, less Gf h².
     void releaseSnapEnergy(size_t b, double volumetricJ);
     /// A support bond's bearing load (LatticeModel::bearingLoads) from its box's pressure.
-    void recordBearingLoad(size_t supportBond, int face, double pressurePa, const Eigen::Quaterniond& bodyToWorld);
+    void recordBearingLoad(size_t supportBond, int face, double pressurePa, double friction, const Eigen::Quaterniond& bodyToWorld);
     /// The lattice in equilibrium with its dead loads before anything else acts (fromBody): its
     /// weight (`weightPerParticleN` on each free voxel particle, as setExternalForces applies it)
     /// and its supports' bearing loads along the columns of particles along the body's axis
@@ -304,9 +309,8 @@ private:
     void gatherBondForces(size_t p);
     // Building (fromBody).
     /// Static boxes the particles may not pass through (the scene's colliders: a window's frame).
-    /// A particle whose cube sinks into one by more than a quarter of its edge is put back at that
-    /// depth and loses its velocity into the box, as on the ground. The quarter leaves a support
-    /// bond's elastic give alone and matches the rigid phase's tolerance
+    /// A particle whose cube sinks into one by more than a quarter of its edge is pushed back out
+    /// as by the ground (pressOn). The quarter leaves a support bond's elastic give alone and matches the rigid phase's tolerance
     /// (collisions.penetration_tolerance_voxels' default).
     void keepOutOf(const StaticWorld& supports);
     void addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& placeM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
@@ -341,20 +345,41 @@ private:
     /// f(i) for i < count: in parallel for large lattices, in order for small ones.
     template <typename F>
     void forEach(size_t count, const F& f) const;
-    /// Puts a particle that sank into a collider back to the allowed depth (keepOutOf), with
-    /// the box's friction (pushOut).
-    void keepOutOfColliders(size_t p);
-    /// Puts a particle that sank into the ground back on it (GroundPlane), with its friction.
-    void keepAboveGround(size_t p);
+    /// The ground's and the colliders' forces on every free particle that presses on them
+    /// (LatticeStaticContacts.cpp), added to its bond force; `dtS` the step they act over.
+    void addSurfaceForces(double dtS);
+    /// A particle's push from the colliders it sinks into beyond the allowed depth (keepOutOf)
+    /// and its slack.
+    void pressOnColliders(size_t p, double dtS);
+    /// How far a particle's cube sinks into a collider beyond the allowed depth, and the
+    /// outward normal of the face it is nearest (none if outside the grown box).
+    struct ColliderDepth {
+        Eigen::Vector3d outward;
+        double depthM;
+    };
+    std::optional<ColliderDepth> depthInCollider(size_t p, const LatticeModel::KeptOut& box) const;
+    /// Each particle's slack in the colliders, from where it entered (LatticeModel::colliderSlackM).
+    void measureColliderSlack();
+    /// The friction of a support bearing on a voxel whose bond to it has broken (a floor on a
+    /// cracked head holds it from sliding, as the ground holds its base).
+    void holdByBearing(const LatticeModel::BearingLoad& load, double dtS);
+    /// Without elastic surfaces: puts a particle that sank into the ground or a collider beyond
+    /// its slack back on it, with its friction (pushOut).
+    void keepOutPlastically(size_t p);
     /// Moves a particle `depthM` out along `outward` and takes away its speed into the surface
     /// and, by Coulomb's law, up to `friction` times that speed along it: the impulse that stops
-    /// it sinking bounds the impulse that stops it sliding, so a particle pressed on a surface
-    /// by a force N slides to rest under μ N (applied at its centre: a cube's contact would
-    /// also turn it; its bonds hold it from turning in a lattice).
+    /// it sinking bounds the impulse that stops it sliding.
     void pushOut(size_t p, const Eigen::Vector3d& outward, double depthM, double friction);
+    /// A particle's push from the ground its cube sinks into (GroundPlane).
+    void pressOnGround(size_t p, double dtS);
+    /// The force of a surface on a particle whose cube sinks `depthM` into it along -`outward`:
+    /// the spring and the dashpot, never pulling; and Coulomb's friction against its sliding, up
+    /// to μ times that, or what stops the sliding within the step `dtS` (applied at its centre:
+    /// a cube's contact would also turn it; its bonds hold it from turning in a lattice).
+    void pressOn(size_t p, const Eigen::Vector3d& outward, double depthM, const LatticeModel::SurfaceContact& surface, double dtS);
     /// Whether a particle is still bonded to its ground point: it then bears on the ground
-    /// through that bond, and the plane (a plastic contact at its rest height) would hold the
-    /// compression side of a bent base rigid, stiffening and strengthening it.
+    /// through that bond, and the plane's spring would hold the compression side of a bent base
+    /// rigid, stiffening and strengthening it.
     bool bondedToGround(size_t p) const;
     BondStrain strainOf(const LatticeBond& bond) const;
 

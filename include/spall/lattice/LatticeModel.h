@@ -221,25 +221,48 @@ struct LatticeModel {
     double handOffResidualStrength = 0.0;  ///< LatticeSettings::handoffResidualStrength
 
     // What holds it and what it may not pass through.
-    /// The ground plane n·x = offset its particles' cubes may not sink into: a particle that
-    /// would is put back on it and loses its velocity into it (a perfectly plastic contact, as a
-    /// rigid body's resting contact; no friction); its offset lowered to where the lattice's
-    /// lowest cubes rest.
+    /// A surface a particle presses on elastically (the ground, a collider's face): a normal
+    /// spring as stiff as a bond, a dashpot that damps a particle's bounce to the surface's
+    /// restitution, and Coulomb's friction (Lattice::pressOn).
+    struct SurfaceContact {
+        double stiffnessNPerM = 0.0;
+        double dashpotNSPerM = 0.0;
+        double friction = 0.0;  ///< Coulomb coefficient (unit: 1)
+    };
+    /// The contacts' normal spring: twice the softest normal bond's stiffness, the half voxel
+    /// of the body's own material between a particle's centre and a rigid surface. A particle
+    /// held by one bond and the surface is then no stiffer than one between two bonds, so the
+    /// stable step stands (unit: N/m).
+    double surfaceStiffnessNPerM = 0.0;
+    /// Whether the ground and the colliders push elastically (pressOn, with
+    /// lattice.impact_fracture); else a particle that sinks in is put back and loses its speed
+    /// into the surface (a perfectly plastic contact, pushOut), as before issue 48.
+    bool elasticSurfaces = false;
+    /// The ground plane n·x = offset its particles' cubes press on; its offset lowered to where
+    /// the lattice's lowest cubes rest.
     GroundPlane ground = GroundPlane{false};
+    SurfaceContact groundContact;
     /// The boxes of keepOutOf, each in its own frame grown by the allowed depth, with the
     /// world-axis bounds of that grown box: a particle outside them costs six comparisons.
     struct KeptOut {
         Eigen::Matrix3d toBox;
         Eigen::Vector3d centreM, reachM;
         Eigen::AlignedBox3d boundsM;
-        double friction = 0.0;  ///< Coulomb coefficient along its faces (unit: 1)
+        SurfaceContact contact;
     };
     std::vector<KeptOut> keptOut;
+    /// Per particle, how far its cube sank into a collider beyond the allowed depth when it
+    /// entered (a voxel's staircase reaches into a slanted or misaligned box): the box pushes
+    /// only beyond it, so entering throws nothing out (empty without colliders) (unit: m).
+    std::vector<float> colliderSlackM;
     /// A support's dead load on a voxel it holds (StaticBox::bearingPressurePa over the
     /// particle's face), acting while the voxel touches the support (setExternalForces).
     struct BearingLoad {
         uint32_t bond = 0;                                 ///< the support bond
         Eigen::Vector3d forceN = Eigen::Vector3d::Zero();  ///< on its voxel particle, world frame
+        double friction = 0.0;  ///< the box's Coulomb coefficient, once the bond has broken (unit: 1)
+        /// The voxel particle it bears on (the support point is the bond's other, later, end).
+        uint32_t voxel(const std::vector<LatticeBond>& bonds) const { return std::min(bonds[bond].low, bonds[bond].high); }
     };
     std::vector<BearingLoad> bearingLoads;
     /// Per particle, its share of the strain energy its dead loads held when it entered

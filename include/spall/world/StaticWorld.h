@@ -89,6 +89,8 @@ struct StaticWorld {
     std::vector<uint8_t> pinned;
     /// Per box, the Coulomb coefficient of what slides on it (unit: 1); empty: frictionless.
     std::vector<double> friction;
+    /// Per box, the restitution of what bounces off it (unit: fraction); empty: none.
+    std::vector<double> restitution;
     /// Per box, the pressure it bears on the voxels it holds (StaticBox) (unit: Pa); empty: none.
     std::vector<double> bearingPressurePa;
     /// What the bodies weigh by: a lattice enters the phase carrying its weight
