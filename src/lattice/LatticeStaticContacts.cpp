@@ -1,6 +1,7 @@
 // A lattice against the static world: the ground plane its particles press on (unless still
-// bonded to their ground point) and the colliders they may not pass through, each an elastic
-// contact with its restitution and Coulomb friction.
+// bonded to their ground point) and the colliders they may not pass through, each with its
+// Coulomb friction: elastic, with the surface's restitution, under impact fracture; else
+// plastic. And the friction of a floor on a cracked head.
 #include "LatticeForEach.h"
 
 #include <algorithm>

@@ -23,7 +23,6 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
-#include <optional>
 #include <vector>
 
 namespace spall {
@@ -309,9 +308,9 @@ private:
     void gatherBondForces(size_t p);
     // Building (fromBody).
     /// Static boxes the particles may not pass through (the scene's colliders: a window's frame).
-    /// A particle whose cube sinks into one by more than a quarter of its edge is pushed back out
-    /// as by the ground (pressOn). The quarter leaves a support bond's elastic give alone and matches the rigid phase's tolerance
-    /// (collisions.penetration_tolerance_voxels' default).
+    /// A particle whose cube sinks into one by more than a quarter of its edge is put back, or
+    /// pushed back, as on the ground. The quarter leaves a support bond's elastic give alone and
+    /// matches the rigid phase's tolerance (collisions.penetration_tolerance_voxels' default).
     void keepOutOf(const StaticWorld& supports);
     void addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& placeM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
                      const Eigen::Quaterniond& q, bool isHeld);
@@ -378,8 +377,8 @@ private:
     /// a cube's contact would also turn it; its bonds hold it from turning in a lattice).
     void pressOn(size_t p, const Eigen::Vector3d& outward, double depthM, const LatticeModel::SurfaceContact& surface, double dtS);
     /// Whether a particle is still bonded to its ground point: it then bears on the ground
-    /// through that bond, and the plane's spring would hold the compression side of a bent base
-    /// rigid, stiffening and strengthening it.
+    /// through that bond, and the plane would hold the compression side of a bent base rigid,
+    /// stiffening and strengthening it.
     bool bondedToGround(size_t p) const;
     BondStrain strainOf(const LatticeBond& bond) const;
 
