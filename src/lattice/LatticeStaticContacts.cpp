@@ -24,6 +24,21 @@ double dashpotForRestitutionNSPerM(double restitution, double stiffnessNPerM, do
     return 2.0 * zeta * std::sqrt(stiffnessNPerM * massKg);
 }
 
+/// Coulomb's friction on a particle of `massKg` sliding at `slidingMS`: against it, up to
+/// `limitN` (μ times the push), or what stops the sliding within the step `dtS`.
+Eigen::Vector3d frictionForceN(const Eigen::Vector3d& slidingMS, double limitN, double massKg, double dtS)
+{
+    const double speedMS = slidingMS.norm();
+    if (speedMS <= 0.0) return Eigen::Vector3d::Zero();
+    return -std::min(limitN, massKg * speedMS / dtS) / speedMS * slidingMS;
+}
+
+/// How far a particle's cube at `positionM` sinks into the model's ground plane (unit: m).
+double depthInGroundM(const LatticeModel& model, const Eigen::Vector3d& positionM)
+{
+    return model.ground.offsetM + 0.5 * model.spacingM - model.ground.normal.dot(positionM);
+}
+
 }  // namespace
 
 bool Lattice::bondedToGround(size_t p) const
@@ -107,21 +122,19 @@ void Lattice::holdByBearing(const LatticeModel::BearingLoad& load, double dtS)
     const size_t p = load.voxel(mModel.bonds);
     const double normalN = load.forceN.norm();
     const Eigen::Vector3d across = load.forceN / normalN, v = state.velocityMS[p];
-    const Eigen::Vector3d sliding = v - across.dot(v) * across;
-    const double slidingMS = sliding.norm();
-    if (slidingMS > 0.0) state.bondForceN[p] -= std::min(load.friction * normalN, mModel.particleMassKg * slidingMS / dtS) / slidingMS * sliding;
+    state.bondForceN[p] += frictionForceN(v - across.dot(v) * across, load.friction * normalN, mModel.particleMassKg, dtS);
 }
 
 void Lattice::pressOnGround(size_t p, double dtS)
 {
-    const double depth = mModel.ground.offsetM + 0.5 * mModel.spacingM - mModel.ground.normal.dot(state.positionM[p]);
+    const double depth = depthInGroundM(mModel, state.positionM[p]);
     if (depth > 0.0) pressOn(p, mModel.ground.normal, depth, mModel.groundContact, dtS);
 }
 
 void Lattice::keepOutPlastically(size_t p)
 {
     if (mModel.ground.enabled && !bondedToGround(p)) {
-        const double depth = mModel.ground.offsetM + 0.5 * mModel.spacingM - mModel.ground.normal.dot(state.positionM[p]);
+        const double depth = depthInGroundM(mModel, state.positionM[p]);
         if (depth > 0.0) pushOut(p, mModel.ground.normal, depth, mModel.groundContact.friction);
     }
     for (const LatticeModel::KeptOut& box : mModel.keptOut)
@@ -149,11 +162,7 @@ void Lattice::pressOn(size_t p, const Eigen::Vector3d& outward, double depthM, c
     // press harder than the wave the body can carry, ρ c v).
     const double normalN = std::max(0.0, surface.stiffnessNPerM * depthM + surface.dashpotNSPerM * std::min(closingMS, 0.0));
     if (normalN == 0.0) return;
-    Eigen::Vector3d forceN = normalN * outward;
-    const Eigen::Vector3d sliding = v + closingMS * outward;
-    const double slidingMS = sliding.norm();
-    if (slidingMS > 0.0) forceN -= std::min(surface.friction * normalN, mModel.particleMassKg * slidingMS / dtS) / slidingMS * sliding;
-    state.bondForceN[p] += forceN;
+    state.bondForceN[p] += normalN * outward + frictionForceN(v + closingMS * outward, surface.friction * normalN, mModel.particleMassKg, dtS);
 }
 
 }  // namespace spall
