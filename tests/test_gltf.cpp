@@ -123,7 +123,7 @@ TEST(Gltf, EachFragmentIsANodeThatFollowsTheHistoryWithAMeshOfItsVolume)
       "voxel_size_m": 0.1, "duration_s": 0.25, "frame_rate_hz": 24, "seed": 3,
       "objects": [{"name": "wall", "primitive": {"shape": "box", "size_m": [2.0, 0.3, 1.5]},
                    "position_m": [0, 0, 0.75], "material": "brick-masonry", "anchor": "ground"}],
-      "charges": [{"position_m": [0.2, -2.0, 0.0], "tnt_kg": 3.0, "burst": "surface"}]})", "gltf-scene", ".");
+      "charges": [{"position_m": [0.2, -2.0, 0.0], "tnt_kg": 4.0, "burst": "surface"}]})", "gltf-scene", ".");
     RunOptions options;
     options.outputDirectory = dir;
     options.gltfPath = dir + "/debris.glb";  // the run's glTF sink exports once the run completes
@@ -152,7 +152,7 @@ TEST(Gltf, EachFragmentIsANodeThatFollowsTheHistoryWithAMeshOfItsVolume)
     EXPECT_NEAR(charge.translation[0], 0.2, 1e-6);
     EXPECT_NEAR(charge.translation[1], 0.0, 1e-6);
     EXPECT_NEAR(charge.translation[2], 2.0, 1e-6);
-    EXPECT_DOUBLE_EQ(charge.extras.Get("tnt_kg").GetNumberAsDouble(), 3.0);
+    EXPECT_DOUBLE_EQ(charge.extras.Get("tnt_kg").GetNumberAsDouble(), 4.0);
 
     const History h = readHistory(dir + "/history.h5");
     const int frames = int(h.timeS.size());

@@ -378,8 +378,9 @@ TEST(Lattice, APinnedEdgePushedAlongItsPinStopsAtTheFrame)
     // stop a pane's edge driven into it. A row of four glass voxels along x, its first pinned to
     // a box beyond its -x face, pushed toward the box by a hundred times its weight per voxel:
     // it slides until its first cube sinks a quarter voxel into the box (Lattice::keepOutOf),
-    // then the box's elastic push stops it there. Without the box's contact it slid in without
-    // limit (a shard of the glass pane scene came out through its frame at 157 m/s).
+    // then the box's elastic push stops it there and throws it back. Without the box's contact it
+    // slid in without limit (a shard of the glass pane scene came out through its frame at
+    // 157 m/s).
     const Material glass = findMaterialPreset("glass");
     const double h = 0.005;
     Body body = test::boxBody(4, 1, 1, h, glass.densityKgM3);
@@ -394,19 +395,25 @@ TEST(Lattice, APinnedEdgePushedAlongItsPinStopsAtTheFrame)
     const size_t first = size_t(lattice.particleAt(openvdb::Coord(0, 0, 0)));
     const Eigen::Vector3d push(-100.0 * lattice.model().particleMassKg * 9.81, 0, 0);
     const double dt = lattice.stableTimeStepS();
-    double deepestM = -1.0;
+    double deepestM = -1.0, earlyPeakMS = 0.0, latePeakMS = 0.0;
     for (int step = 0; step < 20000; ++step) {
         for (size_t p = 0; p < lattice.model().voxelParticleCount; ++p) lattice.externalForceN[p] = push;
         lattice.step(dt);
         // How far the first voxel's cube reaches into the box.
         deepestM = std::max(deepestM, boxFaceM - (lattice.state.positionM[first].x() - 0.5 * h));
+        // The first fifth of the run and its last tenth.
+        const double speedMS = std::abs(lattice.state.velocityMS[first].x());
+        if (step < 4000) earlyPeakMS = std::max(earlyPeakMS, speedMS);
+        if (step >= 18000) latePeakMS = std::max(latePeakMS, speedMS);
     }
-    std::printf("pinned edge pushed into its frame: deepest %.3f voxel into the box, at the end moving %.2e m/s\n", deepestM / h,
-                lattice.state.velocityMS[first].x());
+    std::printf("pinned edge pushed into its frame: deepest %.3f voxel into the box, fastest %.2f m/s early, %.2f m/s late\n", deepestM / h,
+                earlyPeakMS, latePeakMS);
     EXPECT_GT(deepestM, 0.2 * h) << "the pin does not stop it";
     EXPECT_LE(deepestM, 0.26 * h) << "the box's spring gives a hundredth of a voxel at most";
-    // Stopped, but for one step's push of the whole row on it.
-    EXPECT_LE(std::abs(lattice.state.velocityMS[first].x()), dt * 4.0 * push.norm() / lattice.model().particleMassKg);
+    // The row rebounds from the frame as a bar does (its own elastic wave), and the pushes
+    // drive it back: the contact's dashpot and the bonds' viscosity take energy out, the spring
+    // adds none, so the bouncing dies away.
+    EXPECT_LT(latePeakMS, 0.5 * earlyPeakMS) << "the rebounds do not die away";
 }
 
 TEST(Lattice, LongitudinalPulseTravelsAtTheBarSpeed)

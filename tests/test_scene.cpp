@@ -147,6 +147,10 @@ TEST(Scene, MaterialAndLatticeErrorsNameTheKeyAndReason)
                   std::string::npos)
             << blocks;
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "solver": {"air_drag": "stokes"}})").find("solver.air_drag"), std::string::npos);
+    for (const std::string bad : {R"("youngs_modulus_pa": -1)", R"("poissons_ratio": 0.5)", R"("density_kg_m3": 0)"}) {
+        const std::string key = bad.substr(1, bad.find('"', 1) - 1);
+        EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "ground": {)" + bad + "}}").find("ground." + key + ": must be"), std::string::npos) << bad;
+    }
     const std::string stone = R"(}], "materials": {"stone": {)";
     for (const std::string bad : {R"("youngs_modulus_Pa": 0)", R"("poisson_ratio": 0.5)", R"("tensile_strength_Pa": -1)",
                                   R"("fracture_energy_J_per_m2": 0)", R"("shear_strength_Pa": 0)", R"("friction_coefficient": -0.2)",
@@ -227,7 +231,8 @@ const char* kEveryKeyScene = R"({
   "voxel_size_m": 0.07, "duration_s": 1.5, "frame_rate_hz": 30, "seed": 42, "max_voxels": 123456,
   "gravity_m_s2": [0.1, 0.2, -9.7],
   "atmosphere": {"pressure_Pa": 90000, "temperature_K": 300},
-  "ground": {"enabled": false, "normal": [0, 0.6, 0.8], "height_m": 0.5, "restitution": 0.3, "friction": 0.7},
+  "ground": {"enabled": false, "normal": [0, 0.6, 0.8], "height_m": 0.5, "restitution": 0.3, "friction": 0.7, "youngs_modulus_pa": 8e7,
+             "poissons_ratio": 0.35, "density_kg_m3": 1700},
   "colliders": [{"position_m": [1, 2, 3], "size_m": [1, 2, 0.5], "rotation_deg": [0, 0, 10], "restitution": 0.1, "friction": 0.2, "holds": "pinned", "bearing_pressure_pa": 20000}],
   "materials": {"stone": {"density_kg_m3": 2500, "mean_yield_Pa": 60000, "yield_variation": 0.2, "weakening_fraction": 0.3,
                           "orientation_factor": 0.05, "damage_rate_per_s": 200, "damage_stress_scale_per_Pa": 1e-5,

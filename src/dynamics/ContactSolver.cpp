@@ -369,25 +369,21 @@ std::vector<double> inverseMasses(const std::vector<Body>& bodies)
     return inverse;
 }
 
-}  // namespace
+/// One overlap position correction removes: bodies a and b (bodies.size(): the immovable world).
+struct PositionConstraint {
+    int a, b;
+    Eigen::Vector3d normal;
+    double depthM, heightM;
+};
 
-void correctPositions(std::vector<Body>& bodies, const ContactSet& contacts, const WorldSettings& world)
+/// Per movable body and static collider its deepest contact, per touching pair with a movable
+/// body its manifold, from the bottom of the stack up.
+std::vector<PositionConstraint> positionConstraints(const std::vector<Body>& bodies, const ContactSet& contacts, const WorldSettings& world,
+                                                    const std::vector<double>& inverseMass)
 {
-    // A fifth of each overlap per step, as Box2D's and Jolt's position solvers take (their
-    // Baumgarte factor, 0.2): removing it all at once pushed a light piece wedged under a slab
-    // out sideways by centimetres a frame, and a pair whose normal turns from step to step
-    // back and forth.
-    constexpr double kCorrectedFraction = 0.2;
-    if (bodies.empty() || contacts.solverContacts == 0) return;
-    struct Constraint {
-        int a, b;  ///< body indices; bodies.size() is the immovable world
-        Eigen::Vector3d normal;
-        double depth, height;
-    };
-    const std::vector<double> inverseMass = inverseMasses(bodies);
     const int worldIndex = static_cast<int>(bodies.size());
     const Eigen::Vector3d up = upDirection(world);
-    std::vector<Constraint> constraints;
+    std::vector<PositionConstraint> constraints;
     for (size_t i = 0; i < bodies.size(); ++i) {
         if (inverseMass[i] == 0.0) continue;  // a lattice's place is its particles'
         for (int collider = -1; collider < static_cast<int>(world.colliders.size()); ++collider) {
@@ -401,16 +397,57 @@ void correctPositions(std::vector<Body>& bodies, const ContactSet& contacts, con
     for (const ContactManifold& m : contacts.manifolds)
         if (inverseMass[m.a] + inverseMass[m.b] > 0)
             constraints.push_back({m.a, m.b, m.normal, m.maxDepthM, up.dot(bodies[m.a].motion.positionM + bodies[m.b].motion.positionM) / 2});
-    std::stable_sort(constraints.begin(), constraints.end(), [](const Constraint& x, const Constraint& y) { return x.height < y.height; });
+    std::stable_sort(constraints.begin(), constraints.end(), [](const PositionConstraint& x, const PositionConstraint& y) { return x.heightM < y.heightM; });
+    return constraints;
+}
+
+/// Each movable body's overlap slack becomes its deepest overlap now if it has just left the
+/// deformable phase, else the smaller of its slack and that overlap (0 without contacts).
+void shrinkOverlapSlack(std::vector<Body>& bodies, const std::vector<PositionConstraint>& constraints, const std::vector<double>& inverseMass)
+{
+    std::vector<double> deepestM(bodies.size() + 1, 0.0);
+    for (const PositionConstraint& c : constraints) {
+        deepestM[c.a] = std::max(deepestM[c.a], c.depthM);
+        deepestM[c.b] = std::max(deepestM[c.b], c.depthM);
+    }
+    for (size_t i = 0; i < bodies.size(); ++i) {
+        if (inverseMass[i] == 0.0) continue;
+        double& slack = bodies[i].motion.overlapSlackM;
+        slack = slack == kOverlapUnmeasured ? deepestM[i] : std::min(slack, deepestM[i]);
+    }
+}
+
+/// The overlap a constraint excuses: against the world its body's slack; between two bodies the
+/// smaller slack, so only pieces that left the phase overlapping each other keep overlapping. A
+/// body in the phase has none (its slack is measured once it leaves).
+double overlapSlackM(const std::vector<Body>& bodies, const PositionConstraint& c)
+{
+    const auto slackOf = [&](int i) { return std::max(bodies[size_t(i)].motion.overlapSlackM, 0.0); };
+    return c.b == static_cast<int>(bodies.size()) ? slackOf(c.a) : std::min(slackOf(c.a), slackOf(c.b));
+}
+
+}  // namespace
+
+void correctPositions(std::vector<Body>& bodies, const ContactSet& contacts, const WorldSettings& world)
+{
+    // A fifth of each overlap per step, as Box2D's and Jolt's position solvers take (their
+    // Baumgarte factor, 0.2): removing it all at once pushed a light piece wedged under a slab
+    // out sideways by centimetres a frame, and a pair whose normal turns from step to step
+    // back and forth.
+    constexpr double kCorrectedFraction = 0.2;
+    if (bodies.empty()) return;
+    const std::vector<double> inverseMass = inverseMasses(bodies);
+    const std::vector<PositionConstraint> constraints = positionConstraints(bodies, contacts, world, inverseMass);
+    shrinkOverlapSlack(bodies, constraints, inverseMass);
     const double slop = 0.01 * bodies.front().voxelSizeM;
     std::vector<Eigen::Vector3d> shift(inverseMass.size(), Eigen::Vector3d::Zero());
     for (int pass = 0; pass < 4; ++pass) {
-        for (const Constraint& c : constraints) {
-            const double depth = c.depth - c.normal.dot(shift[c.a] - shift[c.b]);
-            if (depth <= slop) continue;
+        for (const PositionConstraint& c : constraints) {
+            const double excessM = c.depthM - c.normal.dot(shift[c.a] - shift[c.b]) - overlapSlackM(bodies, c) - slop;
+            if (excessM <= 0.0) continue;
             const double ia = inverseMass[c.a], ib = inverseMass[c.b];
-            shift[c.a] += kCorrectedFraction * (depth - slop) * ia / (ia + ib) * c.normal;
-            shift[c.b] -= kCorrectedFraction * (depth - slop) * ib / (ia + ib) * c.normal;
+            shift[c.a] += kCorrectedFraction * excessM * ia / (ia + ib) * c.normal;
+            shift[c.b] -= kCorrectedFraction * excessM * ib / (ia + ib) * c.normal;
         }
     }
     for (size_t i = 0; i < bodies.size(); ++i) bodies[i].motion.positionM += shift[i];

@@ -109,11 +109,13 @@ std::vector<StaticContact> findStaticContacts(const Body& body, const WorldSetti
     return reduceStaticContacts(corners, done, group, points);
 }
 
-double fastestClosingSpeedMS(const Body& body, const std::vector<StaticContact>& contacts)
+double fastestClosingSpeedMS(const Body& body, const std::vector<StaticContact>& contacts, double groundShare)
 {
     double fastestMS = 0.0;
-    for (const StaticContact& c : contacts)
-        fastestMS = std::max(fastestMS, -c.normal.dot(body.motion.linearVelocityMS + body.motion.angularVelocityRadS.cross(c.arm)));
+    for (const StaticContact& c : contacts) {
+        const double closingMS = -c.normal.dot(body.motion.linearVelocityMS + body.motion.angularVelocityRadS.cross(c.arm));
+        fastestMS = std::max(fastestMS, c.collider < 0 ? groundShare * closingMS : closingMS);
+    }
     return fastestMS;
 }
 

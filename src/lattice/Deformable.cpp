@@ -51,6 +51,7 @@ void setMotionsFromFit(const std::vector<Body*>& bodies, const RigidFit& fit, co
         b->motion.orientation = Eigen::Quaterniond(fit.rotation).normalized();
         b->motion.linearVelocityMS = velocity + spin.cross(arm);
         b->motion.angularVelocityRadS = spin;
+        b->motion.overlapSlackM = kOverlapUnmeasured;
     }
 }
 
@@ -120,7 +121,7 @@ double crackingImpactSpeedMS(const Body& body, const Material& material, int par
     if (!hasUnits(material) || !unitsResolvedBy(material, particleVoxels * body.voxelSizeM) || material.unitTensileStrengthPa <= material.tensileStrengthPa)
         return crackingImpactSpeedMS(material);
     // A voxel's centre where the object was voxelised: its index times h (classifyUnitBonds).
-    const auto centreOf = [&](const openvdb::Coord& v) { return Eigen::Vector3d(v.x(), v.y(), v.z()) * body.voxelSizeM; };
+    const auto centreOf = [&](const openvdb::Coord& v) -> Eigen::Vector3d { return Eigen::Vector3d(v.x(), v.y(), v.z()) * body.voxelSizeM; };
     for (auto voxel = body.grid->cbeginValueOn(); voxel; ++voxel)
         for (const int face : {kPosX, kPosY, kPosZ})
             if ((*voxel & (1 << face)) && acrossJoint(material, centreOf(voxel.getCoord()), centreOf(voxel.getCoord() + faceOffset(face))))

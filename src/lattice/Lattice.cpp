@@ -73,7 +73,6 @@ void Lattice::step(double dtS)
         kick(p);
         state.positionM[p] += dtS * state.velocityMS[p];
         state.orientation[p] = (rotationOf(dtS * state.angularVelocityRadS[p]) * state.orientation[p]).normalized();
-        if (!mModel.elasticSurfaces && !mModel.held[p]) keepOutPlastically(p);
     });
     // Damage first, from the new positions (and the velocities half-way through the step, for
     // the strain rate), then the forces from the state.

@@ -128,7 +128,6 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
     lattice.mModel.blocks = blocks;
     lattice.mModel.bulkViscosity = settings.bulkViscosity;
     lattice.mModel.handOffResidualStrength = settings.handoffResidualStrength;
-    lattice.mModel.elasticSurfaces = settings.impactFracture;
     // Davison–Stevens is the material's rate law in damage's terms; without one it has nothing
     // to add to the softening line (SceneSetup notes it).
     const bool rateDamage = settings.damageLaw == LatticeDamageLaw::DavisonStevens && material.strengthRateLaw != StrengthRateLaw::None;

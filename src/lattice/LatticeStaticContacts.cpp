@@ -1,10 +1,10 @@
 // A lattice against the static world: the ground plane its particles press on (unless still
-// bonded to their ground point) and the colliders they may not pass through, each with its
-// Coulomb friction: elastic, with the surface's restitution, under impact fracture; else
-// plastic. And the friction of a floor on a cracked head.
+// bonded to their ground point) and the colliders they may not pass through, each elastic, with
+// the surface's restitution and Coulomb friction. And the friction of a floor on a cracked head.
 #include "LatticeForEach.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <optional>
 
@@ -24,6 +24,13 @@ double dashpotForRestitutionNSPerM(double restitution, double stiffnessNPerM, do
     return 2.0 * zeta * std::sqrt(stiffnessNPerM * massKg);
 }
 
+/// A rigid surface's contact with a particle of `massKg`: the spring `stiffnessNPerM` and the
+/// dashpot that gives its bounce the surface's restitution.
+LatticeModel::SurfaceContact rigidSurface(double stiffnessNPerM, double restitution, double friction, double massKg)
+{
+    return {stiffnessNPerM, dashpotForRestitutionNSPerM(restitution, stiffnessNPerM, massKg), 0.0, friction};
+}
+
 /// Coulomb's friction on a particle of `massKg` sliding at `slidingMS`: against it, up to
 /// `limitN` (μ times the push), or what stops the sliding within the step `dtS`.
 Eigen::Vector3d frictionForceN(const Eigen::Vector3d& slidingMS, double limitN, double massKg, double dtS)
@@ -41,6 +48,41 @@ double depthInGroundM(const LatticeModel& model, const Eigen::Vector3d& position
 
 }  // namespace
 
+double Lattice::surfaceStiffnessNPerM() const
+{
+    // A spring of twice this pressed a flat impact 8-27 % above ρ c v (docs/accuracy.md); with
+    // it a particle between a bond and a surface is no stiffer than one between two bonds, so
+    // the stable step stands.
+    const LatticeStiffness& k = mModel.stiffness;
+    return *std::min_element(k.normalNPerM.begin(), k.normalNPerM.end());
+}
+
+LatticeModel::SurfaceContact Lattice::groundContact() const
+{
+    const GroundPlane& ground = mModel.ground;
+    const double bodyNPerM = surfaceStiffnessNPerM();
+    if (ground.youngsModulusPa <= 0.0) return rigidSurface(bodyNPerM, ground.restitution, ground.friction, mModel.particleMassKg);
+    // The half-space under the patch of n faces pressing on it is a footing of radius
+    // sqrt(n / π) h: its spring grows as √n (Boussinesq), so each face's is 1/√n of a lone
+    // face's; the waves it sends away are each face's own (ρ c_p h²).
+    const GroundCompliance face = groundCompliance(ground, mModel.spacingM);
+    const double groundNPerM = face.stiffnessNPerM / std::sqrt(double(std::max<size_t>(particlesOnGround(), 1)));
+    // The half voxel of the body behind each face in series with the ground under it: the
+    // ground takes `share` of the particle's motion, its spring and dashpot act at that share.
+    const double share = bodyNPerM / (bodyNPerM + groundNPerM), stiffnessNPerM = share * groundNPerM;
+    return {stiffnessNPerM, dashpotForRestitutionNSPerM(ground.restitution, stiffnessNPerM, mModel.particleMassKg), share * face.dashpotNSPerM,
+            ground.friction};
+}
+
+size_t Lattice::particlesOnGround() const
+{
+    std::atomic<size_t> count{0};
+    forEach(particleCount(), [&](size_t p) {
+        if (!mModel.held[p] && !bondedToGround(p) && depthInGroundM(mModel, state.positionM[p]) > 0.0) count.fetch_add(1, std::memory_order_relaxed);
+    });
+    return count.load();
+}
+
 bool Lattice::bondedToGround(size_t p) const
 {
     return p < mModel.groundBond.size() && mModel.groundBond[p] >= 0 && bondDamage(size_t(mModel.groundBond[p])) < 1.0;
@@ -48,12 +90,6 @@ bool Lattice::bondedToGround(size_t p) const
 
 void Lattice::keepOutOf(const StaticWorld& supports)
 {
-    const LatticeStiffness& k = mModel.stiffness;
-    mModel.surfaceStiffnessNPerM = *std::min_element(k.normalNPerM.begin(), k.normalNPerM.end());
-    const auto contactWith = [&](double restitution, double friction) {
-        return LatticeModel::SurfaceContact{mModel.surfaceStiffnessNPerM, dashpotForRestitutionNSPerM(restitution, mModel.surfaceStiffnessNPerM, mModel.particleMassKg), friction};
-    };
-    mModel.groundContact = contactWith(supports.ground.restitution, supports.ground.friction);
     // The particle's centre may come within a quarter edge of a box's faces (its cube sinking in
     // by up to a quarter edge); deeper, the box pushes it back out.
     const double allowedM = 0.25 * mModel.spacingM;
@@ -63,7 +99,7 @@ void Lattice::keepOutOf(const StaticWorld& supports)
         const double restitution = i < supports.restitution.size() ? supports.restitution[i] : 0.0;
         const double friction = i < supports.friction.size() ? supports.friction[i] : 0.0;
         LatticeModel::KeptOut kept{box.orientation.toRotationMatrix().transpose(), box.centreM, box.halfExtentM + Eigen::Vector3d::Constant(allowedM), {},
-                                   contactWith(restitution, friction)};
+                                   rigidSurface(surfaceStiffnessNPerM(), restitution, friction, mModel.particleMassKg)};
         const ObstacleBox grown{box.centreM, kept.reachM, box.orientation};
         for (const Eigen::Vector3d& corner : cornersOf(grown)) kept.boundsM.extend(corner);
         mModel.keptOut.push_back(kept);
@@ -73,10 +109,11 @@ void Lattice::keepOutOf(const StaticWorld& supports)
 void Lattice::addSurfaceForces(double dtS)
 {
     const bool ground = mModel.ground.enabled, boxes = !mModel.keptOut.empty();
-    if (mModel.elasticSurfaces && (ground || boxes))
+    const LatticeModel::SurfaceContact onGround = ground ? groundContact() : LatticeModel::SurfaceContact{};
+    if (ground || boxes)
         forEach(particleCount(), [&](size_t p) {
             if (mModel.held[p]) return;
-            if (ground && !bondedToGround(p)) pressOnGround(p, dtS);
+            if (ground && !bondedToGround(p)) pressOnGround(p, onGround, dtS);
             if (boxes) pressOnColliders(p, dtS);
         });
     // Few, each on its own voxel.
@@ -125,42 +162,21 @@ void Lattice::holdByBearing(const LatticeModel::BearingLoad& load, double dtS)
     state.bondForceN[p] += frictionForceN(v - across.dot(v) * across, load.friction * normalN, mModel.particleMassKg, dtS);
 }
 
-void Lattice::pressOnGround(size_t p, double dtS)
+void Lattice::pressOnGround(size_t p, const LatticeModel::SurfaceContact& ground, double dtS)
 {
     const double depth = depthInGroundM(mModel, state.positionM[p]);
-    if (depth > 0.0) pressOn(p, mModel.ground.normal, depth, mModel.groundContact, dtS);
-}
-
-void Lattice::keepOutPlastically(size_t p)
-{
-    if (mModel.ground.enabled && !bondedToGround(p)) {
-        const double depth = depthInGroundM(mModel, state.positionM[p]);
-        if (depth > 0.0) pushOut(p, mModel.ground.normal, depth, mModel.groundContact.friction);
-    }
-    for (const LatticeModel::KeptOut& box : mModel.keptOut)
-        if (const auto sunk = depthInCollider(p, box); sunk && sunk->depthM > mModel.colliderSlackM[p])
-            pushOut(p, sunk->outward, sunk->depthM - mModel.colliderSlackM[p], box.contact.friction);
-}
-
-void Lattice::pushOut(size_t p, const Eigen::Vector3d& outward, double depthM, double friction)
-{
-    state.positionM[p] += depthM * outward;
-    Eigen::Vector3d& v = state.velocityMS[p];
-    const double into = outward.dot(v);
-    if (into >= 0.0) return;
-    v -= into * outward;
-    const Eigen::Vector3d sliding = v - outward.dot(v) * outward;
-    const double slidingMS = sliding.norm();
-    if (slidingMS > 0.0) v -= std::min(1.0, friction * -into / slidingMS) * sliding;
+    if (depth > 0.0) pressOn(p, mModel.ground.normal, depth, ground, dtS);
 }
 
 void Lattice::pressOn(size_t p, const Eigen::Vector3d& outward, double depthM, const LatticeModel::SurfaceContact& surface, double dtS)
 {
     const Eigen::Vector3d& v = state.velocityMS[p];
     const double closingMS = -outward.dot(v);
-    // Damped only as it leaves: striking, the push is the spring's alone (a dashpot then would
-    // press harder than the wave the body can carry, ρ c v).
-    const double normalN = std::max(0.0, surface.stiffnessNPerM * depthM + surface.dashpotNSPerM * std::min(closingMS, 0.0));
+    // The restitution's dashpot acts only as it leaves: striking, the push is the spring's (a
+    // dashpot then would press harder than the wave the body can carry, ρ c v), and a compliant
+    // ground's, which takes the waves it carries away both ways.
+    const double normalN =
+        std::max(0.0, surface.stiffnessNPerM * depthM + surface.dashpotNSPerM * std::min(closingMS, 0.0) + surface.radiationNSPerM * closingMS);
     if (normalN == 0.0) return;
     state.bondForceN[p] += normalN * outward + frictionForceN(v + closingMS * outward, surface.friction * normalN, mModel.particleMassKg, dtS);
 }

@@ -190,6 +190,7 @@ void transferFields(Archive& a, C& c, std::vector<uint8_t>& extraGrids)
         a.flag(b.motion.deformable, "deformable");
         a.pod(b.motion.restTimeS, "rest time");
         a.pod(b.motion.survivedImpactMS, "survived impact");
+        a.pod(b.motion.overlapSlackM, "overlap slack");
         // Mass, faces, bounds, link count and anchoring are derived from the grid on reading.
         if constexpr (Archive::kReading) extraGrids.resize(index + 1);
         a.pod(extraGrids[index++], "damage grids");

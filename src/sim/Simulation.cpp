@@ -193,6 +193,19 @@ void Simulation::enterDeformablePhase(const std::vector<OpenWindow>& windows)
     mState.deformable.enter(mState.bodies, reached, mScene.materials, mScene.lattice, mStaticWorld, mScene.seed, mState.timeS);
 }
 
+namespace {
+
+/// A compliant ground stresses a body that strikes it at v as a rigid one at v Z₂ / (Z₁ + Z₂),
+/// Z = ρ c_p the body's and the ground's impedances (Kolsky, Stress Waves in Solids, 1963, ch. 4):
+/// that fraction (1 on a rigid ground).
+double groundShareOfImpact(const Material& material, const GroundPlane& ground)
+{
+    const double groundImpedance = groundImpedancePaSPerM(ground);
+    return std::isinf(groundImpedance) ? 1.0 : groundImpedance / (material.densityKgM3 * pWaveSpeedMS(material) + groundImpedance);
+}
+
+}  // namespace
+
 void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
 {
     if (mScene.fracture.algorithm != FractureAlgorithm::Lattice || !mScene.lattice.impactFracture) return;
@@ -201,9 +214,10 @@ void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
         Body& body = mState.bodies[i];
         if (body.motion.deformable || body.linkCount == 0 || contacts.statics[i].empty()) continue;
         // A contact that rests (impactSpeedMS) strikes nothing, however weak the material.
-        const double closingMS = fastestClosingSpeedMS(body, contacts.statics[i]);
+        const Material& material = mScene.materials[body.materialIndex];
+        const double closingMS = fastestClosingSpeedMS(body, contacts.statics[i], groundShareOfImpact(material, mScene.world.ground));
         striking[i] = closingMS > std::max(impactSpeedMS(mScene.world, dtS), body.motion.survivedImpactMS) &&
-                      closingMS >= crackingImpactSpeedMS(body, mScene.materials[body.materialIndex], mScene.lattice.particleVoxels);
+                      closingMS >= crackingImpactSpeedMS(body, material, mScene.lattice.particleVoxels);
         if (!striking[i]) continue;
         body.motion.survivedImpactMS = closingMS;
         // Its particles take the impact: the solver must not stop it as a rigid body first.

@@ -11,6 +11,9 @@ const std::vector<Field<GroundPlane>>& fieldTable<GroundPlane>()
         {"ground.height_m", &GroundPlane::offsetM, closed(-1e6, 1e6)},
         {"ground.restitution", &GroundPlane::restitution, closed(0, kMaxRestitution)},
         {"ground.friction", &GroundPlane::friction, closed(0, kMaxFriction)},
+        {"ground.youngs_modulus_pa", &GroundPlane::youngsModulusPa, closed(0, 1e13)},
+        {"ground.poissons_ratio", &GroundPlane::poissonsRatio, closed(0, 0.49)},
+        {"ground.density_kg_m3", &GroundPlane::densityKgM3, closed(100, 30000)},
     };
     return table;
 }

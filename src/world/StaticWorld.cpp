@@ -2,8 +2,26 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace spall {
+
+GroundCompliance groundCompliance(const GroundPlane& ground, double faceSideM)
+{
+    if (ground.youngsModulusPa <= 0.0) return {};
+    const double nu = ground.poissonsRatio, shearPa = ground.youngsModulusPa / (2.0 * (1.0 + nu));
+    const double radiusM = faceSideM / std::sqrt(M_PI);
+    return {4.0 * shearPa * radiusM / (1.0 - nu), groundImpedancePaSPerM(ground) * faceSideM * faceSideM};
+}
+
+double groundImpedancePaSPerM(const GroundPlane& ground)
+{
+    if (ground.youngsModulusPa <= 0.0) return std::numeric_limits<double>::infinity();
+    const double nu = ground.poissonsRatio;
+    // The constrained (P-wave) modulus E (1 - ν) / ((1 + ν)(1 - 2ν)); ρ c_p = sqrt(ρ M).
+    const double constrainedPa = ground.youngsModulusPa * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    return std::sqrt(ground.densityKgM3 * constrainedPa);
+}
 
 std::array<Eigen::Vector3d, 8> cornersOf(const ObstacleBox& box)
 {

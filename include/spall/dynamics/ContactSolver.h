@@ -37,10 +37,11 @@ struct ContactCache {
 void solveContacts(std::vector<Body>& bodies, const ContactSet& contacts, const WorldSettings& world,
                    const CollisionSettings& collisions, double dtS, ContactCache& cache);
 
-/// Removes a fifth of the penetration beyond a hundredth of a voxel per step by moving positions
-/// only (velocities untouched: no kinetic energy is added). Constraints: per body and static
-/// collider its deepest contact, per touching pair its manifold, split by inverse mass; a few
-/// Gauss–Seidel passes from the bottom up, each seeing the depth that earlier moves left.
+/// Removes a fifth of the penetration beyond a hundredth of a voxel and the bodies' overlap slack
+/// per step by moving positions only (velocities untouched: no kinetic energy is added), then
+/// shrinks each body's slack to what it still overlaps. Constraints: per body and static collider
+/// its deepest contact, per touching pair its manifold, split by inverse mass; a few Gauss–Seidel
+/// passes from the bottom up, each seeing the depth that earlier moves left.
 void correctPositions(std::vector<Body>& bodies, const ContactSet& contacts, const WorldSettings& world);
 
 }  // namespace spall

@@ -362,15 +362,16 @@ private:
     /// The friction of a support bearing on a voxel whose bond to it has broken (a floor on a
     /// cracked head holds it from sliding, as the ground holds its base).
     void holdByBearing(const LatticeModel::BearingLoad& load, double dtS);
-    /// Without elastic surfaces: puts a particle that sank into the ground or a collider beyond
-    /// its slack back on it, with its friction (pushOut).
-    void keepOutPlastically(size_t p);
-    /// Moves a particle `depthM` out along `outward` and takes away its speed into the surface
-    /// and, by Coulomb's law, up to `friction` times that speed along it: the impulse that stops
-    /// it sinking bounds the impulse that stops it sliding.
-    void pushOut(size_t p, const Eigen::Vector3d& outward, double depthM, double friction);
     /// A particle's push from the ground its cube sinks into (GroundPlane).
-    void pressOnGround(size_t p, double dtS);
+    void pressOnGround(size_t p, const LatticeModel::SurfaceContact& ground, double dtS);
+    /// The softest bond's stiffness: a surface's spring, the half voxel of the body's own
+    /// material behind a particle's half (unit: N/m).
+    double surfaceStiffnessNPerM() const;
+    /// The ground's contact with each particle that presses on it: rigid, or compliant
+    /// (GroundCompliance), its footing the patch of particles that press on it, shared.
+    LatticeModel::SurfaceContact groundContact() const;
+    /// Free particles whose cubes sink into the ground (not those bonded to it).
+    size_t particlesOnGround() const;
     /// The force of a surface on a particle whose cube sinks `depthM` into it along -`outward`:
     /// the spring and the dashpot, never pulling; and Coulomb's friction against its sliding, up
     /// to μ times that, or what stops the sliding within the step `dtS` (applied at its centre:

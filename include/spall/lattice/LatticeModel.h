@@ -222,26 +222,18 @@ struct LatticeModel {
 
     // What holds it and what it may not pass through.
     /// A surface a particle presses on elastically (the ground, a collider's face): a normal
-    /// spring as stiff as a bond, a dashpot that damps a particle's bounce to the surface's
-    /// restitution, and Coulomb's friction (Lattice::pressOn).
+    /// spring as stiff as a bond (less on a compliant ground), a dashpot that damps a particle's
+    /// bounce to the surface's restitution, the waves a compliant ground carries away, and
+    /// Coulomb's friction (Lattice::pressOn).
     struct SurfaceContact {
         double stiffnessNPerM = 0.0;
-        double dashpotNSPerM = 0.0;
-        double friction = 0.0;  ///< Coulomb coefficient (unit: 1)
+        double dashpotNSPerM = 0.0;    ///< while the particle leaves
+        double radiationNSPerM = 0.0;  ///< both ways: the ground's impedance (GroundCompliance)
+        double friction = 0.0;         ///< Coulomb coefficient (unit: 1)
     };
-    /// The contacts' normal spring: twice the softest normal bond's stiffness, the half voxel
-    /// of the body's own material between a particle's centre and a rigid surface. A particle
-    /// held by one bond and the surface is then no stiffer than one between two bonds, so the
-    /// stable step stands (unit: N/m).
-    double surfaceStiffnessNPerM = 0.0;
-    /// Whether the ground and the colliders push elastically (pressOn, with
-    /// lattice.impact_fracture); else a particle that sinks in is put back and loses its speed
-    /// into the surface (a perfectly plastic contact, pushOut), as before issue 48.
-    bool elasticSurfaces = false;
     /// The ground plane n·x = offset its particles' cubes press on; its offset lowered to where
     /// the lattice's lowest cubes rest.
     GroundPlane ground = GroundPlane{false};
-    SurfaceContact groundContact;
     /// The boxes of keepOutOf, each in its own frame grown by the allowed depth, with the
     /// world-axis bounds of that grown box: a particle outside them costs six comparisons.
     struct KeptOut {

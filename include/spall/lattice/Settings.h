@@ -54,11 +54,7 @@ struct LatticeSettings {
     LatticeDamageLaw damageLaw = LatticeDamageLaw::Softening;
     /// A rigid body with links that strikes the ground or a collider faster than its material
     /// may take undamaged (crackingImpactSpeedMS) becomes a lattice for the impact, as a body the
-    /// blast reaches does, and leaves the phase as any other once quiet. With it the ground and
-    /// the colliders push a lattice's particles elastically (a flat impact presses with ρ c v);
-    /// without it they stop a particle that sinks in plastically, which pulls the layer that
-    /// struck apart from the rest as a body rebounds (docs/accuracy.md). Off by default until
-    /// the default scene's pictures and figures are re-measured with it (unit: none).
+    /// blast reaches does, and leaves the phase as any other once quiet (unit: none).
     bool impactFracture = false;
     /// The edge of a lattice particle, in voxels (lattice/ParticleBlocks.h): 1, a particle per
     /// voxel; k > 1, blocks of k³ voxels, k⁴ times less work, cracks and fragments as a lattice of

@@ -80,7 +80,17 @@ struct BodyMotion {
     /// inherit: one no faster grows no damage (a bond's damage follows the largest strain it has
     /// reached), so it stays rigid (unit: m/s).
     double survivedImpactMS = 0.0;
+    /// How deep it may overlap the ground, a collider or another body without being pushed out
+    /// (correctPositions): what it overlapped when it left the deformable phase, shrinking as the
+    /// overlap does. Its lattice's particles met each other as spheres and the ground as unturned
+    /// cubes where its voxels are turned cubes, so a piece leaves overlapping by up to a fifth of
+    /// a voxel; pushing that out lifts stacks out of nothing (unit: m; kOverlapUnmeasured:
+    /// measured at its next contacts).
+    double overlapSlackM = 0.0;
 };
+
+/// BodyMotion::overlapSlackM of a body that has just left the deformable phase.
+inline constexpr double kOverlapUnmeasured = -1.0;
 
 /// No body: a parent id of a body the scene made, or a part's id before the simulation gives it one.
 inline constexpr int64_t kNoBodyId = -1;

@@ -58,7 +58,27 @@ struct GroundPlane {
     double offsetM = 0.0;       ///< plane: normal . x = offset (unit: m)
     double restitution = 0.2;   ///< (unit: fraction)
     double friction = 0.6;      ///< Coulomb coefficient (unit: 1)
+    /// The ground as an elastic half-space under a lattice's particles (GroundCompliance); 0: as
+    /// stiff as the body that strikes it (unit: Pa).
+    double youngsModulusPa = 0.0;
+    double poissonsRatio = 0.3;    ///< (unit: 1)
+    double densityKgM3 = 1900.0;   ///< (unit: kg/m³)
 };
+
+/// What a compliant ground (GroundPlane::youngsModulusPa > 0) is under one face of side h of a
+/// body pressing on it, as an elastic half-space: Lysmer and Richart's analog of a rigid footing
+/// (J. Soil Mech. Found. Div. ASCE 92 (1966) 65), its static spring 4 G r / (1 - ν) (Boussinesq's
+/// rigid punch) for the circle of the face's area (r = h / √π), and a dashpot of the half-space's
+/// plane-wave impedance ρ c_p over the face, so that a body striking flat takes v Z₁ Z₂ / (Z₁ + Z₂)
+/// (Kolsky, Stress Waves in Solids, 1963, ch. 4). The footings act independently (Winkler): a
+/// wide body rests stiffer on them than on the half-space, which only its settling shows.
+struct GroundCompliance {
+    double stiffnessNPerM = 0.0;
+    double dashpotNSPerM = 0.0;
+};
+GroundCompliance groundCompliance(const GroundPlane& ground, double faceSideM);
+/// The ground's plane-wave impedance ρ c_p (unit: Pa s/m); infinite for a rigid ground.
+double groundImpedancePaSPerM(const GroundPlane& ground);
 
 /// A static, unbreakable oriented box that bodies rest on and bounce off.
 struct StaticBox {
