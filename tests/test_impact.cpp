@@ -132,6 +132,26 @@ TEST(Impact, AFlatImpactOnSandPressesWithTheImpedancesInSeries)
     }
 }
 
+TEST(Impact, AGroundStifferThanTheSlabStaysStableAndPressesNoHarderThanARigidOne)
+{
+    // Steel under concrete (Z₂ = 4.1 Z₁): the plane-wave dashpot alone would take the explicit
+    // step past its stability limit (c dt / m = 1.9); capped, the contact stays bounded between
+    // Kolsky's v Z₁ Z₂ / (Z₁ + Z₂) at half its value and the rigid ground's ρ c v.
+    const Material concrete = findMaterialPreset("concrete");
+    StaticWorld steel = test::groundAtZero();
+    steel.ground.youngsModulusPa = 200e9;
+    steel.ground.poissonsRatio = 0.3;
+    steel.ground.densityKgM3 = 7850.0;
+    const double slabImpedance = concrete.densityKgM3 * pWaveSpeedMS(concrete), steelImpedance = groundImpedancePaSPerM(steel.ground);
+    const double speedMS = 8.0, kolskyPa = speedMS * slabImpedance * steelImpedance / (slabImpedance + steelImpedance);
+    const Strike strike = strikeGround(speedMS, 0.0, steel);
+    std::printf("8 m/s on steel: peak mean contact pressure %.1f MPa, Kolsky %.1f MPa (%+.1f %%), rigid rho c v %.1f MPa\n", strike.peakContactPa / 1e6,
+                kolskyPa / 1e6, 100 * (strike.peakContactPa / kolskyPa - 1), speedMS * slabImpedance / 1e6);
+    ASSERT_TRUE(std::isfinite(strike.peakContactPa));
+    EXPECT_GT(strike.peakContactPa, 0.5 * kolskyPa);
+    EXPECT_LT(strike.peakContactPa, 1.1 * speedMS * slabImpedance);
+}
+
 TEST(Impact, ASlabDroppedFlatFrom3MetresOntoSandBreaksNothing)
 {
     // From 3 m (7.7 m/s) the sand presses the slab with v Z1 Z2 / (Z1 + Z2) = 3.3 MPa, a twelfth

@@ -40,6 +40,9 @@ Eigen::Vector3d frictionForceN(const Eigen::Vector3d& slidingMS, double limitN, 
     return -std::min(limitN, massKg * speedMS / dtS) / speedMS * slidingMS;
 }
 
+/// The largest c dt / m a compliant ground's dashpot may have (Lattice::groundContact).
+constexpr double kMaxDashpotStepFraction = 0.25;
+
 /// How far a particle's cube at `positionM` sinks into the model's ground plane (unit: m).
 double depthInGroundM(const LatticeModel& model, const Eigen::Vector3d& positionM)
 {
@@ -57,7 +60,7 @@ double Lattice::surfaceStiffnessNPerM() const
     return *std::min_element(k.normalNPerM.begin(), k.normalNPerM.end());
 }
 
-LatticeModel::SurfaceContact Lattice::groundContact() const
+LatticeModel::SurfaceContact Lattice::groundContact(double dtS) const
 {
     const GroundPlane& ground = mModel.ground;
     const double bodyNPerM = surfaceStiffnessNPerM();
@@ -67,11 +70,15 @@ LatticeModel::SurfaceContact Lattice::groundContact() const
     // face's; the waves it sends away are each face's own (ρ c_p h²).
     const GroundCompliance face = groundCompliance(ground, mModel.spacingM);
     const double groundNPerM = face.stiffnessNPerM / std::sqrt(double(std::max<size_t>(particlesOnGround(), 1)));
-    // The half voxel of the body behind each face in series with the ground under it: the
-    // ground takes `share` of the particle's motion, its spring and dashpot act at that share.
+    // The body's spring behind each face in series with the ground under it: the ground takes
+    // `share` of the particle's motion, F = share k_g x + share² c_g dx/dt to first order in c_g.
     const double share = bodyNPerM / (bodyNPerM + groundNPerM), stiffnessNPerM = share * groundNPerM;
-    return {stiffnessNPerM, dashpotForRestitutionNSPerM(ground.restitution, stiffnessNPerM, mModel.particleMassKg), share * face.dashpotNSPerM,
-            ground.friction};
+    // Velocity Verlet with a dashpot c on a particle of mass m is stable while (ω dt)² + 2 c dt / m
+    // < 4, and the step leaves (ω dt)² up to 3.24: c dt / m at most a quarter. A ground whose
+    // impedance nears the body's reaches it (c dt / m = 0.47 share² Z₂ / Z₁) and presses less than
+    // Kolsky's v Z₁ Z₂ / (Z₁ + Z₂) (docs/accuracy.md, "A compliant ground").
+    const double radiationNSPerM = std::min(share * share * face.dashpotNSPerM, kMaxDashpotStepFraction * mModel.particleMassKg / dtS);
+    return {stiffnessNPerM, dashpotForRestitutionNSPerM(ground.restitution, stiffnessNPerM, mModel.particleMassKg), radiationNSPerM, ground.friction};
 }
 
 size_t Lattice::particlesOnGround() const
@@ -109,7 +116,7 @@ void Lattice::keepOutOf(const StaticWorld& supports)
 void Lattice::addSurfaceForces(double dtS)
 {
     const bool ground = mModel.ground.enabled, boxes = !mModel.keptOut.empty();
-    const LatticeModel::SurfaceContact onGround = ground ? groundContact() : LatticeModel::SurfaceContact{};
+    const LatticeModel::SurfaceContact onGround = ground ? groundContact(dtS) : LatticeModel::SurfaceContact{};
     if (ground || boxes)
         forEach(particleCount(), [&](size_t p) {
             if (mModel.held[p]) return;

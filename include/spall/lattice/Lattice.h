@@ -364,12 +364,13 @@ private:
     void holdByBearing(const LatticeModel::BearingLoad& load, double dtS);
     /// A particle's push from the ground its cube sinks into (GroundPlane).
     void pressOnGround(size_t p, const LatticeModel::SurfaceContact& ground, double dtS);
-    /// The softest bond's stiffness: a surface's spring, the half voxel of the body's own
-    /// material behind a particle's half (unit: N/m).
+    /// The softest bond's stiffness: a surface's spring, as if the surface were a half voxel of
+    /// the body's own material behind the particle's half (unit: N/m).
     double surfaceStiffnessNPerM() const;
-    /// The ground's contact with each particle that presses on it: rigid, or compliant
-    /// (GroundCompliance), its footing the patch of particles that press on it, shared.
-    LatticeModel::SurfaceContact groundContact() const;
+    /// The ground's contact with each particle that presses on it through a step `dtS`: rigid,
+    /// or compliant (GroundCompliance), its footing the patch of particles that press on it,
+    /// shared.
+    LatticeModel::SurfaceContact groundContact(double dtS) const;
     /// Free particles whose cubes sink into the ground (not those bonded to it).
     size_t particlesOnGround() const;
     /// The force of a surface on a particle whose cube sinks `depthM` into it along -`outward`:

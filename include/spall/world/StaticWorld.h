@@ -70,8 +70,8 @@ struct GroundPlane {
 /// (J. Soil Mech. Found. Div. ASCE 92 (1966) 65), its static spring 4 G r / (1 - ν) (Boussinesq's
 /// rigid punch) for the circle of the face's area (r = h / √π), and a dashpot of the half-space's
 /// plane-wave impedance ρ c_p over the face, so that a body striking flat takes v Z₁ Z₂ / (Z₁ + Z₂)
-/// (Kolsky, Stress Waves in Solids, 1963, ch. 4). The footings act independently (Winkler): a
-/// wide body rests stiffer on them than on the half-space, which only its settling shows.
+/// (Kolsky, Stress Waves in Solids, 1963, ch. 4). Lattice::groundContact shares the spring over
+/// the faces pressing at once.
 struct GroundCompliance {
     double stiffnessNPerM = 0.0;
     double dashpotNSPerM = 0.0;
