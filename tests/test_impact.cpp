@@ -157,7 +157,9 @@ TEST(Impact, ASlabDroppedFlatFrom3MetresOntoSandBreaksNothing)
     // From 3 m (7.7 m/s) the sand presses the slab with v Z1 Z2 / (Z1 + Z2) = 3.3 MPa, a twelfth
     // of fcm, where a rigid ground crushes its edges (the test above): the slab enters the phase
     // (the gate compares the speed at the sand's share of the impact) and nothing breaks.
-    const Drop onSand = dropSlab(3.0, 0.0, 0.05, true, {{"youngs_modulus_pa", 80e6}, {"poissons_ratio", 0.3}, {"density_kg_m3", 1900}});
+    const GroundPlane sand = sandGround().ground;
+    const Drop onSand = dropSlab(3.0, 0.0, 0.05, true,
+                                 {{"youngs_modulus_pa", sand.youngsModulusPa}, {"poissons_ratio", sand.poissonsRatio}, {"density_kg_m3", sand.densityKgM3}});
     std::printf("3 m onto sand: %zu bodies, %lld bonds broken, %zu impact entries\n", onSand.bodies, (long long)onSand.brokenBonds, onSand.impactEntries);
     EXPECT_EQ(onSand.bodies, 1u);
     EXPECT_EQ(onSand.brokenBonds, 0);

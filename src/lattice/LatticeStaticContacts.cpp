@@ -99,14 +99,14 @@ void Lattice::keepOutOf(const StaticWorld& supports)
 {
     // The particle's centre may come within a quarter edge of a box's faces (its cube sinking in
     // by up to a quarter edge); deeper, the box pushes it back out.
-    const double allowedM = 0.25 * mModel.spacingM;
+    const double allowedM = 0.25 * mModel.spacingM, stiffnessNPerM = surfaceStiffnessNPerM();
     mModel.keptOut.clear();
     for (size_t i = 0; i < supports.boxes.size(); ++i) {
         const ObstacleBox& box = supports.boxes[i];
         const double restitution = i < supports.restitution.size() ? supports.restitution[i] : 0.0;
         const double friction = i < supports.friction.size() ? supports.friction[i] : 0.0;
         LatticeModel::KeptOut kept{box.orientation.toRotationMatrix().transpose(), box.centreM, box.halfExtentM + Eigen::Vector3d::Constant(allowedM), {},
-                                   rigidSurface(surfaceStiffnessNPerM(), restitution, friction, mModel.particleMassKg)};
+                                   rigidSurface(stiffnessNPerM, restitution, friction, mModel.particleMassKg)};
         const ObstacleBox grown{box.centreM, kept.reachM, box.orientation};
         for (const Eigen::Vector3d& corner : cornersOf(grown)) kept.boundsM.extend(corner);
         mModel.keptOut.push_back(kept);

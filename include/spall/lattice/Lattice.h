@@ -308,8 +308,8 @@ private:
     void gatherBondForces(size_t p);
     // Building (fromBody).
     /// Static boxes the particles may not pass through (the scene's colliders: a window's frame).
-    /// A particle whose cube sinks into one by more than a quarter of its edge is put back, or
-    /// pushed back, as on the ground. The quarter leaves a support bond's elastic give alone and
+    /// A particle whose cube sinks into one by more than a quarter of its edge is pushed back
+    /// elastically, as on the ground (pressOn). The quarter leaves a support bond's elastic give alone and
     /// matches the rigid phase's tolerance (collisions.penetration_tolerance_voxels' default).
     void keepOutOf(const StaticWorld& supports);
     void addParticle(const openvdb::Coord& ijk, const Eigen::Vector3d& placeM, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
