@@ -51,6 +51,11 @@ TEST(Scene, ErrorsNameTheKeyAndReason)
     const std::string box = R"("primitive": {"shape": "box", "size_m": [1, 1, 1]})";
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(, "material": "cheese"}]})").find("objects[0].material"), std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(, "spin": 1}]})").find("objects[0].spin: unknown key"), std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(, "linear_velocity_m_s": [0, 1]}]})").find("objects[0].linear_velocity_m_s: must be an array of 3"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(, "anchor": "ground", "angular_velocity_rad_s": [0, 0, 1]}]})")
+                  .find("objects[0]: 'object0' is anchored and cannot start moving"),
+              std::string::npos);
     // A key twice: JSON leaves it undefined and the parser kept the last (issue 50).
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}, {)" + box + R"(, "material": "glass", "material": "wood"}]})")
                   .find("objects[1].material: the key appears twice"),
@@ -219,7 +224,7 @@ TEST(Scene, ShippedScenesParseAndTheDefaultMatchesItsAsset)
     EXPECT_EQ(sceneToJson(asset), sceneToJson(builtIn));
     EXPECT_EQ(sceneToJson(loadScene(dir + "brick-wall-yield-limit.json")), sceneToJson(parseScene(paperWallSceneJson(), "built-in", ".")));
     for (const char* name : {"two-charges-concrete.json", "pillar-davison-stevens.json", "brick-wall-lattice.json", "timber-post.json",
-                             "concrete-slab-spall.json", "house-wall.json", "glass-pane.json"})
+                             "concrete-slab-spall.json", "house-wall.json", "glass-pane.json", "block-at-pane.json"})
         EXPECT_NO_THROW(loadScene(dir + name)) << name;
 }
 
@@ -253,6 +258,7 @@ const char* kEveryKeyScene = R"({
   "objects": [{"name": "block", "primitive": {"shape": "box", "size_m": [1, 1, 1]}, "position_m": [0, 0, 0.5],
                "rotation_deg": [0, 0, 5], "material": "stone", "anchor": "ground", "scale": 1.5},
               {"name": "sheet", "mesh": "/meshes/sheet.obj", "position_m": [0, 0, 2], "rotation_deg": [0, 0, 0],
+               "linear_velocity_m_s": [0, 10, 0], "angular_velocity_rad_s": [0, 0, 1],
                "material": "stone", "anchor": "none", "inside": "winding-number", "shell_thickness_m": 0.2, "mesh_unit": "in"}],
   "charges": [{"position_m": [0, -3, 0], "tnt_kg": 2, "detonation_time_s": 0.01, "burst": "free-air"}],
   "blast": {"dataset": "kinney-graham", "table_nodes_per_decade": 64},

@@ -430,3 +430,20 @@ TEST(Checkpoint, DamagedFilesAreRefusedNamingTheFile)
     std::filesystem::remove(path);
     EXPECT_NE(messageOf().find("no checkpoint"), std::string::npos);
 }
+
+TEST(Sim, AThrownObjectStartsWithItsVelocityAndFliesBallistically)
+{
+    // A scene can throw an object: it starts with the velocity and spin given and, with nothing
+    // in its way, flies as a projectile does (x = v t, z = z0 - g t² / 2).
+    const Scene scene = parseScene(R"({"voxel_size_m": 0.05, "objects": [{"primitive": {"shape": "box", "size_m": [0.2, 0.2, 0.2]},
+        "position_m": [0, 0, 5], "material": "concrete", "linear_velocity_m_s": [3, 0, 0], "angular_velocity_rad_s": [0, 0, 2]}]})",
+                                   "thrown", ".");
+    Simulation sim(scene);
+    ASSERT_EQ(sim.bodies().size(), 1u);
+    EXPECT_EQ(sim.bodies()[0].motion.angularVelocityRadS, Eigen::Vector3d(0, 0, 2));
+    const Eigen::Vector3d start = sim.bodies()[0].motion.positionM;
+    sim.advanceTo(0.5);
+    const Eigen::Vector3d moved = sim.bodies()[0].motion.positionM - start;
+    EXPECT_NEAR(moved.x(), 1.5, 0.01);
+    EXPECT_NEAR(moved.z(), -0.5 * 9.81 * 0.25, 0.01);
+}

@@ -7,7 +7,7 @@
 # Without --full, the pictures that take about a minute in all: the default scene, the loads on
 # its wall, where its debris lands and Blender's render of it, its wall during the deformable phase at 2 ms intervals,
 # the timber post. --full adds the concrete slab,
-# the glass pane and its cracks, the house wall (7 minutes), the 3 M-voxel wall (8 minutes) and
+# the glass pane and its cracks, a block thrown at a pane at 2 ms intervals, the house wall (7 minutes), the 3 M-voxel wall (8 minutes) and
 # the accuracy plots (whose run times vary from run to run, so --check leaves them out).
 # --check writes into a scratch directory and compares each picture byte for byte with the one
 # in docs/images (runs are deterministic); it exits 1 naming those that differ. ctest runs
@@ -111,6 +111,10 @@ if [ "$full" = 1 ]; then
     place glass-pane.png "$scratch/glass-pane/preview.png"
     /usr/bin/python3 "$root/tools/fragments_front_view.py" "$scratch/glass-pane/fragments.0002.vdb" "$scratch/glass-cracks.png" >/dev/null
     place glass-pane-cracks.png "$scratch/glass-cracks.png"
+
+    run_scene block-at-pane "$root/assets/scenes/block-at-pane.json" --no-preview
+    "$spall" render "$scratch/block-at-pane" --sheet -o "$scratch/block-at-pane-sheet" >/dev/null
+    place block-at-pane-2ms.png "$scratch/block-at-pane-sheet/sheet.png"
 
     run_scene house-wall "$root/assets/scenes/house-wall.json"
     place house-wall.png "$scratch/house-wall/preview.png"

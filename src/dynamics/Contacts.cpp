@@ -42,22 +42,24 @@ double tunnellingSpeedMS(const WorldSettings& world, double dtS, double voxelSiz
     return std::max(impactSpeedMS(world, dtS), kDeepeningPerStepVoxels * voxelSizeM / dtS);
 }
 
+double fastestClosingSpeedMS(const std::vector<Body>& bodies, const ContactManifold& manifold)
+{
+    const BodyMotion& a = bodies[size_t(manifold.a)].motion;
+    const BodyMotion& b = bodies[size_t(manifold.b)].motion;
+    double fastestMS = 0.0;
+    for (const VoxelContact& p : manifold.points) {
+        const Eigen::Vector3d va = a.linearVelocityMS + a.angularVelocityRadS.cross(p.pointM - a.positionM);
+        const Eigen::Vector3d vb = b.linearVelocityMS + b.angularVelocityRadS.cross(p.pointM - b.positionM);
+        fastestMS = std::max(fastestMS, -manifold.normal.dot(va - vb));  // the normal points from b to a
+    }
+    return fastestMS;
+}
+
 double deepestClosingPenetrationM(const std::vector<Body>& bodies, const ContactSet& contacts, double closingSpeedMS)
 {
     double deepestM = 0.0;
-    for (const ContactManifold& m : contacts.manifolds) {
-        if (m.maxDepthM <= deepestM) continue;
-        const BodyMotion& a = bodies[size_t(m.a)].motion;
-        const BodyMotion& b = bodies[size_t(m.b)].motion;
-        for (const VoxelContact& p : m.points) {
-            const Eigen::Vector3d va = a.linearVelocityMS + a.angularVelocityRadS.cross(p.pointM - a.positionM);
-            const Eigen::Vector3d vb = b.linearVelocityMS + b.angularVelocityRadS.cross(p.pointM - b.positionM);
-            if (m.normal.dot(va - vb) < -closingSpeedMS) {  // the normal points from b to a
-                deepestM = m.maxDepthM;
-                break;
-            }
-        }
-    }
+    for (const ContactManifold& m : contacts.manifolds)
+        if (m.maxDepthM > deepestM && fastestClosingSpeedMS(bodies, m) > closingSpeedMS) deepestM = m.maxDepthM;
     return deepestM;
 }
 

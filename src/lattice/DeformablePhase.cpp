@@ -1,9 +1,12 @@
 #include <spall/lattice/DeformablePhase.h>
 
+#include <spall/core/DisjointSets.h>
 #include <spall/core/Error.h>
+#include <spall/lattice/LatticePairContact.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <unordered_map>
 
 namespace spall {
@@ -51,19 +54,65 @@ void DeformablePhase::enter(std::vector<Body>& bodies, const std::vector<char>& 
     }
 }
 
+std::vector<DeformablePhase::TouchingGroup> DeformablePhase::touchingGroups(double dtS) const
+{
+    // Two lattices may meet within the step if their boxes come within touching of each other,
+    // each moving at its fastest particle's speed over the step and the time it has gathered,
+    // with a skin of an edge: a third lattice striking one within the step speeds it up.
+    std::vector<double> fastestMS;
+    std::vector<Eigen::AlignedBox3d> boxes;
+    for (const DeformableBody& d : lattices) {
+        fastestMS.push_back(fastestParticleSpeedMS(d.lattice));
+        boxes.push_back(particleBox(d.lattice));
+    }
+    DisjointSets sets(lattices.size());
+    std::vector<std::pair<size_t, size_t>> touching;
+    for (size_t k = 0; k < lattices.size(); ++k)
+        for (size_t l = k + 1; l < lattices.size(); ++l) {
+            const double hk = lattices[k].lattice.model().spacingM, hl = lattices[l].lattice.model().spacingM;
+            const double reachM = 0.5 * (hk + hl) + std::max(hk, hl) + fastestMS[k] * (dtS + lattices[k].pendingS) +
+                                  fastestMS[l] * (dtS + lattices[l].pendingS);
+            if (boxes[k].exteriorDistance(boxes[l]) >= reachM) continue;
+            touching.emplace_back(k, l);
+            sets.join(uint32_t(k), uint32_t(l));
+        }
+    std::vector<TouchingGroup> groups;
+    std::vector<size_t> groupOfRoot(lattices.size(), SIZE_MAX), placeInGroup(lattices.size());
+    for (size_t k = 0; k < lattices.size(); ++k) {
+        size_t& g = groupOfRoot[sets.root(uint32_t(k))];
+        if (g == SIZE_MAX) {
+            g = groups.size();
+            groups.emplace_back();
+        }
+        placeInGroup[k] = groups[g].lattices.size();
+        groups[g].lattices.push_back(k);
+    }
+    for (const auto& [k, l] : touching) groups[groupOfRoot[sets.root(uint32_t(k))]].touching.emplace_back(placeInGroup[k], placeInGroup[l]);
+    return groups;
+}
+
 int64_t DeformablePhase::deform(std::vector<Body>& bodies, const std::vector<std::vector<Eigen::Vector3d>>& faceForcesN,
                                 const Eigen::Vector3d& gravityMS2, const ReachedByBlast& reached, double timeS, double dtS,
                                 const std::function<bool()>& abandon)
 {
-    int64_t particleSteps = 0;
     for (size_t k = 0; k < lattices.size(); ++k) {
-        DeformableBody& d = lattices[k];
         const size_t i = bodyIndex(k, bodies);
-        Body& body = bodies[i];
-        setExternalForces(d, body, faceForcesN[i], gravityMS2);
-        particleSteps += advanceDeformable(d, dtS, abandon);
-        followLattice(body, d.lattice);
-        if (reached(body)) d.lastLoadedS = timeS + dtS;
+        setExternalForces(lattices[k], bodies[i], faceForcesN[i], gravityMS2);
+    }
+    int64_t particleSteps = 0;
+    for (const TouchingGroup& group : touchingGroups(dtS)) {
+        if (group.lattices.size() == 1) {
+            particleSteps += advanceDeformable(lattices[group.lattices.front()], dtS, abandon);
+            continue;
+        }
+        std::vector<DeformableBody*> members;
+        for (const size_t k : group.lattices) members.push_back(&lattices[k]);
+        particleSteps += advanceTogether(members, group.touching, dtS, abandon);
+    }
+    for (size_t k = 0; k < lattices.size(); ++k) {
+        Body& body = bodies[bodyIndex(k, bodies)];
+        followLattice(body, lattices[k].lattice);
+        if (reached(body)) lattices[k].lastLoadedS = timeS + dtS;
     }
     return particleSteps;
 }

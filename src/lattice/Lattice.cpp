@@ -61,16 +61,33 @@ void Lattice::refreshForces()
 
 void Lattice::step(double dtS)
 {
-    const double halfDt = 0.5 * dtS, invMass = 1.0 / mModel.particleMassKg, invInertia = 1.0 / mModel.particleInertiaKgM2;
-    // Velocity Verlet: kick half a step, drift, new forces, kick half a step. A cube's inertia is
-    // the same about every axis, so ω changes by the moment alone (no gyroscopic term).
-    auto kick = [&](size_t p) {
-        if (mModel.held[p]) return;
-        state.velocityMS[p] += halfDt * invMass * (state.bondForceN[p] + externalForceN[p]);
-        state.angularVelocityRadS[p] += halfDt * invInertia * state.bondMomentNm[p];
-    };
+    moveAndMeasure(dtS);
+    finishStep(dtS);
+}
+
+void Lattice::kickParticle(size_t p, const HalfKick& kick)
+{
+    // A cube's inertia is the same about every axis, so ω changes by the moment alone (no
+    // gyroscopic term).
+    if (mModel.held[p]) return;
+    state.velocityMS[p] += kick.perMass * (state.bondForceN[p] + externalForceN[p]);
+    state.angularVelocityRadS[p] += kick.perInertia * state.bondMomentNm[p];
+}
+
+Lattice::HalfKick Lattice::halfKick(double dtS) const
+{
+    // Once per pass: the particles' stores may alias the model's mass, so the compiler would
+    // divide again for every particle.
+    const double halfDt = 0.5 * dtS;
+    return {halfDt * (1.0 / mModel.particleMassKg), halfDt * (1.0 / mModel.particleInertiaKgM2)};
+}
+
+void Lattice::moveAndMeasure(double dtS)
+{
+    // Velocity Verlet: kick half a step, drift, new forces, kick half a step (finishStep).
+    const HalfKick kick = halfKick(dtS);
     forEach(particleCount(), [&](size_t p) {
-        kick(p);
+        kickParticle(p, kick);
         state.positionM[p] += dtS * state.velocityMS[p];
         state.orientation[p] = (rotationOf(dtS * state.angularVelocityRadS[p]) * state.orientation[p]).normalized();
     });
@@ -80,16 +97,22 @@ void Lattice::step(double dtS)
     forEach(bondCount(), [&](size_t b) {
         if (const uint8_t bondEvents = measureBond(b, dtS, true)) events.fetch_or(bondEvents, std::memory_order_relaxed);
     });
-    if (events.load() & kBroke) mPiecesStale = true;
+    mStepEvents = events.load();
+    if (mStepEvents & kBroke) mPiecesStale = true;
     computeVolumetricStrain();
     forEach(bondCount(), [&](size_t b) { completeBondForce(b); });
     forEach(particleCount(), [&](size_t p) { gatherBondForces(p); });
     updateContactCandidates();
     addContactForces();
     addSurfaceForces(dtS);
-    forEach(particleCount(), kick);
+}
+
+void Lattice::finishStep(double dtS)
+{
+    const HalfKick kick = halfKick(dtS);
+    forEach(particleCount(), [&](size_t p) { kickParticle(p, kick); });
     // At the step's end, where velocity Verlet's energy is counted.
-    if (events.load() & kSnapped) releaseSnapEnergies();
+    if (mStepEvents & kSnapped) releaseSnapEnergies();
     openSupportHinges();
     dampVibration(dtS);
 }

@@ -4,11 +4,13 @@
 // here instead, by the same kind of normal spring along the line of centres.
 #include <spall/lattice/Lattice.h>
 
+#include "ParticleCells.h"
+
 #include <spall/core/Parallel.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
+#include <numeric>
 
 namespace spall {
 
@@ -22,14 +24,6 @@ constexpr double kContactSkin = 0.3;
 constexpr double kContactStiffnessFraction = 0.5;
 /// Particles listed together on one thread.
 constexpr size_t kListingBlock = 1024;
-
-/// A cell of the listing grid, packed into one key (21 bits a coordinate; cells that wrap round
-/// only add pairs that the distance test then drops).
-uint64_t cellKey(int64_t x, int64_t y, int64_t z)
-{
-    constexpr uint64_t mask = (uint64_t(1) << 21) - 1;
-    return (uint64_t(x) & mask) << 42 | (uint64_t(y) & mask) << 21 | (uint64_t(z) & mask);
-}
 
 }  // namespace
 
@@ -46,38 +40,20 @@ void Lattice::listContactCandidates()
 {
     const double cellM = (1.0 + kContactSkin) * mModel.spacingM, reach2 = cellM * cellM;
     const size_t n = particleCount();
-    std::vector<std::array<int64_t, 3>> cell(n);
-    std::vector<std::pair<uint64_t, uint32_t>> byCell(n);
-    for (size_t p = 0; p < n; ++p) {
-        for (int axis = 0; axis < 3; ++axis) cell[p][size_t(axis)] = static_cast<int64_t>(std::floor(state.positionM[p][axis] / cellM));
-        byCell[p] = {cellKey(cell[p][0], cell[p][1], cell[p][2]), uint32_t(p)};
-    }
-    std::sort(byCell.begin(), byCell.end());
+    std::vector<uint32_t> all(n);
+    std::iota(all.begin(), all.end(), 0u);
+    const ParticleCells cells(state.positionM, all, cellM);
     // Each block of particles lists its pairs apart, in parallel; joined in block order.
     const size_t blockCount = (n + kListingBlock - 1) / kListingBlock;
     std::vector<std::vector<std::pair<uint32_t, uint32_t>>> perBlock(blockCount);
     forEachIndex(blockCount, [&](size_t block) {
         std::vector<std::pair<uint32_t, uint32_t>>& found = perBlock[block];
         for (uint32_t p = uint32_t(block * kListingBlock); p < std::min(n, (block + 1) * kListingBlock); ++p)
-            for (int dx = -1; dx <= 1; ++dx)
-                for (int dy = -1; dy <= 1; ++dy) {
-                    // A column's three cells are one run of keys, searched once (unless z wraps:
-                    // then a cell at a time).
-                    std::array<uint64_t, 3> column{};
-                    for (int dz = -1; dz <= 1; ++dz) column[size_t(dz + 1)] = cellKey(cell[p][0] + dx, cell[p][1] + dy, cell[p][2] + dz);
-                    const bool oneRun = column[0] < column[2];
-                    for (size_t run = 0; run < (oneRun ? 1u : 3u); ++run) {
-                        const uint64_t lo = column[run], hi = oneRun ? column[2] : column[run];
-                        auto it = std::lower_bound(byCell.begin(), byCell.end(), std::make_pair(lo, uint32_t(0)));
-                        for (; it != byCell.end() && it->first <= hi; ++it) {
-                            const uint32_t q = it->second;
-                            if (q <= p || (mModel.held[p] && mModel.held[q]) || (state.positionM[q] - state.positionM[p]).squaredNorm() >= reach2 ||
-                                shareABond(p, q))
-                                continue;
-                            found.emplace_back(p, q);
-                        }
-                    }
-                }
+            cells.forEachAround(cells.cellOf(state.positionM[p]), [&](uint32_t q) {
+                if (q <= p || (mModel.held[p] && mModel.held[q]) || (state.positionM[q] - state.positionM[p]).squaredNorm() >= reach2 || shareABond(p, q))
+                    return;
+                found.emplace_back(p, q);
+            });
         std::sort(found.begin(), found.end());
     });
     mContactCandidates.clear();

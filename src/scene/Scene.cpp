@@ -22,6 +22,8 @@ const std::vector<Field<ObjectSpec>>& fieldTable<ObjectSpec>()
         {"name", &ObjectSpec::name},
         {"position_m", &ObjectSpec::positionM},
         {"rotation_deg", &ObjectSpec::rotationDeg},
+        {"linear_velocity_m_s", &ObjectSpec::linearVelocityMS},
+        {"angular_velocity_rad_s", &ObjectSpec::angularVelocityRadS},
         {"material", &ObjectSpec::material},
         {"anchor", choice(&ObjectSpec::anchor)},
         {"inside", choice(&ObjectSpec::inside)},

@@ -234,6 +234,11 @@ Body Simulation::placeObject(size_t index, const VoxeliseResult& vox)
             throw InputError(mScene.sourceName + ": objects[" + std::to_string(index) + "].anchor: no voxel of '" + spec.name + "' touches the ground" +
                              (spec.anchor == AnchorMode::Supports ? " or a collider" : ""));
     }
+    if (body.anchored && !(spec.linearVelocityMS.isZero(0.0) && spec.angularVelocityRadS.isZero(0.0)))
+        throw InputError(mScene.sourceName + ": objects[" + std::to_string(index) + "]: '" + spec.name +
+                         "' is anchored and cannot start moving (linear_velocity_m_s, angular_velocity_rad_s)");
+    body.motion.linearVelocityMS = spec.linearVelocityMS;
+    body.motion.angularVelocityRadS = spec.angularVelocityRadS;
     refuseChargesInside(body, spec.name, mScene);
     return body;
 }

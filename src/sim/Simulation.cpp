@@ -1,6 +1,7 @@
 #include <spall/sim/Simulation.h>
 
 #include <spall/core/Error.h>
+#include <spall/dynamics/Contacts.h>
 #include <spall/dynamics/Integrate.h>
 #include <spall/dynamics/Sleep.h>
 #include <spall/loads/BlastLoads.h>
@@ -60,6 +61,7 @@ void Simulation::step(double targetS)
     deformBodies(faces, windows, dt);
 
     ContactSet contacts = detectContacts(mState.bodies, mScene.world, mScene.collisions, mScene.sleep);
+    leaveLatticePairsToTheirParticles(contacts);
     enterOnImpact(contacts, dt);
     const double closingPenetrationM = deepestClosingPenetrationM(mState.bodies, contacts, tunnellingSpeedMS(mScene.world, dt, mScene.voxelSizeM));
     solveContactsWithLattices(contacts, dt);
@@ -195,29 +197,79 @@ void Simulation::enterDeformablePhase(const std::vector<OpenWindow>& windows)
 
 namespace {
 
+/// A material's impedance ρ c_p: the stress a flat impact at 1 m/s puts in it against a rigid
+/// face (Kolsky, Stress Waves in Solids, 1963, ch. 4) (unit: Pa s/m).
+double impedancePaSPerM(const Material& material) { return material.densityKgM3 * pWaveSpeedMS(material); }
+
 /// A compliant ground stresses a body that strikes it at v as a rigid one at v Z₂ / (Z₁ + Z₂),
-/// Z = ρ c_p the body's and the ground's impedances (Kolsky, Stress Waves in Solids, 1963, ch. 4):
-/// that fraction (1 on a rigid ground).
+/// Z = ρ c_p the body's and the ground's impedances (Kolsky 1963, ch. 4): that fraction (1 on a
+/// rigid ground).
 double groundShareOfImpact(const Material& material, const GroundPlane& ground)
 {
     const double groundImpedance = groundImpedancePaSPerM(ground);
-    return std::isinf(groundImpedance) ? 1.0 : groundImpedance / (material.densityKgM3 * pWaveSpeedMS(material) + groundImpedance);
+    return std::isinf(groundImpedance) ? 1.0 : groundImpedance / (impedancePaSPerM(material) + groundImpedance);
 }
 
+/// Whether a body can be a lattice: it has links to break, or anchors (DeformablePhase::enter).
+bool canDeform(const Body& body) { return body.motion.deformable || body.linkCount > 0 || body.anchored; }
+
 }  // namespace
+
+void Simulation::leaveLatticePairsToTheirParticles(ContactSet& contacts) const
+{
+    const auto bothLattices = [&](const ContactManifold& m) {
+        return mState.bodies[size_t(m.a)].motion.deformable && mState.bodies[size_t(m.b)].motion.deformable;
+    };
+    for (const ContactManifold& m : contacts.manifolds)
+        if (bothLattices(m)) contacts.solverContacts -= int64_t(m.points.size());
+    contacts.manifolds.erase(std::remove_if(contacts.manifolds.begin(), contacts.manifolds.end(), bothLattices), contacts.manifolds.end());
+}
+
+bool Simulation::strikesHardEnoughToCrack(double closingMS, const Body& body, double share, double dtS) const
+{
+    const double speedMS = closingMS * share;
+    const double survivedMS = body.motion.deformable ? 0.0 : body.motion.survivedImpactMS;
+    // A contact that rests (impactSpeedMS) strikes nothing, however weak the material.
+    return speedMS > std::max(impactSpeedMS(mScene.world, dtS), survivedMS) &&
+           speedMS >= crackingImpactSpeedMS(body, mScene.materials[body.materialIndex], mScene.lattice.particleVoxels);
+}
+
+bool Simulation::crackingImpactBetween(const ContactManifold& m, double dtS)
+{
+    Body& a = mState.bodies[size_t(m.a)];
+    Body& b = mState.bodies[size_t(m.b)];
+    if (!canDeform(a) || !canDeform(b) || (a.motion.deformable && b.motion.deformable)) return false;
+    // Each side takes v Z_other / (Z_a + Z_b) of the closing speed v (Kolsky 1963, ch. 4).
+    const double za = impedancePaSPerM(mScene.materials[a.materialIndex]), zb = impedancePaSPerM(mScene.materials[b.materialIndex]);
+    const double closingMS = fastestClosingSpeedMS(mState.bodies, m), shareA = zb / (za + zb), shareB = za / (za + zb);
+    if (!strikesHardEnoughToCrack(closingMS, a, shareA, dtS) && !strikesHardEnoughToCrack(closingMS, b, shareB, dtS)) return false;
+    for (const auto& [body, share] : {std::make_pair(&a, shareA), std::make_pair(&b, shareB)})
+        if (!body->motion.deformable) body->motion.survivedImpactMS = std::max(body->motion.survivedImpactMS, closingMS * share);
+    return true;
+}
+
+void Simulation::separateBeforeEntering(const ContactManifold& m)
+{
+    Body& a = mState.bodies[size_t(m.a)];
+    Body& b = mState.bodies[size_t(m.b)];
+    const auto inverseMass = [](const Body& body) { return body.anchored || body.motion.deformable ? 0.0 : 1.0 / body.mass.massKg; };
+    const double wa = inverseMass(a), wb = inverseMass(b), depthM = std::max(0.0, m.maxDepthM);
+    if (wa + wb == 0.0 || depthM == 0.0) return;
+    // The normal points from b to a.
+    a.motion.positionM += (depthM * wa / (wa + wb)) * m.normal;
+    b.motion.positionM -= (depthM * wb / (wa + wb)) * m.normal;
+}
 
 void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
 {
     if (mScene.fracture.algorithm != FractureAlgorithm::Lattice || !mScene.lattice.impactFracture) return;
-    std::vector<char> striking(mState.bodies.size(), 0);
+    std::vector<char> striking(mState.bodies.size(), 0), struck(mState.bodies.size(), 0);
     for (size_t i = 0; i < mState.bodies.size(); ++i) {
         Body& body = mState.bodies[i];
         if (body.motion.deformable || body.linkCount == 0 || contacts.statics[i].empty()) continue;
-        // A contact that rests (impactSpeedMS) strikes nothing, however weak the material.
-        const Material& material = mScene.materials[body.materialIndex];
-        const double closingMS = fastestClosingSpeedMS(body, contacts.statics[i], groundShareOfImpact(material, mScene.world.ground));
-        striking[i] = closingMS > std::max(impactSpeedMS(mScene.world, dtS), body.motion.survivedImpactMS) &&
-                      closingMS >= crackingImpactSpeedMS(body, material, mScene.lattice.particleVoxels);
+        const double closingMS =
+            fastestClosingSpeedMS(body, contacts.statics[i], groundShareOfImpact(mScene.materials[body.materialIndex], mScene.world.ground));
+        struck[i] = striking[i] = strikesHardEnoughToCrack(closingMS, body, 1.0, dtS);
         if (!striking[i]) continue;
         body.motion.survivedImpactMS = closingMS;
         // Its particles take the impact: the solver must not stop it as a rigid body first.
@@ -225,14 +277,29 @@ void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
         contacts.solverContacts -= int64_t(contacts.statics[i].size());
         contacts.statics[i].clear();
     }
-    const size_t before = mState.deformable.lattices.size();
+    // Two bodies striking each other both become lattices, which meet particle to particle
+    // (LatticePairContact.h): the solver leaves them to it.
+    std::vector<ContactManifold> kept;
+    for (ContactManifold& m : contacts.manifolds) {
+        if (!crackingImpactBetween(m, dtS)) {
+            kept.push_back(std::move(m));
+            continue;
+        }
+        for (const int i : {m.a, m.b}) striking[size_t(i)] = struck[size_t(i)] = 1;
+        separateBeforeEntering(m);
+        contacts.solverContacts -= int64_t(m.points.size());
+    }
+    contacts.manifolds = std::move(kept);
     // The bodies are where the step's end puts them.
     mState.deformable.enter(mState.bodies, striking, mScene.materials, mScene.lattice, mStaticWorld, mScene.seed, mState.timeS + dtS);
     // The impact loads it for as long as a bar striking a rigid wall stays in contact, 2 L / c
     // (Kolsky 1963, ch. 4), L its largest extent: no hand-off before the impact has played out.
-    for (size_t k = before; k < mState.deformable.lattices.size(); ++k) {
-        const Body& body = mState.bodies[mState.deformable.bodyIndex(k, mState.bodies)];
-        mState.deformable.lattices[k].lastLoadedS += 4.0 * body.boundingRadiusM / pWaveSpeedMS(mScene.materials[body.materialIndex]);
+    for (size_t k = 0; k < mState.deformable.lattices.size(); ++k) {
+        const size_t i = mState.deformable.bodyIndex(k, mState.bodies);
+        const Body& body = mState.bodies[i];
+        if (!struck[i]) continue;
+        double& lastLoadedS = mState.deformable.lattices[k].lastLoadedS;
+        lastLoadedS = std::max(lastLoadedS, mState.timeS + dtS + 4.0 * body.boundingRadiusM / pWaveSpeedMS(mScene.materials[body.materialIndex]));
     }
 }
 

@@ -34,6 +34,10 @@ double impactSpeedMS(const WorldSettings& world, double dtS);
 /// the 3 M-voxel wall's flight at 1/64 of its step (unit: m/s).
 double tunnellingSpeedMS(const WorldSettings& world, double dtS, double voxelSizeM);
 
+/// The fastest the two bodies of a manifold close on each other along its normal at one of
+/// its points (unit: m/s; 0 when they part everywhere).
+double fastestClosingSpeedMS(const std::vector<Body>& bodies, const ContactManifold& manifold);
+
 /// The deepest contact between bodies that still close on each other faster than
 /// `closingSpeedMS` at one of its points (unit: m; 0 when none): a penetration the step is
 /// making, not one that rests (pieces born interlocked, which the position correction

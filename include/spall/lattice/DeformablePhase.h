@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <utility>
 #include <vector>
 
 namespace spall {
@@ -61,7 +62,8 @@ public:
     void enter(std::vector<Body>& bodies, const std::vector<char>& entering, const std::vector<Material>& materials,
                const LatticeSettings& settings, const StaticWorld& supports, uint64_t seed, double timeS);
     /// Each lattice through a step of dtS under its faces' forces (per body, FaceForces::forceN)
-    /// and gravity; its body follows it. Returns the particle-steps taken. `abandon` is asked
+    /// and gravity, lattices that may touch stepped together so that their particles meet
+    /// (LatticePairContact.h); each body follows its lattice. Returns the particle-steps taken. `abandon` is asked
     /// before each lattice step (advanceDeformable).
     int64_t deform(std::vector<Body>& bodies, const std::vector<std::vector<Eigen::Vector3d>>& faceForcesN, const Eigen::Vector3d& gravityMS2,
                    const ReachedByBlast& reached, double timeS, double dtS, const std::function<bool()>& abandon = {});
@@ -86,6 +88,15 @@ public:
                                 uint64_t seed);
 
 private:
+    /// Lattices that may touch one another through a step, directly or through others: stepped
+    /// together (advanceTogether).
+    struct TouchingGroup {
+        std::vector<size_t> lattices;                    ///< indices into `lattices`, ascending
+        std::vector<std::pair<size_t, size_t>> touching;  ///< pairs that may touch, as places in the group
+    };
+    /// The lattices in groups that may touch through a step of dtS (one each when none does),
+    /// in the order of their first lattice.
+    std::vector<TouchingGroup> touchingGroups(double dtS) const;
     /// Per lattice, its body's index (reindex).
     std::vector<size_t> mBodyIndex;
 };

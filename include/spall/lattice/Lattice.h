@@ -59,6 +59,12 @@ public:
     /// stiffest normal bonds; (8μ + 12λ) h / m isotropic) added.
     double stableTimeStepS() const;
     void step(double dtS);
+    /// A step in two halves, for lattices stepped together (LatticePairContact.h), whose forces
+    /// on each other are added to bondForceN between them: the first half-kick, the drift and
+    /// the forces at the new places; then the second half-kick, the energy snapped bonds give
+    /// back and the damping. step() is the two.
+    void moveAndMeasure(double dtS);
+    void finishStep(double dtS);
     /// The bonds' forces from the state, leaving their damage as it is (after the state arrays
     /// were written from outside, as a checkpoint does).
     void refreshForces();
@@ -107,6 +113,9 @@ public:
     /// space; a held piece's L is its farthest reach from what holds it (findDampedPieces).
     double fundamentalFrequencyRadS(double thicknessM, double lengthM, bool held) const;
 
+    /// The softest bond's stiffness: a surface's spring, as if the surface were a half voxel of
+    /// the body's own material behind the particle's half (unit: N/m).
+    double surfaceStiffnessNPerM() const;
     /// What it was built with (fromBody), unchanged since.
     const LatticeModel& model() const { return mModel; }
     /// Whether a support bears on its voxel: while they touch, its bond broken or not (a floor
@@ -168,6 +177,15 @@ private:
     };
     static constexpr size_t kDampingChunk = 4096;
     bool mPiecesStale = true;
+    /// What happened to bonds in the step under way (kSnapped, kBroke): moveAndMeasure's, for finishStep.
+    uint8_t mStepEvents = 0;
+    /// Velocity Verlet's half-kick of a step: dt/2 over a particle's mass and inertia.
+    struct HalfKick {
+        double perMass, perInertia;
+    };
+    HalfKick halfKick(double dtS) const;
+    /// The half-kick of one particle by its forces.
+    void kickParticle(size_t p, const HalfKick& kick);
     std::vector<DampedPiece> mDampedPieces;
     std::vector<uint32_t> mPieceParticles;  ///< the particles piece by piece, each in particle order
     std::vector<uint32_t> mPieceSupportBonds;  ///< the held pieces' support bonds, piece by piece
@@ -364,9 +382,6 @@ private:
     void holdByBearing(const LatticeModel::BearingLoad& load, double dtS);
     /// A particle's push from the ground its cube sinks into (GroundPlane).
     void pressOnGround(size_t p, const LatticeModel::SurfaceContact& ground, double dtS);
-    /// The softest bond's stiffness: a surface's spring, as if the surface were a half voxel of
-    /// the body's own material behind the particle's half (unit: N/m).
-    double surfaceStiffnessNPerM() const;
     /// The ground's contact with each particle that presses on it through a step `dtS`: rigid,
     /// or compliant (GroundCompliance), its footing the patch of particles that press on it,
     /// shared.

@@ -43,6 +43,10 @@ struct ObjectSpec {
     std::optional<Primitive> primitive;   ///< read and written by hand: its keys depend on its shape
     Eigen::Vector3d positionM = Eigen::Vector3d::Zero();     ///< where the object's local origin goes (unit: m)
     Eigen::Vector3d rotationDeg = Eigen::Vector3d::Zero();   ///< about x, then y, then z, world axes (unit: degrees)
+    /// Its motion at the start (a brick thrown at a window): its centre of mass's velocity and
+    /// its spin about it; none for an anchored object (unit: m/s, rad/s).
+    Eigen::Vector3d linearVelocityMS = Eigen::Vector3d::Zero();
+    Eigen::Vector3d angularVelocityRadS = Eigen::Vector3d::Zero();
     std::string material = "brick-masonry";
     AnchorMode anchor = AnchorMode::None;
     InsideTest inside = InsideTest::Auto;  ///< meshes only (docs/voxelisation.md)

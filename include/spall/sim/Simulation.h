@@ -137,8 +137,25 @@ private:
     /// Rigid bodies with links whose contacts with the ground or a collider close faster than
     /// their material may take without cracking (crackingImpactSpeedMS) become lattices
     /// (lattice.impact_fracture): their particles take the impact in the next deform phase, so
-    /// their contacts with the static world leave this step's solve (of length dtS).
+    /// their contacts with the static world leave this step's solve (of length dtS). Two bodies
+    /// whose impact on each other may crack either both become lattices, and their contact
+    /// leaves the solve.
     void enterOnImpact(ContactSet& contacts, double dtS);
+    /// Lattices meet each other particle to particle in the deform phase (LatticePairContact.h):
+    /// their contacts as rigid bodies leave the solve.
+    void leaveLatticePairsToTheirParticles(ContactSet& contacts) const;
+    /// Whether a body's share of an impact closing at closingMS (`share` of it, by the
+    /// impedances) may crack it: faster than a resting contact, than the fastest impact it has
+    /// survived, and than crackingImpactSpeedMS.
+    bool strikesHardEnoughToCrack(double closingMS, const Body& body, double share, double dtS) const;
+    /// Whether two bodies' contact may crack either (strikesHardEnoughToCrack), both able to be
+    /// lattices and not both lattices already; if so, each rigid one's survived impact is raised to it.
+    bool crackingImpactBetween(const ContactManifold& m, double dtS);
+    /// Two bodies about to meet as lattices start touching, not overlapping: the lattices'
+    /// contact has no slack (LatticePairContact), and an overlap it started with would push them
+    /// apart with energy the impact never had. The rigid ones move back along the contact's
+    /// normal by its depth, shared by inverse mass as the position correction shares it.
+    void separateBeforeEntering(const ContactManifold& m);
     /// Pieces of deformable bodies the blast has passed leave the phase once their vibration has
     /// died down (all of them after lattice.max_vibration_s) and become rigid bodies again;
     /// looked for once per lattice.handoff_check_interval_s, in the step of length dtS that

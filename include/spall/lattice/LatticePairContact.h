@@ -1,0 +1,64 @@
+// Contact between two lattices of the deformable phase (issue 48, item 2): bodies that strike
+// each other meet particle to particle, so a brick dents and cracks a pane where it touches it,
+// not the pane as a whole. Lattices that may touch are stepped together (advanceTogether,
+// below), these forces added between the halves of each step (Lattice::moveAndMeasure,
+// finishStep).
+#pragma once
+
+#include <spall/lattice/Deformable.h>
+#include <spall/lattice/Lattice.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <functional>
+#include <utility>
+#include <vector>
+
+namespace spall {
+
+/// The fastest a particle moves (unit: m/s).
+double fastestParticleSpeedMS(const Lattice& lattice);
+
+/// The box that holds a lattice's particles' centres.
+Eigen::AlignedBox3d particleBox(const Lattice& lattice);
+
+/// A normal spring between a voxel's particle of each lattice while their centres are closer
+/// than the sum of their half edges, along the line of centres, never pulling: each side a half
+/// edge of its own material (Lattice::surfaceStiffnessNPerM twice) in series, as the ground's
+/// contact takes a half voxel each side, but never stiffer than the softer side's bond (the
+/// ground's spring, which the stable step allows; for very different materials the interface is
+/// then up to half as stiff as the series). The waves behind it, not the spring, set the stress:
+/// two bodies of one material closing flat at v press each other with ρ c v / 2 (Kolsky, Stress
+/// Waves in Solids, 1963, ch. 4). Forces are equal and opposite: momentum is kept exactly, and
+/// the spring stores and gives back what it takes.
+class LatticePairContact {
+public:
+    LatticePairContact(const Lattice& a, const Lattice& b);
+    /// Adds the contact forces at the particles' present places to a's and b's bondForceN.
+    void addForces(Lattice& a, Lattice& b);
+    double stiffnessNPerM() const { return mStiffnessNPerM; }
+
+private:
+    double mTouchM, mSkinM, mStiffnessNPerM;
+    /// Pairs (a's particle, b's) whose centres were within touching plus the skin when last
+    /// listed, sorted: a Verlet list, listed again once a particle of either has moved half the
+    /// skin since.
+    std::vector<std::pair<uint32_t, uint32_t>> mCandidates;
+    std::vector<Eigen::Vector3d> mListedAM, mListedBM;
+    bool movedHalfTheSkin(const Lattice& a, const Lattice& b) const;
+    void listCandidates(const Lattice& a, const Lattice& b);
+};
+
+/// Lattices that may touch (`touching`: pairs of indices into `group`) through a rigid step of
+/// dtS, stepped together so that their particles meet: each first steps what it had gathered
+/// (catchUpDeformable) under the forces it gathered them with, then all take the same whole
+/// number of equal steps, none longer than the shortest of their stable steps, under the
+/// external forces setExternalForces left, each pair's contact forces added between the halves
+/// of each step. None is left with time gathered. Returns the particle-steps taken; asks
+/// `abandon` before each step (advanceDeformable).
+int64_t advanceTogether(const std::vector<DeformableBody*>& group, const std::vector<std::pair<size_t, size_t>>& touching, double dtS,
+                        const std::function<bool()>& abandon = {});
+
+}  // namespace spall

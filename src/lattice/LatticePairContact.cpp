@@ -1,0 +1,130 @@
+#include <spall/lattice/LatticePairContact.h>
+
+#include "ParticleCells.h"
+
+#include <spall/core/Error.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace spall {
+
+namespace {
+
+/// The Verlet list's skin, in the touching distance: as within a lattice (LatticeContact.cpp).
+constexpr double kPairSkin = 0.3;
+
+/// The voxels' particles of `lattice` inside `box` (not its support points: they stand for the
+/// ground and the boxes that hold it, which other bodies meet as such).
+std::vector<uint32_t> particlesIn(const Lattice& lattice, const Eigen::AlignedBox3d& box)
+{
+    std::vector<uint32_t> inside;
+    for (uint32_t p = 0; p < lattice.model().voxelParticleCount; ++p)
+        if (box.contains(lattice.state.positionM[p])) inside.push_back(p);
+    return inside;
+}
+
+Eigen::AlignedBox3d grown(Eigen::AlignedBox3d box, double marginM)
+{
+    box.min().array() -= marginM;
+    box.max().array() += marginM;
+    return box;
+}
+
+}  // namespace
+
+double fastestParticleSpeedMS(const Lattice& lattice)
+{
+    double fastest2 = 0.0;
+    for (const Eigen::Vector3d& v : lattice.state.velocityMS) fastest2 = std::max(fastest2, v.squaredNorm());
+    return std::sqrt(fastest2);
+}
+
+Eigen::AlignedBox3d particleBox(const Lattice& lattice)
+{
+    Eigen::AlignedBox3d box;
+    for (size_t p = 0; p < lattice.model().voxelParticleCount; ++p) box.extend(lattice.state.positionM[p]);
+    return box;
+}
+
+LatticePairContact::LatticePairContact(const Lattice& a, const Lattice& b)
+    : mTouchM(0.5 * (a.model().spacingM + b.model().spacingM)), mSkinM(kPairSkin * mTouchM)
+{
+    // Each side's half edge is twice as stiff as its whole bond; never stiffer than the softer
+    // side's bond, the ground's contact spring, which the lattices' stable step allows.
+    const double ka = 2.0 * a.surfaceStiffnessNPerM(), kb = 2.0 * b.surfaceStiffnessNPerM();
+    mStiffnessNPerM = std::min(ka * kb / (ka + kb), 0.5 * std::min(ka, kb));
+}
+
+bool LatticePairContact::movedHalfTheSkin(const Lattice& a, const Lattice& b) const
+{
+    if (mListedAM.size() != a.particleCount() || mListedBM.size() != b.particleCount()) return true;
+    const double limit2 = 0.25 * mSkinM * mSkinM;
+    for (size_t p = 0; p < a.particleCount(); ++p)
+        if ((a.state.positionM[p] - mListedAM[p]).squaredNorm() > limit2) return true;
+    for (size_t q = 0; q < b.particleCount(); ++q)
+        if ((b.state.positionM[q] - mListedBM[q]).squaredNorm() > limit2) return true;
+    return false;
+}
+
+void LatticePairContact::listCandidates(const Lattice& a, const Lattice& b)
+{
+    const double reachM = mTouchM + mSkinM, reach2 = reachM * reachM;
+    // Only particles within reach of the other lattice's box can have a partner.
+    const std::vector<uint32_t> nearB = particlesIn(a, grown(particleBox(b), reachM));
+    const ParticleCells cellsOfA(a.state.positionM, nearB, reachM);
+    mCandidates.clear();
+    for (const uint32_t q : particlesIn(b, grown(particleBox(a), reachM)))
+        cellsOfA.forEachAround(cellsOfA.cellOf(b.state.positionM[q]), [&](uint32_t p) {
+            if ((b.state.positionM[q] - a.state.positionM[p]).squaredNorm() < reach2) mCandidates.emplace_back(p, q);
+        });
+    std::sort(mCandidates.begin(), mCandidates.end());
+    mListedAM = a.state.positionM;
+    mListedBM = b.state.positionM;
+}
+
+void LatticePairContact::addForces(Lattice& a, Lattice& b)
+{
+    if (movedHalfTheSkin(a, b)) listCandidates(a, b);
+    // In the sorted list's order, so the sums do not depend on when it was last made.
+    for (const auto& [p, q] : mCandidates) {
+        const Eigen::Vector3d apartM = b.state.positionM[q] - a.state.positionM[p];
+        const double distanceM = apartM.norm();
+        if (distanceM >= mTouchM || distanceM <= 0.0) continue;
+        const Eigen::Vector3d onB = (mStiffnessNPerM * (mTouchM - distanceM) / distanceM) * apartM;
+        b.state.bondForceN[q] += onB;
+        a.state.bondForceN[p] -= onB;
+    }
+}
+
+int64_t advanceTogether(const std::vector<DeformableBody*>& group, const std::vector<std::pair<size_t, size_t>>& touching, double dtS,
+                        const std::function<bool()>& abandon)
+{
+    int64_t particleSteps = 0;
+    double stableS = std::numeric_limits<double>::infinity();
+    for (DeformableBody* d : group) {
+        // Catching up steps under the gathered forces: this step's wait aside.
+        std::vector<Eigen::Vector3d> thisStepN = d->lattice.externalForceN;
+        particleSteps += catchUpDeformable(*d);
+        d->lattice.externalForceN = std::move(thisStepN);
+        stableS = std::min(stableS, d->lattice.stableTimeStepS());
+    }
+    std::vector<LatticePairContact> contacts;
+    for (const auto& [i, j] : touching) contacts.emplace_back(group[i]->lattice, group[j]->lattice);
+    const int64_t steps = static_cast<int64_t>(std::ceil(dtS / stableS * (1.0 - 1e-12)));
+    const double stepS = dtS / double(steps);
+    for (int64_t s = 0; s < steps; ++s) {
+        if (abandon && abandon())
+            throw StepAbandoned("a step of the deformable phase was given up after " + std::to_string(s) + " of its " + std::to_string(steps) +
+                                " steps of lattices in contact");
+        for (DeformableBody* d : group) d->lattice.moveAndMeasure(stepS);
+        for (size_t c = 0; c < touching.size(); ++c) contacts[c].addForces(group[touching[c].first]->lattice, group[touching[c].second]->lattice);
+        for (DeformableBody* d : group) d->lattice.finishStep(stepS);
+    }
+    for (const DeformableBody* d : group) particleSteps += steps * static_cast<int64_t>(d->lattice.particleCount());
+    return particleSteps;
+}
+
+}  // namespace spall
