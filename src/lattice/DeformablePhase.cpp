@@ -56,6 +56,8 @@ void DeformablePhase::enter(std::vector<Body>& bodies, const std::vector<char>& 
 
 std::vector<DeformablePhase::TouchingGroup> DeformablePhase::touchingGroups(double dtS) const
 {
+    // A lattice alone is its own group: no pass over its particles for boxes and speeds.
+    if (lattices.size() == 1) return {TouchingGroup{{0}, {}}};
     // Two lattices may meet within the step if their boxes come within touching of each other,
     // each moving at its fastest particle's speed over the step and the time it has gathered,
     // with a skin of an edge: a third lattice striking one within the step speeds it up.
