@@ -274,9 +274,10 @@ TEST(Impact, TwoEqualBarsMeetingEndOnExchangeTheirVelocitiesAfterTwoTransitTimes
     const double momentum0 = momentumX(), energy0 = energyJ(), barMassKg = bars.striker.lattice.model().particleMassKg * 24 * 9;
     const double dtS = 2e-6;  // longer than the lattices' stable step (1.5 us): two lattice steps each
     double firstTouchS = -1, lastTouchS = -1, worstMomentumError = 0;
+    LatticePairContact contact(bars.striker.lattice, bars.struck.lattice);
     for (double t = 0; t < 6e-4; t += dtS) {
         const double struckMomentumBefore = bars.struck.lattice.linearMomentum().x();
-        advanceTogether({&bars.striker, &bars.struck}, {{0, 1}}, dtS);
+        advanceTogether({&bars.striker, &bars.struck}, {{0, 1}}, {&contact}, dtS);
         if (std::abs(bars.struck.lattice.linearMomentum().x() - struckMomentumBefore) > 1e-9 * momentum0) {
             if (firstTouchS < 0) firstTouchS = t;
             lastTouchS = t + dtS;

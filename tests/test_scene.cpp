@@ -264,7 +264,7 @@ const char* kEveryKeyScene = R"({
   "blast": {"dataset": "kinney-graham", "table_nodes_per_decade": 64},
   "fracture": {"algorithm": "davison-stevens", "weakening": false, "orientation": false, "min_fragment_voxels": 3,
                "small_fragments": "dust"},
-  "lattice": {"bulk_viscosity": 0.2, "handoff_energy_fraction": 0.05, "max_vibration_s": 0.01, "handoff_check_interval_s": 0.002, "handoff_residual_strength": 0.2, "damage_law": "davison-stevens", "impact_fracture": true, "particle_voxels": 2},
+  "lattice": {"bulk_viscosity": 0.2, "handoff_energy_fraction": 0.05, "max_vibration_s": 0.01, "handoff_check_interval_s": 0.002, "handoff_residual_strength": 0.2, "damage_law": "davison-stevens", "impact_fracture": true, "separate_during_blast": true, "particle_voxels": 2},
   "solver": {"integrator": "rk4", "max_time_step_s": 0.002, "min_time_step_s": 1e-6, "front_fraction_voxels": 0.4,
              "pulse_fraction": 0.05, "speed_fraction_voxels": 0.4, "air_drag": "none", "linear_drag_per_s": 0.1, "angular_drag_per_s": 0.2,
              "sleep": false, "sleep_speed_m_s": 0.1, "sleep_time_s": 1.0},

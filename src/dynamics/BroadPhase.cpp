@@ -12,7 +12,10 @@
 
 namespace spall {
 
-bool pairCanInteract(const Body& a, const Body& b) { return takesContactImpulses(a) || takesContactImpulses(b); }
+bool pairCanInteract(const Body& a, const Body& b)
+{
+    return (takesContactImpulses(a) || takesContactImpulses(b)) && !(a.motion.deformable && b.motion.deformable);
+}
 
 namespace {
 

@@ -80,24 +80,17 @@ std::vector<VoxelPair> collectInBlocks(size_t count, size_t blockSize, const Per
 
 /// Appends the pair (i, j) when the voxels belong to different bodies that can interact and lie
 /// within reach; the lower body index goes first.
-void testVoxelPair(const std::vector<WorldVoxel>& voxels, const std::vector<char>& moves, size_t i, size_t j, double reach2,
+void testVoxelPair(const std::vector<WorldVoxel>& voxels, const std::vector<Body>& bodies, size_t i, size_t j, double reach2,
                    std::vector<VoxelPair>& out)
 {
     const WorldVoxel& p = voxels[i];
     const WorldVoxel& q = voxels[j];
-    if (p.body == q.body || (!moves[p.body] && !moves[q.body])) return;
+    if (p.body == q.body || !pairCanInteract(bodies[p.body], bodies[q.body])) return;
     if ((p.centreM - q.centreM).squaredNorm() >= reach2) return;
     if (p.body < q.body)
         out.push_back({{p.body, q.body}, static_cast<uint32_t>(i), static_cast<uint32_t>(j)});
     else
         out.push_back({{q.body, p.body}, static_cast<uint32_t>(j), static_cast<uint32_t>(i)});
-}
-
-std::vector<char> movableFlags(const std::vector<Body>& bodies)
-{
-    std::vector<char> moves(bodies.size());
-    for (size_t i = 0; i < bodies.size(); ++i) moves[i] = takesContactImpulses(bodies[i]);
-    return moves;
 }
 
 }  // namespace
@@ -107,10 +100,9 @@ std::vector<ContactManifold> pairwiseContacts(const std::vector<Body>& bodies)
     const std::vector<WorldVoxel> voxels = worldBoundaryVoxels(bodies);
     if (voxels.empty()) return {};
     const double h = bodies.front().voxelSizeM;
-    const std::vector<char> moves = movableFlags(bodies);
     std::vector<VoxelPair> all = collectInBlocks(voxels.size(), 256, [&](size_t begin, size_t end, std::vector<VoxelPair>& out) {
         for (size_t i = begin; i < end; ++i)
-            for (size_t j = i + 1; j < voxels.size(); ++j) testVoxelPair(voxels, moves, i, j, kReach * kReach * h * h, out);
+            for (size_t j = i + 1; j < voxels.size(); ++j) testVoxelPair(voxels, bodies, i, j, kReach * kReach * h * h, out);
     });
     return manifoldsFromVoxelPairs(bodies, voxels, all);
 }
@@ -132,7 +124,6 @@ std::vector<ContactManifold> bucketContacts(const std::vector<Body>& bodies)
     std::vector<std::pair<uint64_t, uint32_t>> table(voxels.size());
     for (size_t i = 0; i < voxels.size(); ++i) table[i] = {key(cellOf(voxels[i].centreM)), static_cast<uint32_t>(i)};
     std::sort(table.begin(), table.end());
-    const std::vector<char> moves = movableFlags(bodies);
     std::vector<VoxelPair> all = collectInBlocks(voxels.size(), 1024, [&](size_t begin, size_t end, std::vector<VoxelPair>& out) {
         for (size_t i = begin; i < end; ++i) {
             const openvdb::Coord cell = cellOf(voxels[i].centreM);
@@ -142,7 +133,7 @@ std::vector<ContactManifold> bucketContacts(const std::vector<Body>& bodies)
                         const uint64_t k = key(cell.offsetBy(dx, dy, dz));
                         auto it = std::lower_bound(table.begin(), table.end(), std::make_pair(k, uint32_t(0)));
                         for (; it != table.end() && it->first == k; ++it)
-                            if (it->second > i) testVoxelPair(voxels, moves, i, it->second, kReach * kReach * h * h, out);
+                            if (it->second > i) testVoxelPair(voxels, bodies, i, it->second, kReach * kReach * h * h, out);
                     }
         }
     });

@@ -548,4 +548,34 @@ Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tole
     return departure;
 }
 
+bool hasFreePieceAtHandOff(const Lattice& lattice)
+{
+    DisjointSets sets(lattice.particleCount());
+    for (size_t b = 0; b < lattice.bondCount(); ++b)
+        if (!lattice.brokenAtHandOff(b)) sets.join(lattice.model().bonds[b].low, lattice.model().bonds[b].high);
+    // Pieces of voxels: a support point left alone is no piece.
+    std::vector<char> held(lattice.particleCount(), 0), hasVoxel(lattice.particleCount(), 0);
+    for (uint32_t p = 0; p < lattice.particleCount(); ++p) {
+        const uint32_t root = sets.root(p);
+        hasVoxel[root] |= p < lattice.model().voxelParticleCount;
+        held[root] |= lattice.model().held[p];
+    }
+    int64_t pieces = 0;
+    bool anyFree = false;
+    for (uint32_t p = 0; p < lattice.particleCount(); ++p) {
+        pieces += hasVoxel[p];
+        anyFree = anyFree || (hasVoxel[p] && !held[p]);
+    }
+    return pieces > 1 && anyFree;
+}
+
+Departure separateFreePieces(const Body& body, const Lattice& lattice)
+{
+    Departure departure;
+    departure.handOff = handOff(body, lattice);
+    // A lone voxel has no bond to strain: leaving rigid, it discards nothing.
+    for (Body& part : departure.handOff.parts) part.motion.deformable = part.linkCount > 0 || part.anchored;
+    return departure;
+}
+
 }  // namespace spall

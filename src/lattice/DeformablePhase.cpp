@@ -102,6 +102,7 @@ int64_t DeformablePhase::deform(std::vector<Body>& bodies, const std::vector<std
         setExternalForces(lattices[k], bodies[i], faceForcesN[i], gravityMS2);
     }
     int64_t particleSteps = 0;
+    std::vector<std::pair<int64_t, int64_t>> used;
     for (const TouchingGroup& group : touchingGroups(dtS)) {
         if (group.lattices.size() == 1) {
             particleSteps += advanceDeformable(lattices[group.lattices.front()], dtS, abandon);
@@ -109,14 +110,29 @@ int64_t DeformablePhase::deform(std::vector<Body>& bodies, const std::vector<std
         }
         std::vector<DeformableBody*> members;
         for (const size_t k : group.lattices) members.push_back(&lattices[k]);
-        particleSteps += advanceTogether(members, group.touching, dtS, abandon);
+        particleSteps += advanceTogether(members, group.touching, contactsOf(group, used), dtS, abandon);
     }
+    std::sort(used.begin(), used.end());
+    for (auto it = mPairContacts.begin(); it != mPairContacts.end();)
+        it = std::binary_search(used.begin(), used.end(), it->first) ? std::next(it) : mPairContacts.erase(it);
     for (size_t k = 0; k < lattices.size(); ++k) {
         Body& body = bodies[bodyIndex(k, bodies)];
         followLattice(body, lattices[k].lattice);
         if (reached(body)) lattices[k].lastLoadedS = timeS + dtS;
     }
     return particleSteps;
+}
+
+std::vector<LatticePairContact*> DeformablePhase::contactsOf(const TouchingGroup& group, std::vector<std::pair<int64_t, int64_t>>& used)
+{
+    std::vector<LatticePairContact*> contacts;
+    for (const auto& [i, j] : group.touching) {
+        const DeformableBody &a = lattices[group.lattices[i]], &b = lattices[group.lattices[j]];
+        const auto key = std::make_pair(a.bodyId, b.bodyId);
+        contacts.push_back(&mPairContacts.try_emplace(key, a.lattice, b.lattice).first->second);
+        used.push_back(key);
+    }
+    return contacts;
 }
 
 PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, const std::vector<Material>& materials,
@@ -137,11 +153,14 @@ PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, con
         const double sinceBlastS = timeS - d.lastLoadedS;
         const double toleranceJ = settings.handoffEnergyFraction * elasticCapacityPerVoxelJ(materials[body.materialIndex], d.lattice.model().spacingM);
         const bool timeUp = sinceBlastS >= settings.maxVibrationS;
+        // While the blast acts, a piece that has come free may leave the whole (separateFreePieces).
+        const bool look =
+            sinceBlastS > 0.0 ? checkDue || timeUp : settings.separateDuringBlast && checkDue && hasFreePieceAtHandOff(d.lattice);
         Departure departure;
-        if (sinceBlastS > 0.0 && (checkDue || timeUp)) {
+        if (look) {
             out.particleSteps += catchUpDeformable(d);
             followLattice(body, d.lattice);
-            departure = spall::leaveQuietPieces(body, d.lattice, toleranceJ, timeUp);
+            departure = sinceBlastS > 0.0 ? spall::leaveQuietPieces(body, d.lattice, toleranceJ, timeUp) : separateFreePieces(body, d.lattice);
         }
         std::vector<Body>& leftParts = departure.handOff.parts;
         if (leftParts.empty() || (leftParts.size() == 1 && leftParts.front().motion.deformable)) {
@@ -163,6 +182,7 @@ PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, con
         out.leaving.push_back(std::move(d));
     }
     // A body that left whole was replaced in place: the bodies' places are as they were.
+    if (staying.size() != lattices.size()) mPairContacts.clear();
     lattices = std::move(staying);
     mBodyIndex = std::move(stayingBodyIndex);
     return out;

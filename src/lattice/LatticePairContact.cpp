@@ -99,9 +99,10 @@ void LatticePairContact::addForces(Lattice& a, Lattice& b)
     }
 }
 
-int64_t advanceTogether(const std::vector<DeformableBody*>& group, const std::vector<std::pair<size_t, size_t>>& touching, double dtS,
-                        const std::function<bool()>& abandon)
+int64_t advanceTogether(const std::vector<DeformableBody*>& group, const std::vector<std::pair<size_t, size_t>>& touching,
+                        const std::vector<LatticePairContact*>& contacts, double dtS, const std::function<bool()>& abandon)
 {
+    SPALL_CHECK(contacts.size() == touching.size());
     int64_t particleSteps = 0;
     double stableS = std::numeric_limits<double>::infinity();
     for (DeformableBody* d : group) {
@@ -111,8 +112,6 @@ int64_t advanceTogether(const std::vector<DeformableBody*>& group, const std::ve
         d->lattice.externalForceN = std::move(thisStepN);
         stableS = std::min(stableS, d->lattice.stableTimeStepS());
     }
-    std::vector<LatticePairContact> contacts;
-    for (const auto& [i, j] : touching) contacts.emplace_back(group[i]->lattice, group[j]->lattice);
     const int64_t steps = static_cast<int64_t>(std::ceil(dtS / stableS * (1.0 - 1e-12)));
     const double stepS = dtS / double(steps);
     for (int64_t s = 0; s < steps; ++s) {
@@ -120,7 +119,7 @@ int64_t advanceTogether(const std::vector<DeformableBody*>& group, const std::ve
             throw StepAbandoned("a step of the deformable phase was given up after " + std::to_string(s) + " of its " + std::to_string(steps) +
                                 " steps of lattices in contact");
         for (DeformableBody* d : group) d->lattice.moveAndMeasure(stepS);
-        for (size_t c = 0; c < touching.size(); ++c) contacts[c].addForces(group[touching[c].first]->lattice, group[touching[c].second]->lattice);
+        for (size_t c = 0; c < touching.size(); ++c) contacts[c]->addForces(group[touching[c].first]->lattice, group[touching[c].second]->lattice);
         for (DeformableBody* d : group) d->lattice.finishStep(stepS);
     }
     for (const DeformableBody* d : group) particleSteps += steps * static_cast<int64_t>(d->lattice.particleCount());

@@ -13,6 +13,7 @@ const std::vector<Field<LatticeSettings>>& fieldTable<LatticeSettings>()
         {"lattice.handoff_residual_strength", &LatticeSettings::handoffResidualStrength, closed(0.0, 1.0)},
         {"lattice.damage_law", choice(&LatticeSettings::damageLaw)},
         {"lattice.impact_fracture", &LatticeSettings::impactFracture},
+        {"lattice.separate_during_blast", &LatticeSettings::separateDuringBlast},
         {"lattice.particle_voxels", &LatticeSettings::particleVoxels, closed(1, 8)},
     };
     return table;

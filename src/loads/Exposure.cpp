@@ -96,10 +96,11 @@ void Exposure::groupTouchingBodies(const std::vector<Body>& bodies, const std::v
         const Body& body = bodies[b];
         const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
         mCovered[b].assign(body.exposedFaces.size(), 0);
+        LastBlock last;
         for (size_t f = 0; f < body.exposedFaces.size(); ++f) {
             const ExposedFace& face = body.exposedFaces[f];
             const Eigen::Vector3d across = body.voxelWorldM(face.voxel) + body.voxelSizeM * (rot * faceNormal(face.face));
-            const int64_t other = bodyAt(across, [b](size_t body) { return body == b; });
+            const int64_t other = bodyAt(across, [b](size_t body) { return body == b; }, last);
             if (other < 0) continue;
             mCovered[b][f] = 1;
             touching[b].push_back(uint32_t(other));
@@ -125,12 +126,18 @@ void Exposure::ownBlocks()
 {
     // Blocks hold their cells and those next to them: a voxel can contain points of the
     // neighbouring cells (bodies need not share the world's lattice). One of the eight
-    // corners is the cell's own block, so every marked block gets an owner.
+    // corners is the cell's own block, so every marked block gets an owner. Cells in key order
+    // mostly share their corners' blocks with the cell before (the map's nodes stay put).
+    std::array<uint64_t, 8> lastKey;
+    std::array<Block*, 8> lastBlock{};
+    lastKey.fill(~uint64_t(0));
     for (const Cell& c : mCells) {
         const int64_t i = std::llround(c.centre[0]), j = std::llround(c.centre[1]), k = std::llround(c.centre[2]);
         const size_t group = mGroup[c.body];
         for (int corner = 0; corner < 8; ++corner) {
-            Block& block = mBlocks[blockKey(i + (corner & 1 ? 1 : -1), j + (corner & 2 ? 1 : -1), k + (corner & 4 ? 1 : -1))];
+            const uint64_t key = blockKey(i + (corner & 1 ? 1 : -1), j + (corner & 2 ? 1 : -1), k + (corner & 4 ? 1 : -1));
+            if (key != lastKey[size_t(corner)]) lastKey[size_t(corner)] = key, lastBlock[size_t(corner)] = &mBlocks[key];
+            Block& block = *lastBlock[size_t(corner)];
             if (block.owner == kUnowned)
                 block.owner = group;
             else if (block.owner != group)
@@ -194,13 +201,14 @@ int64_t Exposure::firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector
     }
     if (enter > leave) return -1;
     const double blockM = h * (1 << kBlockShift);
+    LastBlock lastOnRay, lastAround;
     for (double t = 0; t < length;) {
         const Eigen::Vector3d x = fromM + t * dir, u = cellUnits(x);
         const int64_t i = std::llround(u.x()), j = std::llround(u.y()), k = std::llround(u.z());
         // A block holding only cells of the excluded group is passed like an empty one.
-        const auto owner = mBlocks.find(blockKey(i, j, k));
-        if (owner != mBlocks.end() && owner->second.owner != excludeGroup) {
-            if (const int64_t body = bodyAt(x, [&](size_t b) { return mGroup[b] == excludeGroup; }); body >= 0) return body;
+        const Block* block = findBlock(blockKey(i, j, k), lastOnRay);
+        if (block && block->owner != excludeGroup) {
+            if (const int64_t body = bodyAt(x, [&](size_t b) { return mGroup[b] == excludeGroup; }, lastAround); body >= 0) return body;
             t += h;
             continue;
         }
@@ -219,18 +227,21 @@ int64_t Exposure::firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector
     return -1;
 }
 
-bool Exposure::anyOccupied(const int64_t lo[3], const int64_t hi[3]) const
+const Exposure::Block* Exposure::findBlock(uint64_t key, LastBlock& last) const
 {
-    uint64_t lastKey = ~uint64_t(0);
-    const Block* block = nullptr;
+    if (key != last.key) {
+        const auto it = mBlocks.find(key);
+        last = {key, it == mBlocks.end() ? nullptr : &it->second};
+    }
+    return last.block;
+}
+
+bool Exposure::anyOccupied(const int64_t lo[3], const int64_t hi[3], LastBlock& last) const
+{
     for (int64_t i = lo[0]; i <= hi[0]; ++i)
         for (int64_t j = lo[1]; j <= hi[1]; ++j)
             for (int64_t k = lo[2]; k <= hi[2]; ++k) {
-                if (const uint64_t key = blockKey(i, j, k); key != lastKey) {
-                    const auto it = mBlocks.find(key);
-                    block = it == mBlocks.end() ? nullptr : &it->second;
-                    lastKey = key;
-                }
+                const Block* block = findBlock(blockKey(i, j, k), last);
                 const int bit = int(i & 7) + 8 * int(j & 7) + 64 * int(k & 7);
                 if (block && (block->occupied[size_t(bit >> 6)] >> (bit & 63) & 1)) return true;
             }
@@ -238,7 +249,7 @@ bool Exposure::anyOccupied(const int64_t lo[3], const int64_t hi[3]) const
 }
 
 template <typename Skip>
-int64_t Exposure::bodyAt(const Eigen::Vector3d& xM, Skip&& skip) const
+int64_t Exposure::bodyAt(const Eigen::Vector3d& xM, Skip&& skip, LastBlock& last) const
 {
     // A voxel within half a cell of x may sit in the next cell along an axis where x lies near
     // a cell boundary (bodies from different objects need not share a lattice): look there too.
@@ -250,7 +261,7 @@ int64_t Exposure::bodyAt(const Eigen::Vector3d& xM, Skip&& skip) const
         if (std::abs(v - nearest) > 0.2) (v > nearest ? range[a][1] : range[a][0]) += v > nearest ? 1 : -1;
     }
     const int64_t lo[3] = {range[0][0], range[1][0], range[2][0]}, hi[3] = {range[0][1], range[1][1], range[2][1]};
-    if (!anyOccupied(lo, hi)) return -1;
+    if (!anyOccupied(lo, hi, last)) return -1;
     for (int64_t i = range[0][0]; i <= range[0][1]; ++i)
         for (int64_t j = range[1][0]; j <= range[1][1]; ++j)
             for (int64_t k = range[2][0]; k <= range[2][1]; ++k) {

@@ -61,7 +61,6 @@ void Simulation::step(double targetS)
     deformBodies(faces, windows, dt);
 
     ContactSet contacts = detectContacts(mState.bodies, mScene.world, mScene.collisions, mScene.sleep);
-    leaveLatticePairsToTheirParticles(contacts);
     enterOnImpact(contacts, dt);
     const double closingPenetrationM = deepestClosingPenetrationM(mState.bodies, contacts, tunnellingSpeedMS(mScene.world, dt, mScene.voxelSizeM));
     solveContactsWithLattices(contacts, dt);
@@ -214,16 +213,6 @@ double groundShareOfImpact(const Material& material, const GroundPlane& ground)
 bool canDeform(const Body& body) { return body.motion.deformable || body.linkCount > 0 || body.anchored; }
 
 }  // namespace
-
-void Simulation::leaveLatticePairsToTheirParticles(ContactSet& contacts) const
-{
-    const auto bothLattices = [&](const ContactManifold& m) {
-        return mState.bodies[size_t(m.a)].motion.deformable && mState.bodies[size_t(m.b)].motion.deformable;
-    };
-    for (const ContactManifold& m : contacts.manifolds)
-        if (bothLattices(m)) contacts.solverContacts -= int64_t(m.points.size());
-    contacts.manifolds.erase(std::remove_if(contacts.manifolds.begin(), contacts.manifolds.end(), bothLattices), contacts.manifolds.end());
-}
 
 bool Simulation::strikesHardEnoughToCrack(double closingMS, const Body& body, double share, double dtS) const
 {

@@ -14,7 +14,8 @@ struct BodyPair {
     bool operator==(const BodyPair& o) const { return a == o.a && b == o.b; }
 };
 
-/// True when a contact between the two bodies could change anything: at least one of them moves.
+/// True when a contact between the two bodies could change anything: at least one of them moves,
+/// and they are not both lattices, which meet particle to particle (lattice/LatticePairContact.h).
 bool pairCanInteract(const Body& a, const Body& b);
 
 /// Pairs whose bounding spheres overlap (found with a hierarchical grid) and that can interact,

@@ -164,6 +164,16 @@ struct Departure {
 };
 Departure leaveQuietPieces(const Body& body, const Lattice& lattice, double tolerancePerParticleJ, bool timeUp);
 
+/// Whether some piece of the lattice, cut where a hand-off would cut it (Lattice::brokenAtHandOff),
+/// holds to no support while another piece exists: the lattice has come apart.
+bool hasFreePieceAtHandOff(const Lattice& lattice);
+
+/// Leaving the phase in pieces while the blast still acts (issue 48, item 3), once
+/// hasFreePieceAtHandOff: handOff's parts, each that can deform (it has links or anchors) marked
+/// to carry on as a lattice of its own, so that the blast loads its own faces, crack faces
+/// included, and the wave passes through the gaps it leaves; a lone voxel leaves rigid.
+Departure separateFreePieces(const Body& body, const Lattice& lattice);
+
 /// Whether some bond counts as broken at hand-off (Lattice::brokenAtHandOff): the lattice may
 /// have come apart.
 bool anyBondBrokenAtHandOff(const Lattice& lattice);

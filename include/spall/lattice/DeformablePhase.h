@@ -5,10 +5,12 @@
 
 #include <spall/fracture/Material.h>
 #include <spall/lattice/Deformable.h>
+#include <spall/lattice/LatticePairContact.h>
 #include <spall/lattice/Settings.h>
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <utility>
 #include <vector>
 
@@ -99,6 +101,13 @@ private:
     std::vector<TouchingGroup> touchingGroups(double dtS) const;
     /// Per lattice, its body's index (reindex).
     std::vector<size_t> mBodyIndex;
+    /// The contacts of the pairs of lattices that may touch, by their bodies' ids, kept while
+    /// the pair may touch so that their lists are not made again every rigid step; all dropped
+    /// when a lattice leaves (a part may keep its whole's id). A cache: the forces do not depend
+    /// on when a list was made (LatticePairContact::addForces), so a checkpoint leaves it out.
+    std::map<std::pair<int64_t, int64_t>, LatticePairContact> mPairContacts;
+    /// The contacts of a group's touching pairs (made when new); `used` collects their keys.
+    std::vector<LatticePairContact*> contactsOf(const TouchingGroup& group, std::vector<std::pair<int64_t, int64_t>>& used);
 };
 
 }  // namespace spall

@@ -51,14 +51,15 @@ private:
     void listCandidates(const Lattice& a, const Lattice& b);
 };
 
-/// Lattices that may touch (`touching`: pairs of indices into `group`) through a rigid step of
-/// dtS, stepped together so that their particles meet: each first steps what it had gathered
+/// Lattices that may touch (`touching`: pairs of indices into `group`, each with its contact in
+/// `contacts`, made for that pair and kept from step to step for its list) through a rigid step
+/// of dtS, stepped together so that their particles meet: each first steps what it had gathered
 /// (catchUpDeformable) under the forces it gathered them with, then all take the same whole
 /// number of equal steps, none longer than the shortest of their stable steps, under the
 /// external forces setExternalForces left, each pair's contact forces added between the halves
 /// of each step. None is left with time gathered. Returns the particle-steps taken; asks
 /// `abandon` before each step (advanceDeformable).
-int64_t advanceTogether(const std::vector<DeformableBody*>& group, const std::vector<std::pair<size_t, size_t>>& touching, double dtS,
-                        const std::function<bool()>& abandon = {});
+int64_t advanceTogether(const std::vector<DeformableBody*>& group, const std::vector<std::pair<size_t, size_t>>& touching,
+                        const std::vector<LatticePairContact*>& contacts, double dtS, const std::function<bool()>& abandon = {});
 
 }  // namespace spall

@@ -80,9 +80,6 @@ private:
     void boundGroups(const std::vector<Body>& bodies, const std::vector<char>& considered);
     /// mCellsLo, mCellsHi and mOnlyGroup: the cells' bounds and their one group, if one.
     void boundCells();
-    /// A body that `skip(body)` does not skip with a voxel that contains x (world, unit: m), or -1.
-    template <typename Skip>
-    int64_t bodyAt(const Eigen::Vector3d& xM, Skip&& skip) const;
 
     /// World point x in cell units: (x - origin) / h.
     Eigen::Vector3d cellUnits(const Eigen::Vector3d& xM) const { return (xM - mOriginM) / mCellSizeM; }
@@ -101,9 +98,20 @@ private:
     };
     /// Every block holding a cell or next to one.
     std::unordered_map<uint64_t, Block> mBlocks;
+    /// The last block looked up: a ray or a face's neighbourhood stays in one block for several
+    /// cells, and a hash lookup per cell was a third of a step's loads.
+    struct LastBlock {
+        uint64_t key = ~uint64_t(0);
+        const Block* block = nullptr;
+    };
+    /// The block of key (null: none), through `last`.
+    const Block* findBlock(uint64_t key, LastBlock& last) const;
+    /// A body that `skip(body)` does not skip with a voxel that contains x (world, unit: m), or -1.
+    template <typename Skip>
+    int64_t bodyAt(const Eigen::Vector3d& xM, Skip&& skip, LastBlock& last) const;
     /// Whether any cell from lattice point lo to hi (inclusive, at most one block apart) holds a
     /// voxel centre: a test of bits before bodyAt's search of the sorted cells.
-    bool anyOccupied(const int64_t lo[3], const int64_t hi[3]) const;
+    bool anyOccupied(const int64_t lo[3], const int64_t hi[3], LastBlock& last) const;
     /// Bounds of every cell's centre (cell units), and the group all cells belong to when they
     /// belong to one (kManyGroups otherwise): a segment that misses the bounds, or a query that
     /// excludes the only group, meets nothing.

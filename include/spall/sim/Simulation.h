@@ -141,9 +141,6 @@ private:
     /// whose impact on each other may crack either both become lattices, and their contact
     /// leaves the solve.
     void enterOnImpact(ContactSet& contacts, double dtS);
-    /// Lattices meet each other particle to particle in the deform phase (LatticePairContact.h):
-    /// their contacts as rigid bodies leave the solve.
-    void leaveLatticePairsToTheirParticles(ContactSet& contacts) const;
     /// Whether a body's share of an impact closing at closingMS (`share` of it, by the
     /// impedances) may crack it: faster than a resting contact, than the fastest impact it has
     /// survived, and than crackingImpactSpeedMS.
