@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdio>
 
 using namespace spall;
@@ -56,8 +57,14 @@ TEST(FreedPieces, APieceFreedDuringTheBlastTakesWhatTheSamePieceCutBeforehandTak
     const double endS = 0.012;
     Simulation cracking(parseScene(columnScene("lattice", true).dump(), "column", "."));
     const Body whole = cracking.bodies().front();
+    // Pieces stay one lattice while the blast is open unless they separate during it.
+    size_t mostBodiesWhileBlastOpen = 0;
+    cracking.setStepObserver([&](const Simulation& s, const StepRecord& r) {
+        if (r.blastOpen) mostBodiesWhileBlastOpen = std::max(mostBodiesWhileBlastOpen, s.bodies().size());
+    });
     cracking.advanceTo(endS);
     ASSERT_GE(cracking.bodies().size(), 2u) << "the column must break for the check to mean anything";
+    EXPECT_GE(mostBodiesWhileBlastOpen, 2u) << "the pieces must leave the column while the blast still acts";
 
     const Scene rigidScene = parseScene(columnScene("none", false).dump(), "column", ".");
     SimulationState cut;
@@ -77,6 +84,5 @@ TEST(FreedPieces, APieceFreedDuringTheBlastTakesWhatTheSamePieceCutBeforehandTak
                     (long long)freed.mass.voxelCount, reference.motion.positionM.z(), pFreed.norm(), pRigid.norm(), 100 * (pFreed.norm() / pRigid.norm() - 1));
         EXPECT_LT((pFreed - pRigid).norm(), 0.1 * pRigid.norm()) << "piece " << freed.id;
     }
-    // The pieces left the whole while the blast still acted: as many events as pieces' parents.
-    EXPECT_GE(cracking.fractureEvents().size(), 1u);
 }
+

@@ -56,8 +56,9 @@ struct LatticeSettings {
     /// may take undamaged (crackingImpactSpeedMS) becomes a lattice for the impact, as a body the
     /// blast reaches does, and leaves the phase as any other once quiet (unit: none).
     bool impactFracture = false;
-    /// While the blast still acts, a piece that has come free of its body's lattice (looked for
-    /// once per handoff_check_interval_s) carries on as a lattice of its own, so that the blast
+    /// While the blast (or the impact that made it a lattice) still loads it, a piece that has
+    /// come free of its body's lattice (looked for once per handoff_check_interval_s) carries on
+    /// as a lattice of its own, so that the blast
     /// loads its own faces, crack faces included, at its own place, and the wave passes the gaps
     /// between pieces (issue 48, item 3); otherwise the pieces stay one lattice, loaded on their
     /// whole body's faces at its rigid fit, until the blast has passed (unit: none).
