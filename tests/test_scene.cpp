@@ -142,6 +142,10 @@ TEST(Scene, MaterialAndLatticeErrorsNameTheKeyAndReason)
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"handoff_residual_strength": 1.5}})").find("lattice.handoff_residual_strength: must be in"),
               std::string::npos);
     EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"damage_law": "paper"}})").find("lattice.damage_law"), std::string::npos);
+    for (const char* flag : {"impact_fracture", "separate_during_blast"})
+        EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {")" + flag + R"(": "yes"}})").find(std::string("lattice.") + flag),
+                  std::string::npos)
+            << flag;
     for (const char* interval : {"0", "-0.001", "2"})
         EXPECT_NE(errorOf(R"({"objects": [{)" + box + R"(}], "lattice": {"handoff_check_interval_s": )" + interval + "}}")
                       .find("lattice.handoff_check_interval_s: must be in"),
