@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <unordered_map>
 
 namespace spall {
@@ -53,6 +54,15 @@ void DeformablePhase::enter(std::vector<Body>& bodies, const std::vector<char>& 
         body.motion.restTimeS = 0.0;
     }
 }
+
+namespace {
+
+/// Whether a lattice entered the phase for the step from timeS of length dtS: the blast's entry
+/// is at the step's start, an impact's at the end of the step before (which lands on a frame's
+/// time, not always bit for bit the sum of the steps).
+bool enteredJustBefore(const DeformableBody& d, double timeS, double dtS) { return d.enteredS >= timeS - 0.5 * dtS; }
+
+}  // namespace
 
 std::vector<DeformablePhase::TouchingGroup> DeformablePhase::touchingGroups(double dtS) const
 {
@@ -110,11 +120,13 @@ int64_t DeformablePhase::deform(std::vector<Body>& bodies, const std::vector<std
         }
         std::vector<DeformableBody*> members;
         for (const size_t k : group.lattices) members.push_back(&lattices[k]);
-        particleSteps += advanceTogether(members, group.touching, contactsOf(group, used), dtS, abandon);
+        particleSteps += advanceTogether(members, group.touching, contactsOf(group, timeS, dtS, used), dtS, abandon);
     }
     std::sort(used.begin(), used.end());
     for (auto it = mPairContacts.begin(); it != mPairContacts.end();)
         it = std::binary_search(used.begin(), used.end(), it->first) ? std::next(it) : mPairContacts.erase(it);
+    pairOverlapExcuses.clear();
+    for (const auto& [key, contact] : mPairContacts) pairOverlapExcuses.push_back({key.first, key.second, contact.overlapExcuseM()});
     for (size_t k = 0; k < lattices.size(); ++k) {
         Body& body = bodies[bodyIndex(k, bodies)];
         followLattice(body, lattices[k].lattice);
@@ -123,13 +135,28 @@ int64_t DeformablePhase::deform(std::vector<Body>& bodies, const std::vector<std
     return particleSteps;
 }
 
-std::vector<LatticePairContact*> DeformablePhase::contactsOf(const TouchingGroup& group, std::vector<std::pair<int64_t, int64_t>>& used)
+std::vector<LatticePairContact*> DeformablePhase::contactsOf(const TouchingGroup& group, double timeS, double dtS,
+                                                             std::vector<std::pair<int64_t, int64_t>>& used)
 {
     std::vector<LatticePairContact*> contacts;
     for (const auto& [i, j] : group.touching) {
         const DeformableBody &a = lattices[group.lattices[i]], &b = lattices[group.lattices[j]];
         const auto key = std::make_pair(a.bodyId, b.bodyId);
-        contacts.push_back(&mPairContacts.try_emplace(key, a.lattice, b.lattice).first->second);
+        auto contact = mPairContacts.find(key);
+        if (contact == mPairContacts.end()) {
+            const auto had = std::lower_bound(pairOverlapExcuses.begin(), pairOverlapExcuses.end(), key, [](const PairOverlapExcuse& e, const auto& k) {
+                return std::make_pair(e.bodyIdA, e.bodyIdB) < k;
+            });
+            // Only a body that has just been rigid overlaps by the rigid phase's leave; parts of
+            // one lattice that overlap press on each other.
+            std::optional<double> excuseM;
+            if (had != pairOverlapExcuses.end() && had->bodyIdA == key.first && had->bodyIdB == key.second)
+                excuseM = had->excuseM;
+            else if (!enteredJustBefore(a, timeS, dtS) && !enteredJustBefore(b, timeS, dtS))
+                excuseM = 0.0;
+            contact = mPairContacts.try_emplace(key, a.lattice, b.lattice, excuseM).first;
+        }
+        contacts.push_back(&contact->second);
         used.push_back(key);
     }
     return contacts;

@@ -49,13 +49,26 @@ Eigen::AlignedBox3d particleBox(const Lattice& lattice)
     return box;
 }
 
-LatticePairContact::LatticePairContact(const Lattice& a, const Lattice& b)
+LatticePairContact::LatticePairContact(const Lattice& a, const Lattice& b, std::optional<double> overlapExcuseM)
     : mTouchM(0.5 * (a.model().spacingM + b.model().spacingM)), mSkinM(kPairSkin * mTouchM)
 {
     // Each side's half edge is twice as stiff as its whole bond; never stiffer than the softer
     // side's bond, the ground's contact spring, which the lattices' stable step allows.
     const double ka = 2.0 * a.surfaceStiffnessNPerM(), kb = 2.0 * b.surfaceStiffnessNPerM();
     mStiffnessNPerM = std::min(ka * kb / (ka + kb), 0.5 * std::min(ka, kb));
+    if (overlapExcuseM) {
+        mOverlapExcuseM = *overlapExcuseM;
+        return;
+    }
+    listCandidates(a, b);
+    mOverlapExcuseM = deepestOverlapM(a, b);
+}
+
+double LatticePairContact::deepestOverlapM(const Lattice& a, const Lattice& b) const
+{
+    double deepestM = 0.0;
+    for (const auto& [p, q] : mCandidates) deepestM = std::max(deepestM, mTouchM - (b.state.positionM[q] - a.state.positionM[p]).norm());
+    return deepestM;
 }
 
 bool LatticePairContact::movedHalfTheSkin(const Lattice& a, const Lattice& b) const
@@ -89,14 +102,18 @@ void LatticePairContact::addForces(Lattice& a, Lattice& b)
 {
     if (movedHalfTheSkin(a, b)) listCandidates(a, b);
     // In the sorted list's order, so the sums do not depend on when it was last made.
+    const double pushFromM = mTouchM - mOverlapExcuseM;
+    double deepestM = 0.0;
     for (const auto& [p, q] : mCandidates) {
         const Eigen::Vector3d apartM = b.state.positionM[q] - a.state.positionM[p];
         const double distanceM = apartM.norm();
-        if (distanceM >= mTouchM || distanceM <= 0.0) continue;
-        const Eigen::Vector3d onB = (mStiffnessNPerM * (mTouchM - distanceM) / distanceM) * apartM;
+        deepestM = std::max(deepestM, mTouchM - distanceM);
+        if (distanceM >= pushFromM || distanceM <= 0.0) continue;
+        const Eigen::Vector3d onB = (mStiffnessNPerM * (pushFromM - distanceM) / distanceM) * apartM;
         b.state.bondForceN[q] += onB;
         a.state.bondForceN[p] -= onB;
     }
+    mOverlapExcuseM = std::min(mOverlapExcuseM, deepestM);
 }
 
 int64_t advanceTogether(const std::vector<DeformableBody*>& group, const std::vector<std::pair<size_t, size_t>>& touching,

@@ -209,6 +209,11 @@ void transferFields(Archive& a, C& c, std::vector<uint8_t>& extraGrids)
         a.vec(d.angularMomentumAboutOrigin, "dust angular momentum");
     });
     a.sequence(s.deformable.lattices, "deformable bodies", [&](auto& d) { transferDeformable(a, d); });
+    a.sequence(s.deformable.pairOverlapExcuses, "lattice pairs", [&](auto& e) {
+        a.pod(e.bodyIdA, "lattice pair body");
+        a.pod(e.bodyIdB, "lattice pair body");
+        a.pod(e.excuseM, "lattice pair overlap excuse");
+    });
     a.sequence(s.handOffs, "hand-offs", [&](auto& h) { transferHandOff(a, h); });
     a.sequence(s.contactCache.points, "contact points", [&](auto& p) {
         a.pod(p.key.first, "contact key");

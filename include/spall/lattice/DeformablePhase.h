@@ -42,10 +42,19 @@ struct PhaseDepartures {
 /// Whether the blast reaches a body during the step (an open window meets it).
 using ReachedByBlast = std::function<bool(const Body&)>;
 
+/// What a pair of lattices' contact excuses of their overlap (LatticePairContact::overlapExcuseM).
+struct PairOverlapExcuse {
+    int64_t bodyIdA = 0, bodyIdB = 0;
+    double excuseM = 0.0;  ///< (unit: m)
+};
+
 class DeformablePhase {
 public:
     /// The bodies in the phase, in the order they entered.
     std::vector<DeformableBody> lattices;
+    /// Per pair of lattices that may touch, sorted by their bodies' ids, the overlap their
+    /// contact excuses: state a checkpoint keeps, where the contacts themselves are a cache.
+    std::vector<PairOverlapExcuse> pairOverlapExcuses;
 
     bool empty() const { return lattices.empty(); }
     /// Lattice k's body among `bodies`, checked against its id.
@@ -104,10 +113,14 @@ private:
     /// The contacts of the pairs of lattices that may touch, by their bodies' ids, kept while
     /// the pair may touch so that their lists are not made again every rigid step; all dropped
     /// when a lattice leaves (a part may keep its whole's id). A cache: the forces do not depend
-    /// on when a list was made (LatticePairContact::addForces), so a checkpoint leaves it out.
+    /// on when a list was made (LatticePairContact::addForces), and what else a contact keeps
+    /// is in pairOverlapExcuses, so a checkpoint leaves it out.
     std::map<std::pair<int64_t, int64_t>, LatticePairContact> mPairContacts;
-    /// The contacts of a group's touching pairs (made when new); `used` collects their keys.
-    std::vector<LatticePairContact*> contactsOf(const TouchingGroup& group, std::vector<std::pair<int64_t, int64_t>>& used);
+    /// The contacts of a group's touching pairs in the step from timeS of length dtS: made when
+    /// new, with the excuse the pair had, else with their overlap excused if either has just
+    /// entered the phase (LatticePairContact); `used` collects their keys.
+    std::vector<LatticePairContact*> contactsOf(const TouchingGroup& group, double timeS, double dtS,
+                                                std::vector<std::pair<int64_t, int64_t>>& used);
 };
 
 }  // namespace spall

@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -33,21 +34,36 @@ Eigen::AlignedBox3d particleBox(const Lattice& lattice);
 /// two bodies of one material closing flat at v press each other with ρ c v / 2 (Kolsky, Stress
 /// Waves in Solids, 1963, ch. 4). Forces are equal and opposite: momentum is kept exactly, and
 /// the spring stores and gives back what it takes.
+///
+/// A contact may excuse an overlap: its particles push only once closer than that, and the
+/// excuse shrinks as the overlap does, never growing again (as the rigid solver excuses the
+/// overlap pieces leave the phase with, BodyMotion::overlapSlackM). A body that was rigid a
+/// moment ago overlaps its neighbours by what the rigid phase let it (a 1 ms step at 5 m/s is
+/// 5 mm), and a spring as stiff as a bond turns that into energy the pieces never had: 1.3 mm
+/// threw the default wall's bricks at hundreds of m/s. The deformable phase excuses the overlap
+/// of a contact made as one of its lattices enters (DeformablePhase::contactsOf).
 class LatticePairContact {
 public:
-    LatticePairContact(const Lattice& a, const Lattice& b);
+    /// `overlapExcuseM`: the excuse the pair's contact had before (a checkpoint, a contact made
+    /// again); none: the deepest overlap now.
+    LatticePairContact(const Lattice& a, const Lattice& b, std::optional<double> overlapExcuseM = std::nullopt);
     /// Adds the contact forces at the particles' present places to a's and b's bondForceN.
     void addForces(Lattice& a, Lattice& b);
     double stiffnessNPerM() const { return mStiffnessNPerM; }
+    /// How much closer than touching the particles are before they push (unit: m).
+    double overlapExcuseM() const { return mOverlapExcuseM; }
 
 private:
     double mTouchM, mSkinM, mStiffnessNPerM;
+    double mOverlapExcuseM = 0.0;
     /// Pairs (a's particle, b's) whose centres were within touching plus the skin when last
     /// listed, sorted: a Verlet list, listed again once a particle of either has moved half the
     /// skin since.
     std::vector<std::pair<uint32_t, uint32_t>> mCandidates;
     std::vector<Eigen::Vector3d> mListedAM, mListedBM;
     bool movedHalfTheSkin(const Lattice& a, const Lattice& b) const;
+    /// The most a listed pair's particles overlap now (0: none does) (unit: m).
+    double deepestOverlapM(const Lattice& a, const Lattice& b) const;
     void listCandidates(const Lattice& a, const Lattice& b);
 };
 

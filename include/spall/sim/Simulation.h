@@ -148,10 +148,12 @@ private:
     /// Whether two bodies' contact may crack either (strikesHardEnoughToCrack), both able to be
     /// lattices and not both lattices already; if so, each rigid one's survived impact is raised to it.
     bool crackingImpactBetween(const ContactManifold& m, double dtS);
-    /// Two bodies about to meet as lattices start touching, not overlapping: the lattices'
-    /// contact has no slack (LatticePairContact), and an overlap it started with would push them
-    /// apart with energy the impact never had. The rigid ones move back along the contact's
-    /// normal by its depth, shared by inverse mass as the position correction shares it.
+    /// Two bodies about to meet as lattices start touching, not overlapping: a rigid step may
+    /// carry a body through a thin one's particles (a block through a pane one particle thick),
+    /// which the lattices' contact would then push out the far side. The rigid ones move back
+    /// along the contact's normal by its depth, shared by inverse mass as the position
+    /// correction shares it; the lattices' contact excuses what overlap is left
+    /// (LatticePairContact).
     void separateBeforeEntering(const ContactManifold& m);
     /// Pieces of deformable bodies the blast has passed leave the phase once their vibration has
     /// died down (all of them after lattice.max_vibration_s) and become rigid bodies again;
