@@ -157,6 +157,14 @@ void transferHandOff(Archive& a, H& h)
     a.flag(h.timedOut, "hand-off timed out");
 }
 
+template <typename Archive, typename E>
+void transferPairOverlapExcuse(Archive& a, E& e)
+{
+    a.pod(e.bodyIdA, "lattice pair body");
+    a.pod(e.bodyIdB, "lattice pair body");
+    a.pod(e.excuseM, "lattice pair overlap excuse");
+}
+
 /// Every field but the grids, in file order. `C` is `const Checkpoint` when writing.
 /// `extraGrids[i]` says which grids besides its links body i has (kDamageGrid, kLinkDamageGrid).
 template <typename Archive, typename C>
@@ -209,11 +217,7 @@ void transferFields(Archive& a, C& c, std::vector<uint8_t>& extraGrids)
         a.vec(d.angularMomentumAboutOrigin, "dust angular momentum");
     });
     a.sequence(s.deformable.lattices, "deformable bodies", [&](auto& d) { transferDeformable(a, d); });
-    a.sequence(s.deformable.pairOverlapExcuses, "lattice pairs", [&](auto& e) {
-        a.pod(e.bodyIdA, "lattice pair body");
-        a.pod(e.bodyIdB, "lattice pair body");
-        a.pod(e.excuseM, "lattice pair overlap excuse");
-    });
+    a.sequence(s.deformable.pairOverlapExcuses, "lattice pairs", [&](auto& e) { transferPairOverlapExcuse(a, e); });
     a.sequence(s.handOffs, "hand-offs", [&](auto& h) { transferHandOff(a, h); });
     a.sequence(s.contactCache.points, "contact points", [&](auto& p) {
         a.pod(p.key.first, "contact key");
