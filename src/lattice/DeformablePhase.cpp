@@ -57,10 +57,13 @@ void DeformablePhase::enter(std::vector<Body>& bodies, const std::vector<char>& 
 
 namespace {
 
-/// Whether a lattice entered the phase for the step from timeS of length dtS: the blast's entry
-/// is at the step's start, an impact's at the end of the step before (which lands on a frame's
-/// time, not always bit for bit the sum of the steps).
-bool enteredJustBefore(const DeformableBody& d, double timeS, double dtS) { return d.enteredS >= timeS - 0.5 * dtS; }
+/// A pair of bodies' ids in the order their excuse is kept by (PairOverlapExcuse).
+std::pair<int64_t, int64_t> orderedPair(int64_t idA, int64_t idB) { return std::minmax(idA, idB); }
+
+bool byPair(const PairOverlapExcuse& a, const PairOverlapExcuse& b)
+{
+    return std::make_pair(a.bodyIdA, a.bodyIdB) < std::make_pair(b.bodyIdA, b.bodyIdB);
+}
 
 }  // namespace
 
@@ -120,13 +123,17 @@ int64_t DeformablePhase::deform(std::vector<Body>& bodies, const std::vector<std
         }
         std::vector<DeformableBody*> members;
         for (const size_t k : group.lattices) members.push_back(&lattices[k]);
-        particleSteps += advanceTogether(members, group.touching, contactsOf(group, timeS, dtS, used), dtS, abandon);
+        particleSteps += advanceTogether(members, group.touching, contactsOf(group, used), dtS, abandon);
     }
     std::sort(used.begin(), used.end());
     for (auto it = mPairContacts.begin(); it != mPairContacts.end();)
         it = std::binary_search(used.begin(), used.end(), it->first) ? std::next(it) : mPairContacts.erase(it);
     pairOverlapExcuses.clear();
-    for (const auto& [key, contact] : mPairContacts) pairOverlapExcuses.push_back({key.first, key.second, contact.overlapExcuseM()});
+    for (const auto& [key, contact] : mPairContacts) {
+        const auto [idA, idB] = orderedPair(key.first, key.second);
+        pairOverlapExcuses.push_back({idA, idB, contact.overlapExcuseM()});
+    }
+    std::sort(pairOverlapExcuses.begin(), pairOverlapExcuses.end(), byPair);
     for (size_t k = 0; k < lattices.size(); ++k) {
         Body& body = bodies[bodyIndex(k, bodies)];
         followLattice(body, lattices[k].lattice);
@@ -135,31 +142,27 @@ int64_t DeformablePhase::deform(std::vector<Body>& bodies, const std::vector<std
     return particleSteps;
 }
 
-std::vector<LatticePairContact*> DeformablePhase::contactsOf(const TouchingGroup& group, double timeS, double dtS,
-                                                             std::vector<std::pair<int64_t, int64_t>>& used)
+std::vector<LatticePairContact*> DeformablePhase::contactsOf(const TouchingGroup& group, std::vector<std::pair<int64_t, int64_t>>& used)
 {
     std::vector<LatticePairContact*> contacts;
     for (const auto& [i, j] : group.touching) {
         const DeformableBody &a = lattices[group.lattices[i]], &b = lattices[group.lattices[j]];
         const auto key = std::make_pair(a.bodyId, b.bodyId);
         auto contact = mPairContacts.find(key);
-        if (contact == mPairContacts.end()) {
-            const auto had = std::lower_bound(pairOverlapExcuses.begin(), pairOverlapExcuses.end(), key, [](const PairOverlapExcuse& e, const auto& k) {
-                return std::make_pair(e.bodyIdA, e.bodyIdB) < k;
-            });
-            // Only a body that has just been rigid overlaps by the rigid phase's leave; parts of
-            // one lattice that overlap press on each other.
-            std::optional<double> excuseM;
-            if (had != pairOverlapExcuses.end() && had->bodyIdA == key.first && had->bodyIdB == key.second)
-                excuseM = had->excuseM;
-            else if (!enteredJustBefore(a, timeS, dtS) && !enteredJustBefore(b, timeS, dtS))
-                excuseM = 0.0;
-            contact = mPairContacts.try_emplace(key, a.lattice, b.lattice, excuseM).first;
-        }
+        if (contact == mPairContacts.end()) contact = mPairContacts.try_emplace(key, a.lattice, b.lattice, storedOverlapExcuseM(a.bodyId, b.bodyId)).first;
         contacts.push_back(&contact->second);
         used.push_back(key);
     }
     return contacts;
+}
+
+std::optional<double> DeformablePhase::storedOverlapExcuseM(int64_t bodyIdA, int64_t bodyIdB) const
+{
+    const auto [idA, idB] = orderedPair(bodyIdA, bodyIdB);
+    const PairOverlapExcuse wanted{idA, idB, 0.0};
+    const auto found = std::lower_bound(pairOverlapExcuses.begin(), pairOverlapExcuses.end(), wanted, byPair);
+    if (found == pairOverlapExcuses.end() || found->bodyIdA != idA || found->bodyIdB != idB) return std::nullopt;
+    return found->excuseM;
 }
 
 PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, const std::vector<Material>& materials,
@@ -173,6 +176,7 @@ PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, con
     out.parts.resize(bodies.size());
     std::vector<DeformableBody> staying;
     std::vector<size_t> stayingBodyIndex;
+    std::vector<int64_t> leftWhole;
     for (size_t k = 0; k < lattices.size(); ++k) {
         DeformableBody& d = lattices[k];
         const size_t i = bodyIndex(k, bodies);
@@ -199,6 +203,7 @@ PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, con
                            timeS - d.enteredS, departure.discardedEnergyJ, departure.timedOut});
         out.brokenLinks += departure.handOff.brokenLinks;
         if (leftParts.size() == 1) {
+            leftWhole.push_back(body.id);
             leftParts.front().id = body.id;
             leftParts.front().parentId = body.parentId;
             body = std::move(leftParts.front());
@@ -208,8 +213,10 @@ PhaseDepartures DeformablePhase::leaveQuietPieces(std::vector<Body>& bodies, con
         out.parts[i] = std::move(leftParts);
         out.leaving.push_back(std::move(d));
     }
-    // A body that left whole was replaced in place: the bodies' places are as they were.
+    // A body that left whole was replaced in place: the bodies' places are as they were. One
+    // that comes back later overlaps by what the rigid phase left it then.
     if (staying.size() != lattices.size()) mPairContacts.clear();
+    forgetOverlapExcusesOf(leftWhole);
     lattices = std::move(staying);
     mBodyIndex = std::move(stayingBodyIndex);
     return out;
@@ -243,13 +250,51 @@ void DeformablePhase::continueVibratingParts(const std::vector<Body>& bodies, co
 {
     std::unordered_map<int64_t, const DeformableBody*> leftBy;
     for (const DeformableBody& d : leaving) leftBy[d.bodyId] = &d;
+    std::unordered_map<int64_t, std::vector<int64_t>> continuingPartsOf;
+    for (const DeformableBody& d : leaving) continuingPartsOf[d.bodyId];  // a whole without such parts leaves no excuse
     for (size_t i = 0; i < bodies.size(); ++i) {
         const Body& body = bodies[i];
         if (!body.motion.deformable || !leftBy.count(body.parentId)) continue;
         lattices.push_back(continueDeformable(body, *leftBy.at(body.parentId), materials[body.materialIndex], settings, supports, seed));
         lattices.back().bodyId = body.id;
         mBodyIndex.push_back(i);
+        continuingPartsOf[body.parentId].push_back(body.id);
     }
+    passOverlapExcusesToParts(continuingPartsOf);
+}
+
+void DeformablePhase::forgetOverlapExcusesOf(const std::vector<int64_t>& bodyIds)
+{
+    const auto among = [&](int64_t id) { return std::find(bodyIds.begin(), bodyIds.end(), id) != bodyIds.end(); };
+    pairOverlapExcuses.erase(std::remove_if(pairOverlapExcuses.begin(), pairOverlapExcuses.end(),
+                                            [&](const PairOverlapExcuse& e) { return among(e.bodyIdA) || among(e.bodyIdB); }),
+                             pairOverlapExcuses.end());
+}
+
+void DeformablePhase::passOverlapExcusesToParts(const std::unordered_map<int64_t, std::vector<int64_t>>& continuingPartsOf)
+{
+    if (continuingPartsOf.empty()) return;
+    const auto idsNow = [&](int64_t id) {
+        const auto parts = continuingPartsOf.find(id);
+        return parts == continuingPartsOf.end() ? std::vector<int64_t>{id} : parts->second;
+    };
+    std::vector<PairOverlapExcuse> passed;
+    // A part takes its whole's excuse with each other lattice: the overlap was its whole's.
+    for (const PairOverlapExcuse& e : pairOverlapExcuses)
+        for (const int64_t idA : idsNow(e.bodyIdA))
+            for (const int64_t idB : idsNow(e.bodyIdB)) {
+                const auto [a, b] = orderedPair(idA, idB);
+                passed.push_back({a, b, e.excuseM});
+            }
+    // Parts of one whole that overlap press on each other, as they did while bonded.
+    for (const auto& [wholeId, parts] : continuingPartsOf)
+        for (size_t p = 0; p < parts.size(); ++p)
+            for (size_t q = p + 1; q < parts.size(); ++q) {
+                const auto [a, b] = orderedPair(parts[p], parts[q]);
+                passed.push_back({a, b, 0.0});
+            }
+    std::sort(passed.begin(), passed.end(), byPair);
+    pairOverlapExcuses = std::move(passed);
 }
 
 }  // namespace spall

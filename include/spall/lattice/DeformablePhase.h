@@ -11,6 +11,8 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -52,8 +54,10 @@ class DeformablePhase {
 public:
     /// The bodies in the phase, in the order they entered.
     std::vector<DeformableBody> lattices;
-    /// Per pair of lattices that may touch, sorted by their bodies' ids, the overlap their
-    /// contact excuses: state a checkpoint keeps, where the contacts themselves are a cache.
+    /// Per pair of lattices that may touch, by their bodies' ids (the smaller first, sorted), the
+    /// overlap their contact excuses: state a checkpoint keeps, where the contacts themselves are
+    /// a cache. A pair without one has its overlap excused when its contact is made: the two
+    /// overlap then only by what the rigid phase left them (LatticePairContact).
     std::vector<PairOverlapExcuse> pairOverlapExcuses;
 
     bool empty() const { return lattices.empty(); }
@@ -116,11 +120,17 @@ private:
     /// on when a list was made (LatticePairContact::addForces), and what else a contact keeps
     /// is in pairOverlapExcuses, so a checkpoint leaves it out.
     std::map<std::pair<int64_t, int64_t>, LatticePairContact> mPairContacts;
-    /// The contacts of a group's touching pairs in the step from timeS of length dtS: made when
-    /// new, with the excuse the pair had, else with their overlap excused if either has just
-    /// entered the phase (LatticePairContact); `used` collects their keys.
-    std::vector<LatticePairContact*> contactsOf(const TouchingGroup& group, double timeS, double dtS,
-                                                std::vector<std::pair<int64_t, int64_t>>& used);
+    /// The contacts of a group's touching pairs: made when new, with the excuse the pair had in
+    /// pairOverlapExcuses, else with their overlap then excused (LatticePairContact); `used`
+    /// collects their keys.
+    std::vector<LatticePairContact*> contactsOf(const TouchingGroup& group, std::vector<std::pair<int64_t, int64_t>>& used);
+    /// The excuse kept for a pair of bodies, if any.
+    std::optional<double> storedOverlapExcuseM(int64_t bodyIdA, int64_t bodyIdB) const;
+    /// Bodies that left the phase whole keep no excuse.
+    void forgetOverlapExcusesOf(const std::vector<int64_t>& bodyIds);
+    /// A whole's excuses pass to each of its parts that carry on as lattices (by whole's id, the
+    /// parts' ids, none if all its parts left); the parts among themselves excuse nothing.
+    void passOverlapExcusesToParts(const std::unordered_map<int64_t, std::vector<int64_t>>& continuingPartsOf);
 };
 
 }  // namespace spall
