@@ -170,9 +170,10 @@ TEST(Fracture, DavisonStevensDamageIsTheIntegralOfItsRate)
     EXPECT_LT(errors[2], errors[0]) << "the error does not fall as the step shrinks";
 }
 
-TEST(Fracture, SplitConservesMomentumExactly)
+TEST(Fracture, SplitConservesMomentumExactlyAndThePartsRememberTheImpactsTheWholeSurvived)
 {
     Body body = test::boxBody(12, 5, 7, 0.1, 2000.0, Eigen::Vector3d(1.0, 2.0, 3.0));
+    body.motion.survivedImpactMS = 1.7;  // a part is no weaker than its whole was (BodyMotion::survivedImpactMS)
     body.motion.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, -2, 0.5).normalized()));
     body.motion.linearVelocityMS = Eigen::Vector3d(3.0, -1.0, 2.5);
     body.motion.angularVelocityRadS = Eigen::Vector3d(4.0, 1.5, -2.0);
@@ -193,6 +194,7 @@ TEST(Fracture, SplitConservesMomentumExactly)
         l += c.worldInertiaKgM2() * c.motion.angularVelocityRadS + c.motion.positionM.cross(c.mass.massKg * c.motion.linearVelocityMS);
         voxels += c.mass.voxelCount;
         EXPECT_EQ(c.parentId, body.id);
+        EXPECT_EQ(c.motion.survivedImpactMS, body.motion.survivedImpactMS);
     }
     const Eigen::Vector3d p0 = body.mass.massKg * body.motion.linearVelocityMS;
     const Eigen::Vector3d l0 = body.worldInertiaKgM2() * body.motion.angularVelocityRadS + body.motion.positionM.cross(p0);

@@ -283,6 +283,7 @@ std::vector<Body> splitBody(const Body& body)
         child.motion.positionM = body.motion.positionM + offset;
         child.motion.angularVelocityRadS = body.motion.angularVelocityRadS;
         child.motion.linearVelocityMS = body.motion.linearVelocityMS + body.motion.angularVelocityRadS.cross(offset);
+        child.motion.survivedImpactMS = body.motion.survivedImpactMS;
         parts.push_back(std::move(child));
     }
     return parts;

@@ -217,9 +217,10 @@ bool canDeform(const Body& body) { return body.motion.deformable || body.linkCou
 bool Simulation::strikesHardEnoughToCrack(double closingMS, const Body& body, double share, double dtS) const
 {
     const double speedMS = closingMS * share;
-    const double survivedMS = body.motion.deformable ? 0.0 : body.motion.survivedImpactMS;
-    // A contact that rests (impactSpeedMS) strikes nothing, however weak the material.
-    return speedMS > std::max(impactSpeedMS(mScene.world, dtS), survivedMS) &&
+    // A contact that rests (impactSpeedMS) strikes nothing, however weak the material; one no
+    // faster than an impact the body took as a lattice grows no damage, a lattice's included
+    // (else a lattice that a rigid piece rubs against pulls it in at every touch).
+    return speedMS > std::max(impactSpeedMS(mScene.world, dtS), body.motion.survivedImpactMS) &&
            speedMS >= crackingImpactSpeedMS(body, mScene.materials[body.materialIndex], mScene.lattice.particleVoxels);
 }
 
@@ -233,7 +234,7 @@ bool Simulation::crackingImpactBetween(const ContactManifold& m, double dtS)
     const double closingMS = fastestClosingSpeedMS(mState.bodies, m), shareA = zb / (za + zb), shareB = za / (za + zb);
     if (!strikesHardEnoughToCrack(closingMS, a, shareA, dtS) && !strikesHardEnoughToCrack(closingMS, b, shareB, dtS)) return false;
     for (const auto& [body, share] : {std::make_pair(&a, shareA), std::make_pair(&b, shareB)})
-        if (!body->motion.deformable) body->motion.survivedImpactMS = std::max(body->motion.survivedImpactMS, closingMS * share);
+        body->motion.survivedImpactMS = std::max(body->motion.survivedImpactMS, closingMS * share);
     return true;
 }
 

@@ -146,7 +146,7 @@ private:
     /// survived, and than crackingImpactSpeedMS.
     bool strikesHardEnoughToCrack(double closingMS, const Body& body, double share, double dtS) const;
     /// Whether two bodies' contact may crack either (strikesHardEnoughToCrack), both able to be
-    /// lattices and not both lattices already; if so, each rigid one's survived impact is raised to it.
+    /// lattices and not both lattices already; if so, each one's survived impact is raised to its share.
     bool crackingImpactBetween(const ContactManifold& m, double dtS);
     /// Two bodies about to meet as lattices start touching, not overlapping: a rigid step may
     /// carry a body through a thin one's particles (a block through a pane one particle thick),
