@@ -11,7 +11,7 @@
 namespace spall {
 
 inline constexpr const char* kCheckpointFileName = "checkpoint.spall";
-inline constexpr uint32_t kCheckpointFormatVersion = 17;
+inline constexpr uint32_t kCheckpointFormatVersion = 18;
 
 struct Checkpoint {
     int framesDone = 0;       ///< frames 0 .. framesDone-1 are written (the state may lie within frame framesDone)
