@@ -41,7 +41,7 @@ Eigen::AlignedBox3d particleBox(const Lattice& lattice);
 /// moment ago overlaps its neighbours by what the rigid phase let it (a 1 ms step at 5 m/s is
 /// 5 mm), and a spring as stiff as a bond turns that into energy the pieces never had: 1.3 mm
 /// threw the default wall's bricks at hundreds of m/s. The deformable phase excuses the overlap
-/// of a contact made as one of its lattices enters (DeformablePhase::contactsOf).
+/// every new contact finds, unless the pair has an excuse kept (DeformablePhase::contactsOf).
 class LatticePairContact {
 public:
     /// `overlapExcuseM`: the excuse the pair's contact had before (a checkpoint, a contact made
