@@ -212,6 +212,20 @@ double groundShareOfImpact(const Material& material, const GroundPlane& ground)
 /// Whether a body can be a lattice: it has links to break, or anchors (DeformablePhase::enter).
 bool canDeform(const Body& body) { return body.motion.deformable || body.linkCount > 0 || body.anchored; }
 
+/// A body about to strike the ground or a collider as a lattice starts touching it, not sunk
+/// into it: a rigid step carries it up to its travel in a step deeper, and the lattice's elastic
+/// contact would give the sunk particles' overlap back as energy the impact never had. It moves
+/// out along each contact's normal by what is left of its depth, deepest first.
+void leaveStaticsBeforeEntering(Body& body, const std::vector<StaticContact>& statics)
+{
+    std::vector<const StaticContact*> deepestFirst;
+    for (const StaticContact& c : statics) deepestFirst.push_back(&c);
+    std::sort(deepestFirst.begin(), deepestFirst.end(), [](const StaticContact* x, const StaticContact* y) { return x->depth > y->depth; });
+    Eigen::Vector3d movedM = Eigen::Vector3d::Zero();
+    for (const StaticContact* c : deepestFirst) movedM += std::max(0.0, c->depth - c->normal.dot(movedM)) * c->normal;
+    body.motion.positionM += movedM;
+}
+
 }  // namespace
 
 bool Simulation::strikesHardEnoughToCrack(double closingMS, const Body& body, double share, double dtS) const
@@ -262,6 +276,7 @@ void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
         struck[i] = striking[i] = strikesHardEnoughToCrack(closingMS, body, 1.0, dtS);
         if (!striking[i]) continue;
         body.motion.survivedImpactMS = closingMS;
+        leaveStaticsBeforeEntering(body, contacts.statics[i]);
         // Its particles take the impact: the solver must not stop it as a rigid body first.
         contacts.staticContacts -= int64_t(contacts.statics[i].size());
         contacts.solverContacts -= int64_t(contacts.statics[i].size());
