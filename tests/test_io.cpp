@@ -354,6 +354,54 @@ TEST(Frames, SmoothingRoundsTheCracksStaircaseAndLeavesTheObjectsOwnSurface)
     EXPECT_GT(compared, 100u);
 }
 
+TEST(Frames, SmoothingChangesTheSurfaceOnlyNearTheCracks)
+{
+    initialiseOpenVdb();
+    // A block 30 x 4 x 9 voxels whose end x < 8 broke off along a 45-degree staircase. The flow
+    // works on the leaves near the crack alone: the rest of the level set, the block's far corners
+    // and edges included, is the unsmoothed one exactly (a flow over the whole band rounded a
+    // wall's corners by a quarter of a voxel: its renormalisation does not keep a corner's
+    // distances), and the solid still holds its voxels' volume.
+    Body block = test::boxBody(30, 4, 9, 0.1, 1000.0);
+    auto acc = block.grid->getAccessor();
+    for (int x = 0; x < 8; ++x)
+        for (int y = 0; y < 4; ++y) {
+            ASSERT_TRUE(breakLink(acc, openvdb::Coord(x, y, 7 - x), kPosX));
+            ASSERT_TRUE(breakLink(acc, openvdb::Coord(x, y, 7 - x), kPosZ));
+        }
+    std::vector<Body> parts = splitBody(block);
+    ASSERT_EQ(parts.size(), 2u);
+    Body& rest = parts[0].mass.voxelCount > parts[1].mass.voxelCount ? parts[0] : parts[1];
+    rest.id = 1;
+    const auto levelSetOf = [&](int steps) {
+        OutputSettings settings;
+        settings.fractureSmoothingSteps = steps;
+        FrameWriter writer(scratch("smoothing-near" + std::to_string(steps)), settings);
+        openvdb::io::File file(writer.write({0, 0.0}, {rest}));
+        file.open();
+        auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("fragment_1"));
+        file.close();
+        return grid;
+    };
+    const auto staircase = levelSetOf(0), smooth = levelSetOf(4);
+    const double h = rest.voxelSizeM;
+    EXPECT_NEAR(std::abs(meshLevelSet(*smooth).signedVolumeM3()), rest.mass.voxelCount * std::pow(h, 3), 0.01 * rest.mass.voxelCount * std::pow(h, 3));
+    const openvdb::math::Transform::Ptr toVoxels = voxelTransformOf(staircase->transform(), 3);
+    const auto smoothed = smooth->getConstAccessor();
+    size_t far = 0, changedNear = 0;
+    for (auto it = staircase->cbeginValueOn(); it; ++it) {
+        const openvdb::Vec3d voxel = toVoxels->worldToIndex(staircase->indexToWorld(it.getCoord()));
+        if (voxel.x() >= 16.0) {  // over 8 voxels from the staircase, which ends at x = 8
+            EXPECT_EQ(smoothed.getValue(it.getCoord()), *it) << it.getCoord();
+            ++far;
+        } else if (std::abs(smoothed.getValue(it.getCoord()) - *it) > 0.01 * h) {
+            ++changedNear;
+        }
+    }
+    EXPECT_GT(far, 1000u);
+    EXPECT_GT(changedNear, 100u) << "the crack was smoothed";
+}
+
 TEST(Frames, FractureRoughnessMovesBrokenFacesOnlyAndKeepsTheSolid)
 {
     initialiseOpenVdb();
@@ -605,4 +653,5 @@ TEST(Render, AChargeIsDrawnWhereItIsUnlessABodyHidesIt)
     settings.chargesM.clear();
     EXPECT_FALSE(isCharge(renderFragments(fragmentsOf(bodies), camera, settings).get(x, 100)));
 }
+
 

@@ -10,6 +10,7 @@
 #include <openvdb/tree/LeafManager.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/Morphology.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <Eigen/Geometry>
@@ -93,38 +94,152 @@ constexpr double kNoiseLatticeVoxels = 0.5;
 /// Within this distance of the object's own surface the noise fades out (unit: voxel edges).
 constexpr double kNoiseFadeVoxels = 0.5;
 
-/// The unsigned distance to the object's own faces (not fracture surface) on the level set's
-/// samples, out to a sample beyond kNoiseFadeVoxels (unit: m); null when it has none.
+/// The unsigned distance to those of the object's own faces (not fracture surface) that `near`
+/// selects on the level set's samples, out to a sample beyond kNoiseFadeVoxels (unit: m); null when
+/// it has none.
 openvdb::FloatGrid::Ptr distanceToOwnFaces(const openvdb::FloatGrid& levelSet, const std::vector<VoxelFace>& faces, double voxelSizeM,
-                                           int subdivisions)
+                                           int subdivisions, const std::function<bool(const VoxelFace&)>& near = {})
 {
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec4I> quads;
-    faceQuads(faces, voxelSizeM, [](const VoxelFace& f) { return !f.fracture; }, points, quads);
+    faceQuads(faces, voxelSizeM, [&](const VoxelFace& f) { return !f.fracture && (!near || near(f)); }, points, quads);
     if (quads.empty()) return nullptr;
     const std::vector<openvdb::Vec3I> noTriangles;
     return openvdb::tools::meshToUnsignedDistanceField<openvdb::FloatGrid>(levelSet.transform(), points, noTriangles, quads,
                                                                            float(kNoiseFadeVoxels * subdivisions) + 1.0f);
 }
 
+using FloatLeaf = openvdb::FloatTree::LeafNodeType;
+
+/// A leaf of the level set's tree as one voxel of a mask: its origin over the leaf's edge.
+openvdb::Coord leafCell(const openvdb::Coord& sample) { return openvdb::Coord(sample.x() >> FloatLeaf::LOG2DIM, sample.y() >> FloatLeaf::LOG2DIM, sample.z() >> FloatLeaf::LOG2DIM); }
+openvdb::Coord leafOrigin(const openvdb::Coord& cell) { return openvdb::Coord(cell.x() << FloatLeaf::LOG2DIM, cell.y() << FloatLeaf::LOG2DIM, cell.z() << FloatLeaf::LOG2DIM); }
+
+/// The leaves (as leafCell) holding samples of `face`.
+openvdb::CoordBBox leafCellsOf(const openvdb::FloatGrid& levelSet, const VoxelFace& face, double voxelSizeM)
+{
+    openvdb::CoordBBox cells;
+    for (const openvdb::Vec3s& corner : faceCorners(face)) {
+        const openvdb::Coord sample = openvdb::Coord::round(levelSet.transform().worldToIndex(openvdb::Vec3d(corner) * voxelSizeM));
+        cells.expand(leafCell(sample));
+    }
+    return cells;
+}
+
+/// The level set's leaves within `dilation` leaves of a fracture face, as leafCell.
+openvdb::MaskTree leavesNearFractureFaces(const openvdb::FloatGrid& levelSet, const std::vector<VoxelFace>& faces, double voxelSizeM, int dilation)
+{
+    openvdb::MaskTree near(false);
+    openvdb::tree::ValueAccessor<openvdb::MaskTree> mark(near);
+    for (const VoxelFace& f : faces) {
+        if (!f.fracture) continue;
+        const openvdb::CoordBBox cells = leafCellsOf(levelSet, f, voxelSizeM);
+        for (auto c = cells.begin(); c; ++c) mark.setValueOn(*c);
+    }
+    if (dilation > 0) openvdb::tools::dilateActiveValues(near, dilation, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    return near;
+}
+
+/// A copy of the level set's leaves (and of its tiles, at a leaf's size) that `cells` holds.
+openvdb::FloatGrid::Ptr copyOfLeaves(const openvdb::FloatGrid& levelSet, const openvdb::MaskTree& cells)
+{
+    openvdb::FloatGrid::Ptr region = openvdb::FloatGrid::create(levelSet.background());
+    region->setTransform(levelSet.transform().copy());
+    region->setGridClass(openvdb::GRID_LEVEL_SET);
+    for (auto cell = cells.cbeginValueOn(); cell; ++cell) {
+        const openvdb::Coord origin = leafOrigin(cell.getCoord());
+        if (const FloatLeaf* leaf = levelSet.tree().probeConstLeaf(origin))
+            region->tree().addLeaf(new FloatLeaf(*leaf));
+        else
+            region->tree().addTile(1, origin, levelSet.tree().getValue(origin), false);
+    }
+    return region;
+}
+
+/// Writes the region's leaves (or tiles) that `cells` holds back into the level set.
+void pasteLeaves(openvdb::FloatGrid& levelSet, const openvdb::FloatGrid& region, const openvdb::MaskTree& cells)
+{
+    for (auto cell = cells.cbeginValueOn(); cell; ++cell) {
+        const openvdb::Coord origin = leafOrigin(cell.getCoord());
+        if (const FloatLeaf* leaf = region.tree().probeConstLeaf(origin))
+            levelSet.tree().addLeaf(new FloatLeaf(*leaf));
+        else
+            levelSet.tree().addTile(1, origin, region.tree().getValue(origin), false);
+    }
+}
+
+/// +1 when the mesh's triangles wind so that their normals point out of the level set's solid,
+/// else -1: the level set rises along the largest triangle's normal, or falls.
+double outwardWinding(const SurfaceMesh& mesh, const openvdb::FloatGrid& levelSet)
+{
+    Eigen::Vector3d largest = Eigen::Vector3d::Zero(), at = Eigen::Vector3d::Zero();
+    for (const auto& t : mesh.triangles) {
+        const Eigen::Vector3d n = (mesh.pointsM[t[1]] - mesh.pointsM[t[0]]).cross(mesh.pointsM[t[2]] - mesh.pointsM[t[0]]);
+        if (n.squaredNorm() > largest.squaredNorm()) {
+            largest = n;
+            at = (mesh.pointsM[t[0]] + mesh.pointsM[t[1]] + mesh.pointsM[t[2]]) / 3.0;
+        }
+    }
+    const openvdb::tools::GridSampler<openvdb::FloatGrid, openvdb::tools::BoxSampler> phi(levelSet);
+    const Eigen::Vector3d step = largest.normalized() * levelSet.voxelSize()[0];
+    const auto sample = [&](const Eigen::Vector3d& p) { return phi.wsSample(openvdb::Vec3d(p.x(), p.y(), p.z())); };
+    return sample(at + step) > sample(at - step) ? 1.0 : -1.0;
+}
+
+/// The volume the mesh readers make of the level set encloses, counted in the leaves `cells`
+/// holds: its triangles' (centroid in those leaves) signed volumes about the world's origin. Of
+/// two level sets that differ only in those leaves, the difference is the difference of their
+/// volumes (unit: m³).
+double volumeInLeaves(const openvdb::FloatGrid& levelSet, const openvdb::MaskTree& cells)
+{
+    const SurfaceMesh mesh = meshLevelSet(levelSet);
+    double sixVolumes = 0.0;
+    for (const auto& t : mesh.triangles) {
+        const Eigen::Vector3d &a = mesh.pointsM[t[0]], &b = mesh.pointsM[t[1]], &c = mesh.pointsM[t[2]];
+        const Eigen::Vector3d centroid = (a + b + c) / 3.0;
+        const openvdb::Coord sample = openvdb::Coord::round(levelSet.transform().worldToIndex(openvdb::Vec3d(centroid.x(), centroid.y(), centroid.z())));
+        if (cells.isValueOn(leafCell(sample))) sixVolumes += a.dot(b.cross(c));
+    }
+    return outwardWinding(mesh, levelSet) * sixVolumes / 6.0;
+}
+
+/// The flow and the volume's correction change samples this many leaves (of 8 samples) from a
+/// fracture face at most, to float rounding: the leaves that are written back.
+constexpr int kChangedLeaves = 1;
+/// Around those, leaves that the flow works on but that are not written back: the flow's
+/// renormalisation reads samples a few leaves off, and a cut band disturbs what it reads.
+constexpr int kHaloLeaves = 2;
+
 /// Mean-curvature flow of the fracture surface alone: the flow's step is blended out toward the
 /// object's own faces (OpenVDB's alpha mask: a smoothstep of the distance to them, 0 on them, 1
 /// half a voxel away), so a box stays a box and its cracks lose their staircase; then the solid
 /// is grown back to its voxels' volume by moving the fracture surface alone, by the missing
 /// volume over the fracture faces' area, measured on the mesh readers make (three times, as the
-/// area changes with it). No own faces: the whole surface flows.
+/// area changes with it). No own faces: the whole surface flows. Only the leaves near fracture
+/// faces change, so the flow works on a copy of those and a halo around them, and writes back
+/// the first: a wall's frame pays for its cracks, not for its faces.
 void smoothFractureFaces(openvdb::FloatGrid& levelSet, const std::vector<VoxelFace>& faces, double voxelSizeM, const SurfaceStyle& style)
 {
-    const openvdb::FloatGrid::Ptr own = distanceToOwnFaces(levelSet, faces, voxelSizeM, style.subdivisions);
-    openvdb::tools::LevelSetFilter<openvdb::FloatGrid, openvdb::FloatGrid> filter(levelSet);
+    const openvdb::MaskTree changed = leavesNearFractureFaces(levelSet, faces, voxelSizeM, kChangedLeaves);
+    const openvdb::MaskTree worked = leavesNearFractureFaces(levelSet, faces, voxelSizeM, kChangedLeaves + kHaloLeaves);
+    const openvdb::FloatGrid::Ptr region = copyOfLeaves(levelSet, worked);
+    const auto inRegion = [&](const VoxelFace& f) {
+        const openvdb::CoordBBox cells = leafCellsOf(levelSet, f, voxelSizeM);
+        return worked.isValueOn(cells.min()) || worked.isValueOn(cells.max());
+    };
+    const openvdb::FloatGrid::Ptr own = distanceToOwnFaces(*region, faces, voxelSizeM, style.subdivisions, inRegion);
+    // The whole's volume as it will be: as it was but for what changes in the changed leaves.
+    const double wholeBeforeM3 = std::abs(meshLevelSet(levelSet).signedVolumeM3()), changedBeforeM3 = volumeInLeaves(*region, changed);
+    openvdb::tools::LevelSetFilter<openvdb::FloatGrid, openvdb::FloatGrid> filter(*region);
     if (own) filter.setMaskRange(0.0f, float(kNoiseFadeVoxels * voxelSizeM));
     for (int i = 0; i < style.smoothingSteps; ++i) filter.meanCurvature(own.get());
-    const double voxelVolume = enclosedVolume(faces) * std::pow(voxelSizeM, 3);
     const double fractureAreaM2 = double(std::count_if(faces.begin(), faces.end(), [](const VoxelFace& f) { return f.fracture; })) * voxelSizeM * voxelSizeM;
+    const double voxelVolumeM3 = enclosedVolume(faces) * std::pow(voxelSizeM, 3);
     for (int i = 0; i < 3; ++i) {
-        const double volume = std::abs(meshLevelSet(levelSet).signedVolumeM3());
-        filter.offset(float(-(voxelVolume - volume) / fractureAreaM2), own.get());  // a negative offset grows the solid
+        const double volumeM3 = wholeBeforeM3 + volumeInLeaves(*region, changed) - changedBeforeM3;
+        filter.offset(float(-(voxelVolumeM3 - volumeM3) / fractureAreaM2), own.get());  // a negative offset grows the solid
     }
+    pasteLeaves(levelSet, *region, changed);
 }
 
 /// Moves the zero surface outward by roughness * voxelSizeM * noise * fade, where fade rises from
