@@ -299,6 +299,24 @@ TEST(Frames, TheDebrisLevelSetHoldsEveryPieceWhereItsOwnGridPutsIt)
     EXPECT_GT(at.wsSample(openvdb::Vec3d(0.0, 0.0, 1.5)), 0.0f) << "between the pieces";
 }
 
+namespace {
+
+/// The level set a frame writes for `body` (its id must be 1), its fracture surface smoothed by
+/// `steps` steps, written under `name` in the scratch directory.
+openvdb::FloatGrid::Ptr writtenLevelSet(const Body& body, int steps, const std::string& name)
+{
+    OutputSettings settings;
+    settings.fractureSmoothingSteps = steps;
+    FrameWriter writer(scratch(name + std::to_string(steps)), settings);
+    openvdb::io::File file(writer.write({0, 0.0}, {body}));
+    file.open();
+    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("fragment_1"));
+    file.close();
+    return grid;
+}
+
+}  // namespace
+
 TEST(Frames, SmoothingRoundsTheCracksStaircaseAndLeavesTheObjectsOwnSurface)
 {
     initialiseOpenVdb();
@@ -320,17 +338,7 @@ TEST(Frames, SmoothingRoundsTheCracksStaircaseAndLeavesTheObjectsOwnSurface)
     ASSERT_EQ(halves.size(), 2u);
     Body& lower = halves[0].grid->tree().isValueOn(openvdb::Coord(0, 0, 0)) ? halves[0] : halves[1];
     lower.id = 1;
-    const auto levelSetOf = [&](int steps) {
-        OutputSettings settings;
-        settings.fractureSmoothingSteps = steps;
-        FrameWriter writer(scratch("smoothing" + std::to_string(steps)), settings);
-        openvdb::io::File file(writer.write({0, 0.0}, {lower}));
-        file.open();
-        auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("fragment_1"));
-        file.close();
-        return grid;
-    };
-    const auto staircase = levelSetOf(0), smooth = levelSetOf(4);
+    const auto staircase = writtenLevelSet(lower, 0, "smoothing"), smooth = writtenLevelSet(lower, 4, "smoothing");
     const SurfaceMesh before = meshLevelSet(*staircase), after = meshLevelSet(*smooth);
     const double h = lower.voxelSizeM, voxelVolume = lower.mass.voxelCount * std::pow(h, 3);
     const double excessM2 = (std::sqrt(2.0) - 1.0) * 8.0 * 4.0 * h * h;  // the staircase's area over the plane's
@@ -373,17 +381,7 @@ TEST(Frames, SmoothingChangesTheSurfaceOnlyNearTheCracks)
     ASSERT_EQ(parts.size(), 2u);
     Body& rest = parts[0].mass.voxelCount > parts[1].mass.voxelCount ? parts[0] : parts[1];
     rest.id = 1;
-    const auto levelSetOf = [&](int steps) {
-        OutputSettings settings;
-        settings.fractureSmoothingSteps = steps;
-        FrameWriter writer(scratch("smoothing-near" + std::to_string(steps)), settings);
-        openvdb::io::File file(writer.write({0, 0.0}, {rest}));
-        file.open();
-        auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("fragment_1"));
-        file.close();
-        return grid;
-    };
-    const auto staircase = levelSetOf(0), smooth = levelSetOf(4);
+    const auto staircase = writtenLevelSet(rest, 0, "smoothing-near"), smooth = writtenLevelSet(rest, 4, "smoothing-near");
     const double h = rest.voxelSizeM;
     EXPECT_NEAR(std::abs(meshLevelSet(*smooth).signedVolumeM3()), rest.mass.voxelCount * std::pow(h, 3), 0.01 * rest.mass.voxelCount * std::pow(h, 3));
     const openvdb::math::Transform::Ptr toVoxels = voxelTransformOf(staircase->transform(), 3);
