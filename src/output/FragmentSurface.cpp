@@ -113,7 +113,11 @@ using FloatLeaf = openvdb::FloatTree::LeafNodeType;
 
 /// A leaf of the level set's tree as one voxel of a mask: its origin over the leaf's edge.
 openvdb::Coord leafCell(const openvdb::Coord& sample) { return openvdb::Coord(sample.x() >> FloatLeaf::LOG2DIM, sample.y() >> FloatLeaf::LOG2DIM, sample.z() >> FloatLeaf::LOG2DIM); }
-openvdb::Coord leafOrigin(const openvdb::Coord& cell) { return openvdb::Coord(cell.x() << FloatLeaf::LOG2DIM, cell.y() << FloatLeaf::LOG2DIM, cell.z() << FloatLeaf::LOG2DIM); }
+openvdb::Coord leafOrigin(const openvdb::Coord& cell)
+{
+    constexpr int dim = int(FloatLeaf::DIM);  // a multiplication: shifting a negative cell left is undefined
+    return openvdb::Coord(cell.x() * dim, cell.y() * dim, cell.z() * dim);
+}
 
 /// The leaves (as leafCell) holding samples of `face`.
 openvdb::CoordBBox leafCellsOf(const openvdb::FloatGrid& levelSet, const VoxelFace& face, double voxelSizeM)
@@ -168,47 +172,43 @@ void pasteLeaves(openvdb::FloatGrid& levelSet, const openvdb::FloatGrid& region,
     }
 }
 
-/// +1 when the mesh's triangles wind so that their normals point out of the level set's solid,
-/// else -1: the level set rises along the largest triangle's normal, or falls.
-double outwardWinding(const SurfaceMesh& mesh, const openvdb::FloatGrid& levelSet)
-{
-    Eigen::Vector3d largest = Eigen::Vector3d::Zero(), at = Eigen::Vector3d::Zero();
-    for (const auto& t : mesh.triangles) {
-        const Eigen::Vector3d n = (mesh.pointsM[t[1]] - mesh.pointsM[t[0]]).cross(mesh.pointsM[t[2]] - mesh.pointsM[t[0]]);
-        if (n.squaredNorm() > largest.squaredNorm()) {
-            largest = n;
-            at = (mesh.pointsM[t[0]] + mesh.pointsM[t[1]] + mesh.pointsM[t[2]]) / 3.0;
-        }
-    }
-    const openvdb::tools::GridSampler<openvdb::FloatGrid, openvdb::tools::BoxSampler> phi(levelSet);
-    const Eigen::Vector3d step = largest.normalized() * levelSet.voxelSize()[0];
-    const auto sample = [&](const Eigen::Vector3d& p) { return phi.wsSample(openvdb::Vec3d(p.x(), p.y(), p.z())); };
-    return sample(at + step) > sample(at - step) ? 1.0 : -1.0;
-}
-
 /// The volume the mesh readers make of the level set encloses, counted in the leaves `cells`
-/// holds: its triangles' (centroid in those leaves) signed volumes about the world's origin. Of
-/// two level sets that differ only in those leaves, the difference is the difference of their
-/// volumes (unit: m³).
-double volumeInLeaves(const openvdb::FloatGrid& levelSet, const openvdb::MaskTree& cells)
+/// holds: its triangles' (centroid in those leaves) signed volumes about `aboutM`, times
+/// `winding` (the sign of a closed mesh's signedVolumeM3 from this mesher). Of two level sets
+/// that differ only well inside those leaves, the difference is the difference of their volumes
+/// (unit: m³).
+double volumeInLeaves(const openvdb::FloatGrid& levelSet, const openvdb::MaskTree& cells, const Eigen::Vector3d& aboutM, double winding)
 {
     const SurfaceMesh mesh = meshLevelSet(levelSet);
     double sixVolumes = 0.0;
     for (const auto& t : mesh.triangles) {
-        const Eigen::Vector3d &a = mesh.pointsM[t[0]], &b = mesh.pointsM[t[1]], &c = mesh.pointsM[t[2]];
-        const Eigen::Vector3d centroid = (a + b + c) / 3.0;
+        const Eigen::Vector3d a = mesh.pointsM[t[0]] - aboutM, b = mesh.pointsM[t[1]] - aboutM, c = mesh.pointsM[t[2]] - aboutM;
+        const Eigen::Vector3d centroid = aboutM + (a + b + c) / 3.0;
         const openvdb::Coord sample = openvdb::Coord::round(levelSet.transform().worldToIndex(openvdb::Vec3d(centroid.x(), centroid.y(), centroid.z())));
         if (cells.isValueOn(leafCell(sample))) sixVolumes += a.dot(b.cross(c));
     }
-    return outwardWinding(mesh, levelSet) * sixVolumes / 6.0;
+    return winding * sixVolumes / 6.0;
 }
 
-/// The flow and the volume's correction change samples this many leaves (of 8 samples) from a
-/// fracture face at most, to float rounding: the leaves that are written back.
+/// The centre of the leaves `cells` holds, in the world (unit: m).
+Eigen::Vector3d centreOfLeaves(const openvdb::FloatGrid& levelSet, const openvdb::MaskTree& cells)
+{
+    openvdb::CoordBBox box;
+    cells.evalActiveVoxelBoundingBox(box);
+    const openvdb::Vec3d centre = levelSet.indexToWorld((leafOrigin(box.min()).asVec3d() + leafOrigin(box.max() + openvdb::Coord(1)).asVec3d()) * 0.5);
+    return Eigen::Vector3d(centre.x(), centre.y(), centre.z());
+}
+
+/// The flow and the volume's correction change samples within a leaf (8 samples) of a fracture
+/// face at the default 4 steps, to float rounding: the leaves written back. A flow of more steps
+/// reaches further (the surface moves about steps / 3 samples over a crack's radius in samples),
+/// so the region grows by a leaf every kStepsPerLeaf steps.
 constexpr int kChangedLeaves = 1;
 /// Around those, leaves that the flow works on but that are not written back: the flow's
-/// renormalisation reads samples a few leaves off, and a cut band disturbs what it reads.
+/// renormalisation reads samples a few leaves off, and where the copy ends it reads the
+/// background, an error that spreads about a sample a step.
 constexpr int kHaloLeaves = 2;
+constexpr int kStepsPerLeaf = 8;
 
 /// Mean-curvature flow of the fracture surface alone: the flow's step is blended out toward the
 /// object's own faces (OpenVDB's alpha mask: a smoothstep of the distance to them, 0 on them, 1
@@ -220,8 +220,9 @@ constexpr int kHaloLeaves = 2;
 /// the first: a wall's frame pays for its cracks, not for its faces.
 void smoothFractureFaces(openvdb::FloatGrid& levelSet, const std::vector<VoxelFace>& faces, double voxelSizeM, const SurfaceStyle& style)
 {
-    const openvdb::MaskTree changed = leavesNearFractureFaces(levelSet, faces, voxelSizeM, kChangedLeaves);
-    const openvdb::MaskTree worked = leavesNearFractureFaces(levelSet, faces, voxelSizeM, kChangedLeaves + kHaloLeaves);
+    const int grownLeaves = style.smoothingSteps / kStepsPerLeaf;
+    const openvdb::MaskTree changed = leavesNearFractureFaces(levelSet, faces, voxelSizeM, kChangedLeaves + grownLeaves);
+    const openvdb::MaskTree worked = leavesNearFractureFaces(levelSet, faces, voxelSizeM, kChangedLeaves + kHaloLeaves + 2 * grownLeaves);
     const openvdb::FloatGrid::Ptr region = copyOfLeaves(levelSet, worked);
     const auto inRegion = [&](const VoxelFace& f) {
         const openvdb::CoordBBox cells = leafCellsOf(levelSet, f, voxelSizeM);
@@ -229,14 +230,16 @@ void smoothFractureFaces(openvdb::FloatGrid& levelSet, const std::vector<VoxelFa
     };
     const openvdb::FloatGrid::Ptr own = distanceToOwnFaces(*region, faces, voxelSizeM, style.subdivisions, inRegion);
     // The whole's volume as it will be: as it was but for what changes in the changed leaves.
-    const double wholeBeforeM3 = std::abs(meshLevelSet(levelSet).signedVolumeM3()), changedBeforeM3 = volumeInLeaves(*region, changed);
+    const double wholeSignedM3 = meshLevelSet(levelSet).signedVolumeM3(), winding = wholeSignedM3 < 0.0 ? -1.0 : 1.0;
+    const Eigen::Vector3d aboutM = centreOfLeaves(levelSet, changed);
+    const double changedBeforeM3 = volumeInLeaves(*region, changed, aboutM, winding);
     openvdb::tools::LevelSetFilter<openvdb::FloatGrid, openvdb::FloatGrid> filter(*region);
     if (own) filter.setMaskRange(0.0f, float(kNoiseFadeVoxels * voxelSizeM));
     for (int i = 0; i < style.smoothingSteps; ++i) filter.meanCurvature(own.get());
     const double fractureAreaM2 = double(std::count_if(faces.begin(), faces.end(), [](const VoxelFace& f) { return f.fracture; })) * voxelSizeM * voxelSizeM;
     const double voxelVolumeM3 = enclosedVolume(faces) * std::pow(voxelSizeM, 3);
     for (int i = 0; i < 3; ++i) {
-        const double volumeM3 = wholeBeforeM3 + volumeInLeaves(*region, changed) - changedBeforeM3;
+        const double volumeM3 = std::abs(wholeSignedM3) + volumeInLeaves(*region, changed, aboutM, winding) - changedBeforeM3;
         filter.offset(float(-(voxelVolumeM3 - volumeM3) / fractureAreaM2), own.get());  // a negative offset grows the solid
     }
     pasteLeaves(levelSet, *region, changed);
