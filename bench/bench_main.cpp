@@ -419,13 +419,10 @@ Body crackedWall()
     auto acc = g->getAccessor();
     // The corner x + z < kCorner breaks off: every link across that staircase.
     for (int x = 0; x < kCorner; ++x)
-        for (int y = 0; y < kThickness; ++y)
-            for (int z = 0; z < kCorner - x; ++z) {
-                if (x + z + 1 == kCorner) {
-                    breakLink(acc, openvdb::Coord(x, y, z), kPosX);
-                    breakLink(acc, openvdb::Coord(x, y, z), kPosZ);
-                }
-            }
+        for (int y = 0; y < kThickness; ++y) {
+            breakLink(acc, openvdb::Coord(x, y, kCorner - 1 - x), kPosX);
+            breakLink(acc, openvdb::Coord(x, y, kCorner - 1 - x), kPosZ);
+        }
     std::vector<Body> parts = splitBody(makeBody(g, 0.01, 1900.0));
     std::sort(parts.begin(), parts.end(), [](const Body& a, const Body& b) { return a.mass.voxelCount > b.mass.voxelCount; });
     parts.front().id = 1;

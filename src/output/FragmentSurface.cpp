@@ -144,32 +144,27 @@ openvdb::MaskTree leavesNearFractureFaces(const openvdb::FloatGrid& levelSet, co
     return near;
 }
 
-/// A copy of the level set's leaves (and of its tiles, at a leaf's size) that `cells` holds.
+/// Copies the leaves (or the tiles, at a leaf's size) of `from` that `cells` holds into `to`,
+/// replacing what `to` had there.
+void copyLeaves(const openvdb::FloatGrid& from, openvdb::FloatGrid& to, const openvdb::MaskTree& cells)
+{
+    for (auto cell = cells.cbeginValueOn(); cell; ++cell) {
+        const openvdb::Coord origin = leafOrigin(cell.getCoord());
+        if (const FloatLeaf* leaf = from.tree().probeConstLeaf(origin))
+            to.tree().addLeaf(new FloatLeaf(*leaf));
+        else
+            to.tree().addTile(1, origin, from.tree().getValue(origin), false);
+    }
+}
+
+/// A level set of the leaves (and tiles) of `levelSet` that `cells` holds.
 openvdb::FloatGrid::Ptr copyOfLeaves(const openvdb::FloatGrid& levelSet, const openvdb::MaskTree& cells)
 {
     openvdb::FloatGrid::Ptr region = openvdb::FloatGrid::create(levelSet.background());
     region->setTransform(levelSet.transform().copy());
     region->setGridClass(openvdb::GRID_LEVEL_SET);
-    for (auto cell = cells.cbeginValueOn(); cell; ++cell) {
-        const openvdb::Coord origin = leafOrigin(cell.getCoord());
-        if (const FloatLeaf* leaf = levelSet.tree().probeConstLeaf(origin))
-            region->tree().addLeaf(new FloatLeaf(*leaf));
-        else
-            region->tree().addTile(1, origin, levelSet.tree().getValue(origin), false);
-    }
+    copyLeaves(levelSet, *region, cells);
     return region;
-}
-
-/// Writes the region's leaves (or tiles) that `cells` holds back into the level set.
-void pasteLeaves(openvdb::FloatGrid& levelSet, const openvdb::FloatGrid& region, const openvdb::MaskTree& cells)
-{
-    for (auto cell = cells.cbeginValueOn(); cell; ++cell) {
-        const openvdb::Coord origin = leafOrigin(cell.getCoord());
-        if (const FloatLeaf* leaf = region.tree().probeConstLeaf(origin))
-            levelSet.tree().addLeaf(new FloatLeaf(*leaf));
-        else
-            levelSet.tree().addTile(1, origin, region.tree().getValue(origin), false);
-    }
 }
 
 /// The volume the mesh readers make of the level set encloses, counted in the leaves `cells`
@@ -242,7 +237,7 @@ void smoothFractureFaces(openvdb::FloatGrid& levelSet, const std::vector<VoxelFa
         const double volumeM3 = std::abs(wholeSignedM3) + volumeInLeaves(*region, changed, aboutM, winding) - changedBeforeM3;
         filter.offset(float(-(voxelVolumeM3 - volumeM3) / fractureAreaM2), own.get());  // a negative offset grows the solid
     }
-    pasteLeaves(levelSet, *region, changed);
+    copyLeaves(*region, levelSet, changed);
 }
 
 /// Moves the zero surface outward by roughness * voxelSizeM * noise * fade, where fade rises from
