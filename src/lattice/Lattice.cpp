@@ -51,7 +51,6 @@ void Lattice::refreshForces()
     state.bondMomentNm.resize(particleCount());
     forEach(bondCount(), [&](size_t b) { measureBond(b, 0.0, false); });
     computeVolumetricStrain();
-    forEach(bondCount(), [&](size_t b) { completeBondForce(b); });
     forEach(particleCount(), [&](size_t p) { gatherBondForces(p); });
     mListedAtM.clear();  // the state may have been written from outside
     updateContactCandidates();
@@ -100,7 +99,6 @@ void Lattice::moveAndMeasure(double dtS)
     mStepEvents = events.load();
     if (mStepEvents & kBroke) mPiecesStale = true;
     computeVolumetricStrain();
-    forEach(bondCount(), [&](size_t b) { completeBondForce(b); });
     forEach(particleCount(), [&](size_t p) { gatherBondForces(p); });
     updateContactCandidates();
     addContactForces();

@@ -1,6 +1,6 @@
 // A lattice's energies and momenta, and the energy a snapping bond gives back to its particles
 // (the last pass of a step, Lattice::step).
-#include <spall/lattice/Lattice.h>
+#include "LatticeBondLaws.h"
 
 #include <algorithm>
 #include <cmath>
@@ -44,7 +44,7 @@ void Lattice::releaseSnapEnergies()
     // particle's volumetric energy with them counted (tr ε now plus their shares) less without.
     std::unordered_map<uint32_t, double> removedTrace;
     const auto traceShare = [&](uint32_t b, uint32_t p) {
-        const double stretchM = mBondTerms[b].armM.norm() - mModel.spacingM;
+        const double stretchM = armOf(b).norm() - mModel.spacingM;
         return stretchM > 0.0 ? stretchM / mModel.spacingM * mModel.inverseBondCount[p][mModel.bonds[b].axis] : 0.0;
     };
     for (const uint32_t b : snapped)
@@ -69,7 +69,8 @@ void Lattice::releaseSnapEnergy(size_t b, double volumetricJ)
     const int freeEnds = int(!mModel.held[bond.low]) + int(!mModel.held[bond.high]);
     if (freeEnds == 0) return;
     const BondStrain strain = strainOf(bond);
-    const double lengthM = mBondTerms[b].armM.norm();
+    const Eigen::Vector3d armM = armOf(b);
+    const double lengthM = armM.norm();
     double lostJ = elasticEnergyJ(b, strain, 1.0) + volumetricJ;
     // Closed, it still carries its compression as contact: its normal spring's energy stays.
     if (lengthM < mModel.spacingM) lostJ -= 0.5 * mModel.stiffness.normalNPerM[size_t(a)] * strain.displacementM[a] * strain.displacementM[a];
@@ -84,7 +85,7 @@ void Lattice::releaseSnapEnergy(size_t b, double volumetricJ)
     // Kinetic energy added by dv apart, shared between the free ends (a held end takes none):
     // E = m (dv w + dv² / 2) for one free end and m (dv w / 2 + dv² / 4) for two (each moving
     // dv / 2), w the free ends' opening rate: dv = -w + sqrt(w² + 2 n E / m), n free ends.
-    const Eigen::Vector3d along = mBondTerms[b].armM / lengthM;
+    const Eigen::Vector3d along = armM / lengthM;
     const auto freeVelocity = [&](uint32_t p) { return mModel.held[p] ? Eigen::Vector3d::Zero() : state.velocityMS[p]; };
     const double w = (freeVelocity(bond.high) - freeVelocity(bond.low)).dot(along);
     const double dv = -w + std::sqrt(w * w + 2.0 * freeEnds * releasedJ / mModel.particleMassKg);

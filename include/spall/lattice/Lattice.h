@@ -134,14 +134,12 @@ private:
     /// stress it carried when its force was last completed, tension positive (unit: Pa).
     std::vector<double> mUncrushedLambdaTracePa;
     std::vector<double> mBondNormalStressPa;
-    /// What the force pass takes from each bond, measured once per substep (measureBond).
+    /// What the force pass takes from each bond, measured once per substep (measureBond); the
+    /// arm between its particles is found again from their places where it is needed.
     struct BondForceTerms {
-        Eigen::Vector3d armM;             ///< high − low (unit: m)
-        /// On high: the spring and dashpot when measured, the whole force once completed with
-        /// the volumetric term (completeBondForce) (unit: N).
+        /// On high: the spring and dashpot, before the volumetric term (unit: N).
         Eigen::Vector3d forceOnHighN;
         Eigen::Vector3d bendingMomentNm;  ///< bending and twisting, on high (unit: N m)
-        Eigen::Vector3d pairMomentNm;     ///< of the pair of forces about either centre, −(arm / 2) × force (unit: N m)
         /// Its stretch (length change) as the volumetric term counts it: in tension times
         /// √(1 − D), so the bond's own share of the volumetric force falls with 1 − D as its
         /// spring's does and the traction follows the softening line (unit: m).
@@ -288,11 +286,11 @@ private:
     void computeFailureTerms();
     /// The failure index as a stretch (equivalentStretchM) from a measured strain and the
     /// bond's damage.
-    double equivalentStretchM(size_t b, const BondStrain& strain, double lengthM, double damage) const;
+    [[gnu::always_inline]] inline double equivalentStretchM(size_t b, const BondStrain& strain, double lengthM, double damage) const;
     /// Damage grows with the largest equivalent stretch (and under Davison–Stevens, over the
     /// step's duration), crushing with the largest crushing shortening; what they take away
     /// stays away. Returns whether the damage may have changed.
-    bool growBondDamage(size_t b, double equivalentStretchNowM, double crushingShorteningNowM, double strainRatePerS, double dtS);
+    inline bool growBondDamage(size_t b, double equivalentStretchNowM, double crushingShorteningNowM, double strainRatePerS, double dtS);
     /// The rate law's strength factor follows an increase of a bond's stretch while the bond is
     /// undamaged (BondHistory::strengthFactor).
     void followStrengthRate(BondHistory& history, double increaseM, double strainRatePerS) const;
@@ -314,15 +312,17 @@ private:
     /// / E (1 on the strength surface; its shortening in uniaxial compression). Where even the
     /// unconfined strength leaves it within the bond's largest shortening so far, that unconfined
     /// shortening, an upper bound that changes nothing (unit: m).
-    double crushingShorteningM(size_t b, double normalM) const;
+    inline double crushingShorteningM(size_t b, double normalM) const;
     /// The compression across axis `a` at a particle: of its normal stresses along the two axes
     /// across, each its bonds' mean, the lesser; 0 in tension or at a free face (unit: Pa).
-    double confinementPa(uint32_t p, int a) const;
-    /// Adds the volumetric term to the bond's force on high, once every particle's volumetric
-    /// strain is known, and takes the pair's moment (so a bond's force is found once, not once
-    /// from each end).
-    void completeBondForce(size_t b);
-    /// A particle's bond force and moment: the sum over its faces, in face order.
+    inline double confinementPa(uint32_t p, int a) const;
+    /// A bond's whole force on high: its spring and dashpot with the volumetric term, once every
+    /// particle's volumetric strain is known (the same from either end, so each end finds it).
+    [[gnu::always_inline]] inline Eigen::Vector3d completeBondForce(size_t b, const Eigen::Vector3d& armM) const;
+    /// A particle's bond force and moment: the sum over its faces, in face order, each bond's
+    /// completed and with the moment of its pair of forces, −(arm / 2) × force, about either
+    /// centre (it acts at the face between them; a pin at its voxel's centre). The low end of a
+    /// bond records its normal stress for crushing.
     void gatherBondForces(size_t p);
     // Building (fromBody).
     /// Static boxes the particles may not pass through (the scene's colliders: a window's frame).
@@ -397,7 +397,12 @@ private:
     /// through that bond, and the plane would hold the compression side of a bent base rigid,
     /// stiffening and strengthening it.
     bool bondedToGround(size_t p) const;
-    BondStrain strainOf(const LatticeBond& bond) const;
+    // The bond pass's per-bond functions are inline (src/lattice/LatticeBondLaws.h).
+    [[gnu::always_inline]] inline BondStrain strainOf(const LatticeBond& bond) const;
+    /// From a bond's low particle to its high one (unit: m).
+    Eigen::Vector3d armOf(size_t b) const { return state.positionM[mModel.bonds[b].high] - state.positionM[mModel.bonds[b].low]; }
+    /// The strength a bond fails at.
+    const LatticeStiffness::Strength& strengthOf(size_t b) const { return mModel.stiffness.strength[mModel.bonds[b].strengthClass]; }
 
     // Contact between particles that share no bond (LatticeContact.cpp): pieces of one lattice
     // that were never neighbours meet as the broken bonds' pieces do, by a normal spring along
