@@ -154,6 +154,8 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
             lattice.mModel.ground.offsetM = std::min(lattice.mModel.ground.offsetM, lattice.mModel.ground.normal.dot(x) - 0.5 * h);
     lattice.addLinkBonds(body);
     lattice.addSupportBonds(body, supports);
+    for (uint32_t b = 0; b < lattice.mModel.bonds.size(); ++b)
+        if (lattice.mModel.held[lattice.mModel.bonds[b].low] || lattice.mModel.held[lattice.mModel.bonds[b].high]) lattice.mModel.bondsToHeld.push_back(b);
     lattice.measureColliderSlack();
     if (hasUnits(material)) lattice.classifyUnitBonds(material);
     if (hasGrain(material)) lattice.classifyGrainBonds(material);

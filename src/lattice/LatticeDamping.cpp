@@ -35,12 +35,7 @@ double Lattice::fundamentalFrequencyRadS(double thicknessM, double lengthM, bool
 
 bool Lattice::heldBySupport() const
 {
-    for (uint32_t p = 0; p < particleCount(); ++p) {
-        if (!mModel.held[p]) continue;
-        for (const int32_t b : mModel.bondAcross[p])
-            if (b >= 0 && bondDamage(size_t(b)) < 1.0) return true;
-    }
-    return false;
+    return std::any_of(mModel.bondsToHeld.begin(), mModel.bondsToHeld.end(), [&](uint32_t b) { return bondDamage(b) < 1.0; });
 }
 
 std::vector<uint32_t> Lattice::bondsFromHeld() const

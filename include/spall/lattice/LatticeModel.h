@@ -187,6 +187,9 @@ struct LatticeModel {
     std::vector<std::array<int32_t, 6>> bondAcross;
     /// Per voxel particle, its bond to a ground point, or -1.
     std::vector<int32_t> groundBond;
+    /// The bonds with a held end (a support point, or an anchored voxel held itself), in bond
+    /// order: what Lattice::heldBySupport looks at, every step of an anchored body.
+    std::vector<uint32_t> bondsToHeld;
 
     // The material's response.
     LatticeStiffness stiffness;
