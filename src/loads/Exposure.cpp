@@ -3,6 +3,8 @@
 #include <spall/core/DisjointSets.h>
 #include <spall/core/Parallel.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <limits>
 #include <cmath>
@@ -87,15 +89,41 @@ void Exposure::collectCells(const std::vector<Body>& bodies, const std::vector<c
     std::sort(mCells.begin(), mCells.end(), [](const Cell& a, const Cell& c) { return a.key != c.key ? a.key < c.key : a.body < c.body; });
 }
 
+std::vector<char> Exposure::nearAnother(const std::vector<Body>& bodies, const std::vector<char>& considered) const
+{
+    // The world-axis boxes round the bodies' oriented boxes, swept along x.
+    std::vector<Eigen::AlignedBox3d> bounds(bodies.size());
+    std::vector<uint32_t> order;
+    for (size_t b = 0; b < bodies.size(); ++b) {
+        if (!considered[b]) continue;
+        for (const Eigen::Vector3d& corner : cornersOf(worldBounds(bodies[b]))) bounds[b].extend(corner);
+        order.push_back(uint32_t(b));
+    }
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t c) { return bounds[a].min().x() < bounds[c].min().x(); });
+    // A face's neighbouring cell lies half a voxel outside its body's box, and a voxel found
+    // there has its centre within a cell's half-diagonal of it, inside its own body's box: two
+    // boxes further apart than two voxels share no face.
+    const double reachM = 2.0 * mCellSizeM;
+    std::vector<char> near(bodies.size(), 0);
+    for (size_t i = 0; i < order.size(); ++i) {
+        const Eigen::AlignedBox3d grown(bounds[order[i]].min().array() - reachM, bounds[order[i]].max().array() + reachM);
+        for (size_t j = i + 1; j < order.size() && bounds[order[j]].min().x() <= grown.max().x(); ++j)
+            if (grown.intersects(bounds[order[j]])) near[order[i]] = near[order[j]] = 1;
+    }
+    return near;
+}
+
 void Exposure::groupTouchingBodies(const std::vector<Body>& bodies, const std::vector<char>& considered)
 {
-    // Per face: is the cell across it another body's?
+    // Per face: is the cell across it another body's? (None is, for a body near no other.)
+    const std::vector<char> near = nearAnother(bodies, considered);
     std::vector<std::vector<uint32_t>> touching(bodies.size());
     forEachIndex(bodies.size(), [&](size_t b) {
         if (!considered[b]) return;
         const Body& body = bodies[b];
         const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
         mCovered[b].assign(body.exposedFaces.size(), 0);
+        if (!near[b]) return;
         LastBlock last;
         for (size_t f = 0; f < body.exposedFaces.size(); ++f) {
             const ExposedFace& face = body.exposedFaces[f];

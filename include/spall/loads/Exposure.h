@@ -72,6 +72,10 @@ private:
     /// mCovered (faces whose neighbouring cell is another body's) and mGroup (bodies pressed
     /// together).
     void groupTouchingBodies(const std::vector<Body>& bodies, const std::vector<char>& considered);
+    /// Per body, whether it is considered and another considered body's box comes within two
+    /// voxels of its own: only such a body can touch another (a wall alone in the blast has
+    /// millions of faces to look across, and nothing to find).
+    std::vector<char> nearAnother(const std::vector<Body>& bodies, const std::vector<char>& considered) const;
     /// mBlocks' occupancy: each cell's bit.
     void markCells();
     /// mBlocks' owners: the group of the cells in or next to each block, or kManyGroups.
