@@ -25,11 +25,6 @@ bool Lattice::brokenAtHandOff(size_t b) const
     return residualStrengthFraction(b) < mModel.handOffResidualStrength;
 }
 
-double Lattice::crackingDamage(size_t b) const
-{
-    return bond_laws::crackingDamage(state.bondHistory[b], strengthOf(b), mModel.damageLaw);
-}
-
 double Lattice::crushingDamage(size_t b) const
 {
     return bond_laws::crushingDamage(state.bondHistory[b], strengthOf(b));

@@ -100,9 +100,10 @@ std::vector<char> Exposure::nearAnother(const std::vector<Body>& bodies, const s
         order.push_back(uint32_t(b));
     }
     std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t c) { return bounds[a].min().x() < bounds[c].min().x(); });
-    // A face's neighbouring cell lies half a voxel outside its body's box, and a voxel found
-    // there has its centre within a cell's half-diagonal of it, inside its own body's box: two
-    // boxes further apart than two voxels share no face.
+    // The point across a face lies within half the body's voxel of its box along each world
+    // axis, and bodyAt takes a voxel whose centre is under half a cell from it along each axis,
+    // a centre inside its own body's box: boxes more than two cells apart share no face (the
+    // bodies of a simulation share the scene's voxel size, the cells').
     const double reachM = 2.0 * mCellSizeM;
     std::vector<char> near(bodies.size(), 0);
     for (size_t i = 0; i < order.size(); ++i) {
