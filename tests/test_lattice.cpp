@@ -212,35 +212,44 @@ TEST(Lattice, ParticlesThatShareNoBondCollideAsSmoothSpheres)
     // at each other at 5 m/s, 0.3 of an edge off centre. Reference: the elastic collision of two
     // equal smooth spheres (the particles meet as spheres of the edge's diameter): the relative
     // velocity's component along the line of centres at contact reverses, the rest is kept.
-    // Before pieces of one lattice met, they passed through each other.
-    Body body = makeBody(test::gridFromVoxels({openvdb::Coord(0, 0, 0), openvdb::Coord(4, 0, 0)}, kH), kH, kConcrete.densityKgM3);
-    Lattice lattice = Lattice::fromBody(body, kConcrete);
-    ASSERT_EQ(lattice.bondCount(), 0u);
+    // Before pieces of one lattice met, they passed through each other. Where in a step the
+    // contact starts decides the error of a spring switched on between steps, so five starts a
+    // fifth of a step apart.
     const double offset = 0.3;
-    lattice.state.positionM[1].y() += offset * kH;
-    lattice.state.velocityMS[0] = Eigen::Vector3d(5, 0, 0);
-    lattice.state.velocityMS[1] = Eigen::Vector3d(-5, 0, 0);
-    lattice.refreshForces();
-    const Eigen::Vector3d p0 = lattice.linearMomentum();
-    const double e0 = lattice.kineticEnergyJ();
-    double closest = 1e30;
-    const double dt = lattice.stableTimeStepS();
-    for (double t = 0; t < 8 * kH / 10.0; t += dt) {
-        lattice.step(dt);
-        closest = std::min(closest, (lattice.state.positionM[1] - lattice.state.positionM[0]).norm());
-    }
     const Eigen::Vector3d n(std::sqrt(1 - offset * offset), offset, 0);  // from 0 to 1 at contact
     const Eigen::Vector3d relative(10, 0, 0), exchange = relative.dot(n) * n;
-    // Within 0.5 % of the relative speed (measured 0.22 %): the spring is soft enough that the
-    // spheres slide 27 µm past each other while they touch, turning the line of centres.
-    EXPECT_LT((lattice.state.velocityMS[0] - (Eigen::Vector3d(5, 0, 0) - exchange)).norm(), 5e-3 * 10);
-    EXPECT_LT((lattice.state.velocityMS[1] - (Eigen::Vector3d(-5, 0, 0) + exchange)).norm(), 5e-3 * 10);
-    EXPECT_LT((lattice.linearMomentum() - p0).norm(), 1e-12 * lattice.model().particleMassKg * 5);
-    // The contact lasts about four steps: velocity Verlet with a force that starts within a step
-    // loses a little (0.47 %), and must not gain.
-    EXPECT_LT(lattice.kineticEnergyJ(), e0);
-    EXPECT_GT(lattice.kineticEnergyJ(), 0.99 * e0);
-    EXPECT_GT(closest, 0.95 * kH);
+    double meanEnergyRatio = 0.0;
+    for (const double phase : {0.0, 0.2, 0.4, 0.6, 0.8}) {
+        Body body = makeBody(test::gridFromVoxels({openvdb::Coord(0, 0, 0), openvdb::Coord(4, 0, 0)}, kH), kH, kConcrete.densityKgM3);
+        Lattice lattice = Lattice::fromBody(body, kConcrete);
+        ASSERT_EQ(lattice.bondCount(), 0u);
+        const double dt = lattice.stableTimeStepS();
+        lattice.state.positionM[1].y() += offset * kH;
+        lattice.state.positionM[1].x() -= phase * relative.x() * dt;
+        lattice.state.velocityMS[0] = Eigen::Vector3d(5, 0, 0);
+        lattice.state.velocityMS[1] = Eigen::Vector3d(-5, 0, 0);
+        lattice.refreshForces();
+        const Eigen::Vector3d p0 = lattice.linearMomentum();
+        const double e0 = lattice.kineticEnergyJ();
+        double closest = 1e30;
+        for (double t = 0; t < 8 * kH / 10.0; t += dt) {
+            lattice.step(dt);
+            closest = std::min(closest, (lattice.state.positionM[1] - lattice.state.positionM[0]).norm());
+        }
+        const double energyRatio = lattice.kineticEnergyJ() / e0, velocityErrorMS = (lattice.state.velocityMS[0] - (Eigen::Vector3d(5, 0, 0) - exchange)).norm();
+        std::printf("contact starting %.1f of a step later: kinetic energy after / before %.4f, velocity off by %.4f m/s\n", phase, energyRatio,
+                    velocityErrorMS);
+        meanEnergyRatio += 0.2 * energyRatio;
+        // Within 2 % of the relative speed and 6 % of the energy at any start (measured: up to
+        // 1.2 % and 4.8 %); momentum exact; the spheres never closer than 0.95 edge.
+        EXPECT_LT(velocityErrorMS, 0.02 * 10);
+        EXPECT_LT((lattice.state.velocityMS[1] - (Eigen::Vector3d(-5, 0, 0) + exchange)).norm(), 0.02 * 10);
+        EXPECT_NEAR(energyRatio, 1.0, 0.06);
+        EXPECT_LT((lattice.linearMomentum() - p0).norm(), 1e-12 * lattice.model().particleMassKg * 5);
+        EXPECT_GT(closest, 0.95 * kH);
+    }
+    // Over the starts the errors mostly cancel: the contact neither makes nor takes energy.
+    EXPECT_NEAR(meanEnergyRatio, 1.0, 0.01);
 }
 
 TEST(Lattice, OneAndTwoThreadsGiveTheSameBits)

@@ -27,16 +27,7 @@ Eigen::Quaterniond rotationOf(const Eigen::Vector3d& turn)
 
 }  // namespace
 
-double stableTimeStepS(const LatticeStiffness& k, double spacingM, double particleMassKg)
-{
-    double shear = 0.0;
-    for (const Eigen::Vector3d& springs : k.shearNPerM) shear = std::max(shear, springs.maxCoeff());
-    const double normal = *std::max_element(k.normalNPerM.begin(), k.normalNPerM.end());
-    const double omegaSquared = (12.0 * shear + 4.0 * normal + 12.0 * k.lameLambdaPa * spacingM) / particleMassKg;
-    return 0.9 * 2.0 / std::sqrt(omegaSquared);
-}
-
-double Lattice::stableTimeStepS() const { return spall::stableTimeStepS(mModel.stiffness, mModel.spacingM, mModel.particleMassKg); }
+double Lattice::stableTimeStepS() const { return mModel.stableStepS; }
 
 void Lattice::refreshForces()
 {

@@ -138,6 +138,7 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
     lattice.mModel.particleMassKg = material.densityKgM3 * h * h * h;
     lattice.mModel.particleInertiaKgM2 = lattice.mModel.particleMassKg * h * h / 6.0;
     lattice.mModel.stiffness = calibrateLattice(material, h);
+    lattice.mModel.stableStepS = spall::stableTimeStepS(lattice.mModel.stiffness, h, lattice.mModel.particleMassKg);
     if (rateDamage) {
         lattice.mModel.stiffness.davisonStevens = davisonStevensFitTo(material.strengthRateLaw);
         lattice.mModel.stiffness.strengthRateLaw = StrengthRateLaw::None;

@@ -53,10 +53,8 @@ public:
     int32_t bondAcross(size_t p, int face) const { return mModel.bondAcross[p][face]; }
     size_t bondCount() const { return mModel.bonds.size(); }
 
-    /// Largest stable step (unit: s): 0.9 × 2/ω with ω bounding the lattice's highest frequency,
-    /// the rotational optical mode of the stiffest shear bonds (ω² = 12 k_s / m; 24 μ h / m
-    /// isotropic) and the translational breathing mode (ω² = (4 k_n + 12 λ h) / m, k_n the
-    /// stiffest normal bonds; (8μ + 12λ) h / m isotropic) added.
+    /// The step it takes (unit: s): 0.9 × 2/ω, ω the highest frequency of an unbounded lattice of
+    /// its springs (highestFrequencyRadS), which bounds a bounded one's.
     double stableTimeStepS() const;
     void step(double dtS);
     /// A step in two halves, for lattices stepped together (LatticePairContact.h), whose forces

@@ -86,8 +86,13 @@ struct LatticeStiffness {
 /// From the material's density, E, ν, tensile strength and Gf (fracture/Material.h), and for
 /// wood its values along the grain.
 LatticeStiffness calibrateLattice(const Material& material, double voxelSizeM);
-/// The largest step central differences keep stable on a lattice of these springs and particles
-/// (Lattice::stableTimeStepS; known before a lattice is built, for the run's cost estimate) (unit: s).
+/// The highest angular frequency of an unbounded lattice of these springs and particles (cubes
+/// of edge `spacingM`): the largest over its Brillouin zone of its Bloch waves' (LatticeFrequency.cpp).
+/// A bounded lattice's is lower (unit: rad/s).
+double highestFrequencyRadS(const LatticeStiffness& stiffness, double spacingM, double particleMassKg);
+/// The step velocity Verlet takes on such a lattice: 0.9 × 2 / highestFrequencyRadS, a tenth
+/// inside its limit (Lattice::stableTimeStepS; known before a lattice is built, for the run's
+/// cost estimate) (unit: s).
 double stableTimeStepS(const LatticeStiffness& stiffness, double spacingM, double particleMassKg);
 
 /// What a bond remembers (all of it saved with a checkpoint).
@@ -174,6 +179,8 @@ struct LatticeModel {
     VoxelBlocks blocks;
     double particleMassKg = 0.0;
     double particleInertiaKgM2 = 0.0;  ///< a cube's, m h² / 6, the same about every axis
+    /// stableTimeStepS of its stiffness and particles, found once as it is built (unit: s).
+    double stableStepS = 0.0;
     /// The body's orientation when the lattice was built: a particle's rest place in the world
     /// is its index × spacing turned by it (about the body's place). A held piece's rotation away
     /// from rest is measured against it (Lattice::openSupportHinges).
