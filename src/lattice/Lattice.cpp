@@ -5,6 +5,8 @@
 // (LatticeDamping.cpp), energies (LatticeEnergy.cpp).
 #include "LatticeForEach.h"
 
+#include <spall/core/Error.h>
+
 #include <atomic>
 #include <cmath>
 
@@ -27,7 +29,11 @@ Eigen::Quaterniond rotationOf(const Eigen::Vector3d& turn)
 
 }  // namespace
 
-double Lattice::stableTimeStepS() const { return mModel.stableStepS; }
+double Lattice::stableTimeStepS() const
+{
+    SPALL_CHECK(mModel.stableStepS > 0.0);  // set by fromBody; a lattice read back is rebuilt first
+    return mModel.stableStepS;
+}
 
 void Lattice::refreshForces()
 {

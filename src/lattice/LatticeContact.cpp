@@ -19,8 +19,10 @@ namespace {
 /// The Verlet list's skin (in particle edges): pairs this far beyond touching are listed, and
 /// the list is made again once some particle has moved half of it.
 constexpr double kContactSkin = 0.3;
-/// The contact's stiffness against the softest normal bond's: a particle wedged among up to
-/// twelve others must stay within the step that six bonds allow (stableTimeStepS).
+/// The contact's stiffness k_c against the softest normal bond's k_n: a particle wedged among up
+/// to twelve others, each moving against it, rings at ω² ≤ 8 k_c / m = 4 k_n / m (Σ n nᵀ over
+/// the twelve edge directions is 4 I), no faster than the lattice's own wave along a bond at the
+/// zone's edge (LatticeFrequency.cpp), so it stays within the stable step.
 constexpr double kContactStiffnessFraction = 0.5;
 /// Particles listed together on one thread.
 constexpr size_t kListingBlock = 1024;

@@ -53,8 +53,8 @@ public:
     int32_t bondAcross(size_t p, int face) const { return mModel.bondAcross[p][face]; }
     size_t bondCount() const { return mModel.bonds.size(); }
 
-    /// The step it takes (unit: s): 0.9 × 2/ω, ω the highest frequency of an unbounded lattice of
-    /// its springs (highestFrequencyRadS), which bounds a bounded one's.
+    /// The step it takes (unit: s): 0.9 × 2/ω, ω the highest frequency of a lattice of its
+    /// springs, in the bulk or at a face, edge or corner (highestFrequencyRadS).
     double stableTimeStepS() const;
     void step(double dtS);
     /// A step in two halves, for lattices stepped together (LatticePairContact.h), whose forces

@@ -86,9 +86,9 @@ struct LatticeStiffness {
 /// From the material's density, E, ν, tensile strength and Gf (fracture/Material.h), and for
 /// wood its values along the grain.
 LatticeStiffness calibrateLattice(const Material& material, double voxelSizeM);
-/// The highest angular frequency of an unbounded lattice of these springs and particles (cubes
-/// of edge `spacingM`): the largest over its Brillouin zone of its Bloch waves' (LatticeFrequency.cpp).
-/// A bounded lattice's is lower (unit: rad/s).
+/// The highest angular frequency of a lattice of these springs and particles (cubes of edge
+/// `spacingM`): the largest of its Bloch waves' in the bulk and along faces and edges (slabs and
+/// bars up to three particles across) and of small cubes' modes (LatticeFrequency.cpp) (unit: rad/s).
 double highestFrequencyRadS(const LatticeStiffness& stiffness, double spacingM, double particleMassKg);
 /// The step velocity Verlet takes on such a lattice: 0.9 × 2 / highestFrequencyRadS, a tenth
 /// inside its limit (Lattice::stableTimeStepS; known before a lattice is built, for the run's
