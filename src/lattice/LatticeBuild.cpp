@@ -138,7 +138,6 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
     lattice.mModel.particleMassKg = material.densityKgM3 * h * h * h;
     lattice.mModel.particleInertiaKgM2 = lattice.mModel.particleMassKg * h * h / 6.0;
     lattice.mModel.stiffness = calibrateLattice(material, h);
-    lattice.mModel.stableStepS = spall::stableTimeStepS(lattice.mModel.stiffness, h, lattice.mModel.particleMassKg);
     if (rateDamage) {
         lattice.mModel.stiffness.davisonStevens = davisonStevensFitTo(material.strengthRateLaw);
         lattice.mModel.stiffness.strengthRateLaw = StrengthRateLaw::None;
@@ -167,6 +166,7 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
     const double stiffestPa = *std::max_element(k.normalModulusPa.begin(), k.normalModulusPa.end());
     const double pWaveSpeed = std::sqrt((k.lameLambdaPa + stiffestPa) / material.densityKgM3);
     lattice.mModel.dashpotPerViscosityNSPerM = material.densityKgM3 * pWaveSpeed * h * h;
+    lattice.mModel.stableStepS = spall::stableTimeStepS(k, h, lattice.mModel.particleMassKg, lattice.mModel.bulkViscosity * lattice.mModel.dashpotPerViscosityNSPerM);
     lattice.condenseVolumetricModulus();
     // The weight's share per particle as setExternalForces gives it.
     const bool settled = lattice.settleUnderDeadLoads(wholeBody.mass.massKg / double(lattice.mModel.voxelParticleCount) * supports.gravityMS2);

@@ -212,12 +212,17 @@ double highestFrequencyRadS(const LatticeStiffness& stiffness, double spacingM, 
     return known != found.end() ? known->second : found.emplace(key, searchHighestFrequencyRadS(stiffness, spacingM, particleMassKg)).first->second;
 }
 
-double stableTimeStepS(const LatticeStiffness& stiffness, double spacingM, double particleMassKg)
+double stableTimeStepS(const LatticeStiffness& stiffness, double spacingM, double particleMassKg, double bondDashpotNSPerM)
 {
+    const double omegaRadS = highestFrequencyRadS(stiffness, spacingM, particleMassKg);
     // Central differences (velocity Verlet) are stable while ω dt < 2 (Belytschko, Liu & Moran,
-    // Nonlinear Finite Elements for Continua and Structures, 2000, ch. 6); a tenth below, for
-    // the dashpots and contacts beside the bonds.
-    return 0.9 * 2.0 / highestFrequencyRadS(stiffness, spacingM, particleMassKg);
+    // Nonlinear Finite Elements for Continua and Structures, 2000, ch. 6), with damping ratio ξ
+    // while ω dt < 2 (√(1 + ξ²) − ξ) (ibid.). The bonds' dashpots damp a particle's motion at
+    // most at 4 c / m (two bonds along each axis, each pulling both ways); as if all of that
+    // damped the highest mode, ξ = 2 c / (m ω). A tenth inside the undamped limit, or the damped
+    // limit where that is shorter (a bulk viscosity above about 0.17).
+    const double dampingRatio = 2.0 * bondDashpotNSPerM / (particleMassKg * omegaRadS);
+    return std::min(0.9, std::sqrt(1.0 + dampingRatio * dampingRatio) - dampingRatio) * 2.0 / omegaRadS;
 }
 
 }  // namespace spall

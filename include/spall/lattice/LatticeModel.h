@@ -90,10 +90,11 @@ LatticeStiffness calibrateLattice(const Material& material, double voxelSizeM);
 /// `spacingM`): the largest of its Bloch waves' in the bulk and along faces and edges (slabs and
 /// bars up to three particles across) and of small cubes' modes (LatticeFrequency.cpp) (unit: rad/s).
 double highestFrequencyRadS(const LatticeStiffness& stiffness, double spacingM, double particleMassKg);
-/// The step velocity Verlet takes on such a lattice: 0.9 × 2 / highestFrequencyRadS, a tenth
-/// inside its limit (Lattice::stableTimeStepS; known before a lattice is built, for the run's
-/// cost estimate) (unit: s).
-double stableTimeStepS(const LatticeStiffness& stiffness, double spacingM, double particleMassKg);
+/// The step velocity Verlet takes on such a lattice, each bond with a dashpot along it: 0.9 ×
+/// 2 / highestFrequencyRadS, a tenth inside its limit, or shorter where the dashpots limit it
+/// (Lattice::stableTimeStepS; known before a lattice is built, for the run's cost estimate)
+/// (unit: s).
+double stableTimeStepS(const LatticeStiffness& stiffness, double spacingM, double particleMassKg, double bondDashpotNSPerM = 0.0);
 
 /// What a bond remembers (all of it saved with a checkpoint).
 struct BondHistory {
