@@ -309,24 +309,29 @@ void Lattice::takeOverLinkDamage(const Body& body)
     }
 }
 
+double condensedLambdaPa(const LatticeStiffness& stiffness, const std::array<bool, 3>& bondedAlong)
+{
+    double missingCompliance = 0.0;
+    for (size_t axis = 0; axis < 3; ++axis)
+        if (!bondedAlong[axis]) missingCompliance += 1.0 / stiffness.normalModulusPa[axis];
+    return stiffness.lameLambdaPa / (1.0 + stiffness.lameLambdaPa * missingCompliance);
+}
+
 void Lattice::condenseVolumetricModulus()
 {
-    // λ condensed over the axes a particle has no bond along (σ = 0 there):
-    // λ / (1 + λ Σ_missing 1/d); isotropic, λ for three axes, 2μλ / (λ + 2μ) for two (plane
-    // stress), λμ / (λ + μ) for one (a bar: E = 2μ + that).
-    const double lambda = mModel.stiffness.lameLambdaPa;
     mModel.lambdaPa.resize(particleCount());
     mModel.inverseBondCount.resize(particleCount());
     for (size_t p = 0; p < particleCount(); ++p) {
-        double missingCompliance = 0.0;
+        std::array<bool, 3> bondedAlong{};
         for (int axis = 0; axis < 3; ++axis) {
             // A pin carries nothing along its axis, so it is no bond there.
             int count = 0;
             for (const int face : {2 * axis, 2 * axis + 1}) count += int(mModel.bondAcross[p][face] >= 0 && !mModel.bonds[size_t(mModel.bondAcross[p][face])].pinned);
             mModel.inverseBondCount[p][axis] = count > 0 ? 1.0 / count : 0.0;
-            if (count == 0) missingCompliance += 1.0 / mModel.stiffness.normalModulusPa[axis];
+            bondedAlong[size_t(axis)] = count > 0;
         }
-        mModel.lambdaPa[p] = lambda / (1.0 + lambda * missingCompliance);  // a particle with no bonds has no strain to weigh
+        // A particle with no bonds has no strain to weigh.
+        mModel.lambdaPa[p] = condensedLambdaPa(mModel.stiffness, bondedAlong);
     }
 }
 

@@ -112,14 +112,13 @@ Eigen::MatrixXcd dynamicalMatrix(const LatticeStiffness& k, double h, const Cell
         ++bondsAlong[size_t(bond.high)][size_t(a)];
     }
     for (size_t p = 0; p < size_t(cell.count()); ++p) {
-        double missingCompliance = 0.0;
         Eigen::RowVectorXcd trace = Eigen::RowVectorXcd::Zero(dofs);
+        std::array<bool, 3> bondedAlong{};
         for (size_t a = 0; a < 3; ++a) {
-            if (bondsAlong[p][a] == 0) missingCompliance += 1.0 / k.normalModulusPa[a];
-            else trace += stretchAlong[p][a] / double(bondsAlong[p][a]);
+            bondedAlong[a] = bondsAlong[p][a] > 0;
+            if (bondedAlong[a]) trace += stretchAlong[p][a] / double(bondsAlong[p][a]);
         }
-        const double lambdaPa = k.lameLambdaPa / (1.0 + k.lameLambdaPa * missingCompliance);
-        d += (lambdaPa * h) * trace.adjoint() * trace;
+        d += (condensedLambdaPa(k, bondedAlong) * h) * trace.adjoint() * trace;
     }
     return d;
 }

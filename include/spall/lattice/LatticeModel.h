@@ -86,6 +86,10 @@ struct LatticeStiffness {
 /// From the material's density, E, ν, tensile strength and Gf (fracture/Material.h), and for
 /// wood its values along the grain.
 LatticeStiffness calibrateLattice(const Material& material, double voxelSizeM);
+/// A particle's λ condensed over the axes it has no bond along (σ = 0 there): λ / (1 + λ Σ_missing
+/// 1/d); isotropic, λ for three axes, 2μλ / (λ + 2μ) for two (plane stress), λμ / (λ + μ) for
+/// one (a bar: E = 2μ + that) (unit: Pa).
+double condensedLambdaPa(const LatticeStiffness& stiffness, const std::array<bool, 3>& bondedAlong);
 /// The highest angular frequency of a lattice of these springs and particles (cubes of edge
 /// `spacingM`): the largest of its Bloch waves' in the bulk and along faces and edges (slabs and
 /// bars up to three particles across) and of small cubes' modes (LatticeFrequency.cpp) (unit: rad/s).
