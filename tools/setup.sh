@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 packages=(
   build-essential cmake ccache pkg-config
   libbullet-dev libopenvdb-dev libboost-dev libboost-iostreams-dev libblosc-dev libtbb-dev
-  libeigen3-dev libhdf5-dev libgtest-dev libgmock-dev libbenchmark-dev
+  libeigen3-dev libxsimd-dev libhdf5-dev libgtest-dev libgmock-dev libbenchmark-dev
   libassimp-dev libcli11-dev nlohmann-json3-dev libpng-dev libtinygltf-dev
   python3-openvdb python3-h5py python3-numpy python3-matplotlib python3-pil libopenvdb-tools hdf5-tools
   blender chromium valgrind

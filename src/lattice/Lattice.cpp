@@ -46,7 +46,7 @@ void Lattice::refreshForces()
     }
     state.bondForceN.resize(particleCount());
     state.bondMomentNm.resize(particleCount());
-    forEach(bondCount(), [&](size_t b) { measureBond(b, 0.0, false); });
+    measureBonds(0.0, false);
     computeVolumetricStrain();
     forEach(particleCount(), [&](size_t p) { gatherBondForces(p); });
     mListedAtM.clear();  // the state may have been written from outside
@@ -89,11 +89,7 @@ void Lattice::moveAndMeasure(double dtS)
     });
     // Damage first, from the new positions (and the velocities half-way through the step, for
     // the strain rate), then the forces from the state.
-    std::atomic<uint8_t> events{0};
-    forEach(bondCount(), [&](size_t b) {
-        if (const uint8_t bondEvents = measureBond(b, dtS, true)) events.fetch_or(bondEvents, std::memory_order_relaxed);
-    });
-    mStepEvents = events.load();
+    mStepEvents = measureBonds(dtS, true);
     if (mStepEvents & kBroke) mPiecesStale = true;
     computeVolumetricStrain();
     forEach(particleCount(), [&](size_t p) { gatherBondForces(p); });

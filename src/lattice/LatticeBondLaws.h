@@ -6,6 +6,8 @@
 
 #include <spall/lattice/Lattice.h>
 
+#include "BondStrainKernel.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -73,41 +75,42 @@ inline double bondDamage(const BondHistory& history, const LatticeStiffness::Str
 }
 
 /// The shear traction over the shear strength: |(k_b d_b, k_c d_c)| / (h² c) across axis a.
-inline double shearIndexOf(const Eigen::Vector3d& perM, const Eigen::Vector3d& displacementM, int a)
+template <typename Vector>
+inline double shearIndexOf(const Eigen::Vector3d& perM, const Vector& displacementM, int a)
 {
     const int b = (a + 1) % 3, c = (a + 2) % 3;
     // Equal factors (isotropic): one product, as the golden states were recorded with.
-    if (perM[b] == perM[c]) return perM[b] * std::sqrt(std::max(0.0, displacementM.squaredNorm() - displacementM[a] * displacementM[a]));
+    if (perM[b] == perM[c]) {
+        // Summed left to right, as Eigen sums a 3-vector's squares.
+        const double squaredNorm = displacementM[0] * displacementM[0] + displacementM[1] * displacementM[1] + displacementM[2] * displacementM[2];
+        return perM[b] * std::sqrt(std::max(0.0, squaredNorm - displacementM[a] * displacementM[a]));
+    }
     return std::hypot(perM[b] * displacementM[b], perM[c] * displacementM[c]);
 }
 
-/// Rotation vector of a unit quaternion (angle × axis), the short way round. Bonds turn by
-/// small angles: there 2 atan(s/w)/s by its series (relative error below 1e-13 for s/w < 1e-3).
+/// Rotation vector of a unit quaternion (angle × axis), the short way round: by its series
+/// where the angle is small (BondStrainKernel.h), else 2 atan2(s, w) / s.
 inline Eigen::Vector3d rotationVector(Eigen::Quaterniond q)
 {
+    const double coefficients[4] = {q.x(), q.y(), q.z(), q.w()};
+    double series[3];
+    bool small = false;
+    bond_strain::smallRotationVector(coefficients, series, small);
+    if (small) return {series[0], series[1], series[2]};
     if (q.w() < 0.0) q.coeffs() = -q.coeffs();
-    const double s2 = q.vec().squaredNorm(), w = q.w();
-    if (s2 < 1e-6 * w * w) {
-        const double inverseW = 1.0 / w, r2 = s2 * inverseW * inverseW;
-        return (2.0 * inverseW * (1.0 - r2 / 3.0 + r2 * r2 / 5.0)) * q.vec();
-    }
-    const double s = std::sqrt(s2);
-    return (2.0 * std::atan2(s, w) / s) * q.vec();
+    const double s = std::sqrt(q.vec().squaredNorm());
+    return (2.0 * std::atan2(s, q.w()) / s) * q.vec();
 }
 
-/// The rotation matrix of a quaternion of any length (its own normalised): one division, where
-/// normalising first takes a root and four.
+/// The rotation matrix of a quaternion of any length (its own normalised; BondStrainKernel.h).
 inline Eigen::Matrix3d rotationMatrixOf(const Eigen::Quaterniond& q)
 {
-    const double w = q.w(), x = q.x(), y = q.y(), z = q.z();
-    const double s = 2.0 / (w * w + x * x + y * y + z * z);
-    const double xx = s * x * x, yy = s * y * y, zz = s * z * z, xy = s * x * y, xz = s * x * z, yz = s * y * z;
-    const double wx = s * w * x, wy = s * w * y, wz = s * w * z;
-    Eigen::Matrix3d r;
-    r << 1.0 - yy - zz, xy - wz, xz + wy,
-         xy + wz, 1.0 - xx - zz, yz - wx,
-         xz - wy, yz + wx, 1.0 - xx - yy;
-    return r;
+    const double coefficients[4] = {q.x(), q.y(), q.z(), q.w()};
+    double r[3][3];
+    bond_strain::rotationMatrixOf(coefficients, r);
+    Eigen::Matrix3d m;
+    m << r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2];
+    return m;
 }
 
 }  // namespace bond_laws
@@ -125,14 +128,20 @@ inline BondStrain Lattice::strainOf(const LatticeBond& bond) const
         s.displacementM[bond.axis] = 0.0;
         return s;
     }
-    // Half-way between two orientations: their normalised sum (slerp at ½, as qb is near qa).
-    const double sameHemisphere = qa.coeffs().dot(qb.coeffs()) >= 0.0 ? 1.0 : -1.0;
-    Eigen::Quaterniond half;
-    half.coeffs() = qa.coeffs() + sameHemisphere * qb.coeffs();
-    s.frame = bond_laws::rotationMatrixOf(half);
-    s.displacementM = s.frame.transpose() * (state.positionM[bond.high] - state.positionM[bond.low]);
-    s.displacementM[bond.axis] -= mModel.spacingM;
-    s.rotationRad = s.frame.transpose() * bond_laws::rotationVector(qb * qa.conjugate());
+    const auto endState = [&](uint32_t p) {
+        bond_strain::EndState<double> e;
+        for (int k = 0; k < 3; ++k) e.position[k] = state.positionM[p][k], e.velocity[k] = state.velocityMS[p][k];
+        for (int k = 0; k < 4; ++k) e.quaternion[k] = state.orientation[p].coeffs()[k];
+        return e;
+    };
+    bond_strain::Strain<double> measured;
+    bool smallTurn = false;
+    bond_strain::halfwayStrain(endState(bond.low), endState(bond.high), bond.axis, mModel.spacingM, measured, smallTurn);
+    s.frame << measured.frame[0][0], measured.frame[0][1], measured.frame[0][2], measured.frame[1][0], measured.frame[1][1],
+        measured.frame[1][2], measured.frame[2][0], measured.frame[2][1], measured.frame[2][2];
+    s.displacementM = Eigen::Vector3d(measured.displacementM[0], measured.displacementM[1], measured.displacementM[2]);
+    s.rotationRad = smallTurn ? Eigen::Vector3d(measured.rotationRad[0], measured.rotationRad[1], measured.rotationRad[2])
+                              : Eigen::Vector3d(s.frame.transpose() * bond_laws::rotationVector(qb * qa.conjugate()));
     return s;
 }
 
@@ -166,7 +175,8 @@ inline double Lattice::crushingShorteningM(size_t b, double normalM) const
     return compressionPa / strengthPa * strength.crushingPeakShorteningM;
 }
 
-inline double Lattice::equivalentStretchM(size_t b, const BondStrain& strain, double lengthM, double damage) const
+template <typename Strain>
+inline double Lattice::equivalentStretchM(size_t b, const Strain& strain, double lengthM, double damage) const
 {
     const LatticeBond& bond = mModel.bonds[b];
     const int a = bond.axis;
@@ -180,7 +190,7 @@ inline double Lattice::equivalentStretchM(size_t b, const BondStrain& strain, do
     // would (the parallel bond's σ = F/A + |M| R/I, Potyondy & Cundall 2004), not that of their
     // centres, t/2 − h/2 from the neutral axis. As the bond softens its moment goes, and its
     // opening alone carries it to the end of the softening line, so it still dissipates Gf.
-    const Eigen::Vector3d& rotation = strain.rotationRad;
+    const auto& rotation = strain.rotationRad;
     const double bendingStretchM = 0.5 * mModel.spacingM * (1.0 - damage) * (std::abs(rotation[(a + 1) % 3]) + std::abs(rotation[(a + 2) % 3]));
     const double stretchM = bond.pinned ? 0.0 : lengthM - mModel.spacingM + bendingStretchM;  // a pin fails in shear
     double index = 0.0;

@@ -2,10 +2,14 @@
 // spring, dashpot and bending terms (measureBond, each bond writing only its own entry); each
 // particle's volumetric strain; and each particle gathering its six bonds' forces in face order,
 // each completed with the volumetric force, so the sums do not depend on the thread count.
+#include "BondStrainBatch.h"
 #include "LatticeBondLaws.h"
 #include "LatticeForEach.h"
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstddef>
 
 namespace spall {
 
@@ -37,17 +41,80 @@ void Lattice::computeVolumetricStrain()
         });
 }
 
-uint8_t Lattice::measureBond(size_t b, double dtS, bool growDamage)
+namespace {
+
+constexpr int kRunCapacity = int(BondStrainRun::kCapacity);
+
+/// Lane `lane` of a run's strains, read in place: its elements lie kCapacity doubles apart, so
+/// nothing reads in pairs what the run wrote one by one (a pair's load would wait for both stores).
+struct StrainInRun {
+    Eigen::Map<const Eigen::Matrix3d, 0, Eigen::Stride<kRunCapacity, 3 * kRunCapacity>> frame;
+    Eigen::Map<const Eigen::Vector3d, 0, Eigen::InnerStride<kRunCapacity>> displacementM, rotationRad;
+    StrainInRun(const BondStrainRun& run, size_t lane)
+        : frame(&run.frame[0][0][lane]), displacementM(&run.displacementM[0][lane]), rotationRad(&run.rotationRad[0][lane])
+    {
+    }
+};
+
+/// The frame times a vector, summed as Eigen's SSE2 code sums a 3 × 3 by a 3-vector (the first
+/// two rows as a pair, left to right; the third alone, right first), so results stay bit for bit.
+Eigen::Vector3d frameTimes(const StrainInRun& s, const Eigen::Vector3d& v)
+{
+    Eigen::Vector3d out;
+    for (int i = 0; i < 2; ++i) out[i] = (s.frame(i, 0) * v[0] + s.frame(i, 1) * v[1]) + s.frame(i, 2) * v[2];
+    out[2] = s.frame(2, 0) * v[0] + (s.frame(2, 1) * v[1] + s.frame(2, 2) * v[2]);
+    return out;
+}
+
+/// Writes one bond's strain into lane `lane` of a run.
+void storeStrain(const BondStrain& s, size_t lane, BondStrainRun& run)
+{
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) run.frame[r][c][lane] = s.frame(r, c);
+        run.displacementM[r][lane] = s.displacementM[r];
+        run.rotationRad[r][lane] = s.rotationRad[r];
+    }
+}
+
+// measureBonds reads the particles' and bonds' arrays as flat words.
+static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double) && sizeof(Eigen::Quaterniond) == 4 * sizeof(double));
+static_assert(sizeof(LatticeBond) == 4 * sizeof(uint32_t) && offsetof(LatticeBond, low) == 0 && offsetof(LatticeBond, high) == 4 &&
+              offsetof(LatticeBond, axis) == 8 && sizeof(LatticeBond::axis) == 4);
+
+}  // namespace
+
+uint8_t Lattice::measureBonds(double dtS, bool growDamage)
+{
+    if (bondCount() == 0) return 0;
+    const BondStrainInputs inputs{state.positionM.front().data(), state.velocityMS.front().data(), state.orientation.front().coeffs().data(),
+                                  reinterpret_cast<const uint32_t*>(mModel.bonds.data()), mModel.spacingM};
+    constexpr size_t capacity = BondStrainRun::kCapacity;
+    std::atomic<uint8_t> events{0};
+    forEach((bondCount() + capacity - 1) / capacity, [&](size_t r) {
+        BondStrainRun run;
+        const size_t first = r * capacity, count = std::min(capacity, bondCount() - first);
+        measureBondStrains(inputs, first, count, run);
+        // A pin, or a turn too large for the run's series: measured alone.
+        for (size_t lane = 0; lane < count; ++lane)
+            if (mModel.bonds[first + lane].pinned || run.smallTurn[lane] == 0.0) storeStrain(strainOf(mModel.bonds[first + lane]), lane, run);
+        uint8_t runEvents = 0;
+        for (size_t lane = 0; lane < count; ++lane) runEvents |= measureBond(first + lane, run, lane, dtS, growDamage);
+        if (runEvents) events.fetch_or(runEvents, std::memory_order_relaxed);
+    });
+    return events.load();
+}
+
+uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, double dtS, bool growDamage)
 {
     const LatticeBond& bond = mModel.bonds[b];
     const LatticeStiffness& k = mModel.stiffness;
-    const BondStrain s = strainOf(bond);
+    const StrainInRun s(run, lane);
     const int a = bond.axis;
     BondForceTerms& terms = mBondTerms[b];
-    const Eigen::Vector3d armM = armOf(b);
-    const double lengthM = armM.norm();
+    const Eigen::Vector3d armM(run.armM[0][lane], run.armM[1][lane], run.armM[2][lane]);
+    const double lengthM = run.lengthM[lane];
     const Eigen::Vector3d along = armM * (1.0 / lengthM);
-    const double openingRateMS = (state.velocityMS[bond.high] - state.velocityMS[bond.low]).dot(along);
+    const double openingRateMS = run.openingRateMS[lane];
     const BondHistory& history = state.bondHistory[b];
     const LatticeStiffness::Strength& strength = k.strength[bond.strengthClass];
     const double damageBefore = bond_laws::bondDamage(history, strength, mModel.damageLaw);
@@ -66,7 +133,7 @@ uint8_t Lattice::measureBond(size_t b, double dtS, bool growDamage)
     const bool opening = lengthM > mModel.spacingM;
     Eigen::Vector3d local = (-intact * k.shearNPerM[a]).cwiseProduct(s.displacementM);
     local[a] = -intact * k.normalNPerM[a] * s.displacementM[a];
-    terms.forceOnHighN = s.frame * local;
+    terms.forceOnHighN = frameTimes(s, local);
     if (bond.pinned) {
         // Across its axis only: no contact, dashpot, moment or volumetric share.
         terms.bendingMomentNm.setZero();
@@ -86,7 +153,7 @@ uint8_t Lattice::measureBond(size_t b, double dtS, bool growDamage)
     if (mModel.bulkViscosity > 0.0) terms.forceOnHighN -= (opening ? intact : uncrushed) * mModel.bulkViscosity * mModel.dashpotPerViscosityNSPerM * openingRateMS * along;
     Eigen::Vector3d bending = -intact * k.bendingNmPerRad[a] * s.rotationRad;
     bending[a] = -intact * k.twistingNmPerRad[a] * s.rotationRad[a];
-    terms.bendingMomentNm = s.frame * bending;
+    terms.bendingMomentNm = frameTimes(s, bending);
     const double sqrtUncrushed = crushed == 0.0 ? 1.0 : std::sqrt(uncrushed);
     terms.uncrushedStretchM = opening ? sqrtIntact * (lengthM - mModel.spacingM) : lengthM - mModel.spacingM;
     terms.effectiveStretchM = opening ? terms.uncrushedStretchM : sqrtUncrushed * terms.uncrushedStretchM;

@@ -31,6 +31,8 @@ namespace spall {
 /// arrays. The caller sets externalForceN before a step (it acts through the step); step()
 /// integrates by velocity Verlet, symplectic, so with no damping the energy oscillates but does
 /// not drift. Held particles (the body's anchored voxels) stay where they are.
+struct BondStrainRun;
+
 class Lattice {
 public:
     /// A body's voxels at their world places, moving with the body's rigid velocity field. Each
@@ -215,10 +217,13 @@ private:
 
     /// Each particle's tr ε: per axis, the mean stretch (length change / h) of its bonds along it.
     void computeVolumetricStrain();
-    /// A bond's strain, damage (grown over dtS when `growDamage`) and force terms, from the
-    /// state; writes only the bond's own entries, so bonds measure in parallel. Returns what
-    /// happened to it (kSnapped, kBroke).
-    uint8_t measureBond(size_t b, double dtS, bool growDamage);
+    /// Every bond's strain, damage (grown over dtS when `growDamage`) and force terms, from the
+    /// state, in runs of consecutive bonds whose strains are measured side by side
+    /// (BondStrainBatch.h). Returns what happened to any (kSnapped, kBroke).
+    uint8_t measureBonds(double dtS, bool growDamage);
+    /// One bond's damage and force terms, its strain lane `lane` of `run`; writes only the bond's
+    /// own entries, so bonds measure in parallel. Returns what happened to it.
+    uint8_t measureBond(size_t b, const BondStrainRun& run, size_t lane, double dtS, bool growDamage);
     /// What measureBond reports: the bond snapped at its peak (releaseSnapEnergies), or broke
     /// by any law (the pieces may have changed).
     static constexpr uint8_t kSnapped = 1, kBroke = 2;
@@ -284,7 +289,9 @@ private:
     void computeFailureTerms();
     /// The failure index as a stretch (equivalentStretchM) from a measured strain and the
     /// bond's damage.
-    [[gnu::always_inline]] inline double equivalentStretchM(size_t b, const BondStrain& strain, double lengthM, double damage) const;
+    /// (A BondStrain, or a view of one with its members' names.)
+    template <typename Strain>
+    [[gnu::always_inline]] inline double equivalentStretchM(size_t b, const Strain& strain, double lengthM, double damage) const;
     /// Damage grows with the largest equivalent stretch (and under Davison–Stevens, over the
     /// step's duration), crushing with the largest crushing shortening; what they take away
     /// stays away. Returns whether the damage may have changed.
