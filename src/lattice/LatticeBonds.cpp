@@ -58,7 +58,7 @@ struct StrainInRun {
 
 /// The frame times a vector, summed as Eigen's SSE2 code sums a 3 × 3 by a 3-vector (the first
 /// two rows as a pair, left to right; the third alone, right first), so results stay bit for bit.
-Eigen::Vector3d frameTimes(const StrainInRun& s, const Eigen::Vector3d& v)
+[[gnu::always_inline]] inline Eigen::Vector3d frameTimes(const StrainInRun& s, const Eigen::Vector3d& v)
 {
     Eigen::Vector3d out;
     for (int i = 0; i < 2; ++i) out[i] = (s.frame(i, 0) * v[0] + s.frame(i, 1) * v[1]) + s.frame(i, 2) * v[2];
@@ -131,8 +131,10 @@ uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, do
     if (snapped) mSnapped[b] = 1;
     const double intact = 1.0 - damage, sqrtIntact = std::sqrt(intact);
     const bool opening = lengthM > mModel.spacingM;
-    Eigen::Vector3d local = (-intact * k.shearNPerM[a]).cwiseProduct(s.displacementM);
-    local[a] = -intact * k.normalNPerM[a] * s.displacementM[a];
+    // Element by element (a store into element a after a store of the whole made its next read
+    // wait for both).
+    Eigen::Vector3d local;
+    for (int i = 0; i < 3; ++i) local[i] = (i == a ? -intact * k.normalNPerM[a] : -intact * k.shearNPerM[a][i]) * s.displacementM[i];
     terms.forceOnHighN = frameTimes(s, local);
     if (bond.pinned) {
         // Across its axis only: no contact, dashpot, moment or volumetric share.
@@ -151,8 +153,8 @@ uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, do
     if (crushed > 0.0 && rubbleM > 0.0) terms.forceOnHighN += k.normalNPerM[a] * rubbleM * along;
     // A crack opening carries no viscous stress either: the dashpot softens with the spring.
     if (mModel.bulkViscosity > 0.0) terms.forceOnHighN -= (opening ? intact : uncrushed) * mModel.bulkViscosity * mModel.dashpotPerViscosityNSPerM * openingRateMS * along;
-    Eigen::Vector3d bending = -intact * k.bendingNmPerRad[a] * s.rotationRad;
-    bending[a] = -intact * k.twistingNmPerRad[a] * s.rotationRad[a];
+    Eigen::Vector3d bending;
+    for (int i = 0; i < 3; ++i) bending[i] = (i == a ? -intact * k.twistingNmPerRad[a] : -intact * k.bendingNmPerRad[a]) * s.rotationRad[i];
     terms.bendingMomentNm = frameTimes(s, bending);
     const double sqrtUncrushed = crushed == 0.0 ? 1.0 : std::sqrt(uncrushed);
     terms.uncrushedStretchM = opening ? sqrtIntact * (lengthM - mModel.spacingM) : lengthM - mModel.spacingM;
