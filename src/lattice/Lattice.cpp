@@ -38,6 +38,7 @@ double Lattice::stableTimeStepS() const
 void Lattice::refreshForces()
 {
     mBondTerms.resize(bondCount());
+    mBondStretch.resize(bondCount());
     mSnapped.assign(bondCount(), 0);
     // Crushing's scratch exists only for a material that crushes (which it then flags).
     if (canCrush()) {

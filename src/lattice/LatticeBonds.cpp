@@ -28,8 +28,8 @@ void Lattice::computeVolumetricStrain()
                 for (const int face : {2 * axis, 2 * axis + 1}) {
                     const int32_t b = mModel.bondAcross[p][face];
                     if (b < 0) continue;
-                    sum += mBondTerms[size_t(b)].effectiveStretchM * inverseH;
-                    if (crushes) uncrushedSum += mBondTerms[size_t(b)].uncrushedStretchM * inverseH;
+                    sum += mBondStretch[size_t(b)].effectiveM * inverseH;
+                    if (crushes) uncrushedSum += mBondStretch[size_t(b)].uncrushedM * inverseH;
                 }
                 trace += sum * mModel.inverseBondCount[p][axis];
                 uncrushedTrace += uncrushedSum * mModel.inverseBondCount[p][axis];
@@ -139,7 +139,8 @@ uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, do
     if (bond.pinned) {
         // Across its axis only: no contact, dashpot, moment or volumetric share.
         terms.bendingMomentNm.setZero();
-        terms.effectiveStretchM = terms.uncrushedStretchM = terms.volumetricAreaPerArmM = 0.0;
+        terms.volumetricAreaPerArmM = 0.0;
+        mBondStretch[b] = BondStretch();
         return uint8_t(broke ? kBroke : 0);
     }
     // What cracking took still carries compression, as contact: along the line of centres, and
@@ -157,8 +158,9 @@ uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, do
     for (int i = 0; i < 3; ++i) bending[i] = (i == a ? -intact * k.twistingNmPerRad[a] : -intact * k.bendingNmPerRad[a]) * s.rotationRad[i];
     terms.bendingMomentNm = frameTimes(s, bending);
     const double sqrtUncrushed = crushed == 0.0 ? 1.0 : std::sqrt(uncrushed);
-    terms.uncrushedStretchM = opening ? sqrtIntact * (lengthM - mModel.spacingM) : lengthM - mModel.spacingM;
-    terms.effectiveStretchM = opening ? terms.uncrushedStretchM : sqrtUncrushed * terms.uncrushedStretchM;
+    BondStretch& stretch = mBondStretch[b];
+    stretch.uncrushedM = opening ? sqrtIntact * (lengthM - mModel.spacingM) : lengthM - mModel.spacingM;
+    stretch.effectiveM = opening ? stretch.uncrushedM : sqrtUncrushed * stretch.uncrushedM;
     terms.volumetricAreaPerArmM = (opening ? sqrtIntact : sqrtUncrushed) * mModel.spacingM * mModel.spacingM / lengthM;
     return uint8_t((snapped ? kSnapped : 0) | (broke ? kBroke : 0));
 }

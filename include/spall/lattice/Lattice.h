@@ -140,18 +140,23 @@ private:
         /// On high: the spring and dashpot, before the volumetric term (unit: N).
         Eigen::Vector3d forceOnHighN;
         Eigen::Vector3d bendingMomentNm;  ///< bending and twisting, on high (unit: N m)
-        /// Its stretch (length change) as the volumetric term counts it: in tension times
-        /// √(1 − D), so the bond's own share of the volumetric force falls with 1 − D as its
-        /// spring's does and the traction follows the softening line (unit: m).
-        /// In compression times √(1 − D_c), as crushing takes the volumetric share too.
-        double effectiveStretchM = 0.0;
-        /// The same without crushing's factor: what the material would strain uncrushed (unit: m).
-        double uncrushedStretchM = 0.0;
         /// The volumetric force on high per pascal of its particles' shares, along −arm:
         /// h² √(1 − D in tension, 1 − D_c in compression) / |arm| (unit: m).
         double volumetricAreaPerArmM = 0.0;
     };
     std::vector<BondForceTerms> mBondTerms;
+    /// Each bond's stretch as the volumetric strain counts it, apart from the force terms so
+    /// the volumetric pass reads 16 bytes a bond, not the terms' 56.
+    struct BondStretch {
+        /// Its length change: in tension times √(1 − D), so the bond's own share of the
+        /// volumetric force falls with 1 − D as its spring's does and the traction follows the
+        /// softening line; in compression times √(1 − D_c), as crushing takes the volumetric
+        /// share too (unit: m).
+        double effectiveM = 0.0;
+        /// The same without crushing's factor: what the material would strain uncrushed (unit: m).
+        double uncrushedM = 0.0;
+    };
+    std::vector<BondStretch> mBondStretch;
     // Damping (dampVibration): the pieces as the last bond to break left them, each with the
     // decay rate of its velocities about its rigid motion, 2 ζ ω (Clough & Penzien, Dynamics
     // of Structures, 1993, §12-4: mass-proportional damping a0 M damps mode n at a0 / 2 ω_n).
