@@ -76,16 +76,19 @@ void Exposure::collectCells(const std::vector<Body>& bodies, const std::vector<c
             mOriginM = bodies[b].voxelWorldM(bodies[b].boundaryVoxels.front());
             break;
         }
-    // Every considered body's boundary voxels into one sorted list of cells.
-    std::vector<std::vector<Cell>> perBody(bodies.size());
-    forEachIndex(bodies.size(), [&](size_t b) {
-        if (!considered[b]) return;
-        for (const openvdb::Coord& ijk : bodies[b].boundaryVoxels) {
-            const Eigen::Vector3d u = cellUnits(bodies[b].voxelWorldM(ijk));
-            perBody[b].push_back({cellKey(u), uint32_t(b), {float(u.x()), float(u.y()), float(u.z())}});
-        }
-    });
-    for (auto& cells : perBody) mCells.insert(mCells.end(), cells.begin(), cells.end());
+    // Every considered body's boundary voxels into one sorted list of cells, each body's at its
+    // own offset, in parallel over all of them (a wall's hundreds of thousands too).
+    std::vector<size_t> firstCell(bodies.size() + 1, 0);
+    for (size_t b = 0; b < bodies.size(); ++b) firstCell[b + 1] = firstCell[b] + (considered[b] ? bodies[b].boundaryVoxels.size() : 0);
+    mCells.resize(firstCell.back());
+    forEachIndex(
+        mCells.size(),
+        [&](size_t i) {
+            const size_t b = size_t(std::upper_bound(firstCell.begin(), firstCell.end(), i) - firstCell.begin()) - 1;
+            const Eigen::Vector3d u = cellUnits(bodies[b].voxelWorldM(bodies[b].boundaryVoxels[i - firstCell[b]]));
+            mCells[i] = {cellKey(u), uint32_t(b), {float(u.x()), float(u.y()), float(u.z())}};
+        },
+        kCheapGrain);
     std::sort(mCells.begin(), mCells.end(), [](const Cell& a, const Cell& c) { return a.key != c.key ? a.key < c.key : a.body < c.body; });
 }
 
