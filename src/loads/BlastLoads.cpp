@@ -286,7 +286,9 @@ std::vector<Wrench> BlastLoads::stepWrenches(const std::vector<Body>& bodies, co
     std::vector<Wrench> wrenches(bodies.size());
     std::vector<char> wanted = loaded;
     if (faces) {
-        faces->forceN.assign(bodies.size(), {});
+        // Each body's faces emptied, their storage kept for the next step's.
+        faces->forceN.resize(bodies.size());
+        for (std::vector<Eigen::Vector3d>& forces : faces->forceN) forces.clear();
         // A body the wave is not crossing takes no force on any face: its zeros need no exposure.
         for (size_t i = 0; i < bodies.size(); ++i) {
             if (!faces->wanted[i]) continue;

@@ -54,11 +54,11 @@ void Simulation::step(double targetS)
     const BlastLoads blast(*mField, windows, mScene.loads, mStaticWorld);
     const std::vector<char> loaded = blast.loadedBodies(mState.bodies);
     wakeLoadedBodies(mState.bodies, loaded);
-    FaceForces faces;
-    for (const Body& body : mState.bodies) faces.wanted.push_back(body.motion.deformable);
-    const std::vector<Wrench> blastWrenches = blast.stepWrenches(mState.bodies, loaded, mState.timeS, dt, &faces);
+    mFaceForces.wanted.clear();
+    for (const Body& body : mState.bodies) mFaceForces.wanted.push_back(body.motion.deformable);
+    const std::vector<Wrench> blastWrenches = blast.stepWrenches(mState.bodies, loaded, mState.timeS, dt, &mFaceForces);
     integrateBodies(mState.bodies, blastWrenches, mScene.world, airOf(mScene.blast.atmosphere), mScene.timeStep.integrator, mState.timeS, dt);
-    deformBodies(faces, windows, dt);
+    deformBodies(mFaceForces, windows, dt);
 
     ContactSet contacts = detectContacts(mState.bodies, mScene.world, mScene.collisions, mScene.sleep);
     enterOnImpact(contacts, dt);

@@ -208,6 +208,9 @@ private:
     SimulationState mState;  ///< everything carried from step to step (what a checkpoint saves)
     std::function<void(const Simulation&, const StepRecord&)> mObserver;
     StepRecord mRecord;  ///< filled while a step runs, for the observer
+    /// A step's face loads for the deformable phase, kept so each step reuses their storage (a
+    /// fine wall's hundreds of thousands of faces were allocated and zeroed page by page).
+    FaceForces mFaceForces;
     Interrupter* mInterrupter = nullptr;  ///< advanceTo's, while it runs: the lattices ask it whether to give up the step
     std::vector<std::string> mNotes;
 };
