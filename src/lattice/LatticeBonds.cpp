@@ -100,7 +100,7 @@ uint8_t Lattice::measureBonds(double dtS, bool growDamage)
         uint8_t runEvents = 0;
         for (size_t lane = 0; lane < count; ++lane) runEvents |= measureBond(first + lane, run, lane, dtS, growDamage);
         if (runEvents) events.fetch_or(runEvents, std::memory_order_relaxed);
-    });
+    }, std::max<size_t>(1, kCheapGrain / capacity));  // as many bonds a task as one bond at a time had
     return events.load();
 }
 

@@ -14,8 +14,14 @@ constexpr size_t kParallelParticles = 2048;
 template <typename F>
 void Lattice::forEach(size_t count, const F& f) const
 {
+    forEach(count, f, kCheapGrain);
+}
+
+template <typename F>
+void Lattice::forEach(size_t count, const F& f, size_t grain) const
+{
     if (particleCount() >= kParallelParticles) {
-        forEachIndex(count, f, kCheapGrain);
+        forEachIndex(count, f, grain);
         return;
     }
     for (size_t i = 0; i < count; ++i) f(i);

@@ -367,9 +367,12 @@ private:
     void scatterLognormal(double coefficientOfVariation, double correlationLengthM, uint64_t seed, const Picks& scatters);
     /// Weibull: each bond the weakest link of its h x h face, independently.
     void drawWeakestLinkStrengths(const Material& material, uint64_t seed);
-    /// f(i) for i < count: in parallel for large lattices, in order for small ones.
+    /// f(i) for i < count: in parallel for large lattices (`grain` items a task at least, by
+    /// default core/Parallel.h's for cheap items), in order for small ones.
     template <typename F>
     void forEach(size_t count, const F& f) const;
+    template <typename F>
+    void forEach(size_t count, const F& f, size_t grain) const;
     /// The ground's and the colliders' forces on every free particle that presses on them
     /// (LatticeStaticContacts.cpp), added to its bond force; `dtS` the step they act over.
     void addSurfaceForces(double dtS);
