@@ -15,8 +15,9 @@ using namespace spall;
 
 namespace {
 
-/// Particles near a cubic lattice's sites, moving and turned by small angles (and a few by large
-/// ones, which the series cannot take), and bonds between random pairs along each axis.
+/// Particles near a cubic lattice's sites, moving and turned by small angles (a few by large ones,
+/// which the series cannot take; a few not at all, or about an axis, so that components are zeros
+/// of either sign), and bonds between random pairs along each axis.
 struct RandomBonds {
     std::vector<double> positionM, velocityMS, quaternion;
     std::vector<uint32_t> bondWords;
@@ -30,8 +31,10 @@ struct RandomBonds {
         for (size_t p = 0; p < particles; ++p) {
             for (int k = 0; k < 3; ++k) positionM.push_back(kSpacingM * (double(p % 7) + 1e-2 * normal(random)));
             for (int k = 0; k < 3; ++k) velocityMS.push_back(normal(random));
-            const double angleRad = p % 10 == 0 ? 0.5 : 1e-3 * std::abs(normal(random));
+            // Some unturned (the identity, whose zeros carry a sign), some about a lattice axis.
+            const double angleRad = p % 10 == 0 ? 0.5 : p % 7 == 0 ? 0.0 : 1e-3 * std::abs(normal(random));
             double axis[3] = {normal(random), normal(random), normal(random)};
+            if (p % 5 == 0) axis[0] = axis[1] = 0.0;
             const double norm = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
             // Either sign: q and −q are the same orientation.
             const double sign = p % 3 == 0 ? -1.0 : 1.0;

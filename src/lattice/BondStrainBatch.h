@@ -1,5 +1,5 @@
 // The bond pass's strain measurement for a run of consecutive bonds at once, in batches as wide
-// as the machine's vector registers (xsimd, chosen at run time: AVX-512, AVX2 or SSE2), the
+// as the machine's vector registers (xsimd; AVX-512, AVX2 or SSE2, chosen at run time), the
 // same formulas as one bond's (BondStrainKernel.h), bit for bit.
 #pragma once
 

@@ -71,7 +71,9 @@ void rotationMatrixOf(const T (&q)[4], T (&r)[3][3])
 template <typename T>
 void relativeRotation(const T (&a)[4], const T (&b)[4], T (&out)[4])
 {
-    const T cx = -a[0], cy = -a[1], cz = -a[2], cw = a[3];  // a's conjugate
+    // a's conjugate, its signs flipped by a product: xsimd's AVX-512 negation is 0 − x, which
+    // turns −0 into +0 where Eigen's flips the sign bit.
+    const T cx = a[0] * T(-1.0), cy = a[1] * T(-1.0), cz = a[2] * T(-1.0), cw = a[3];
     out[0] = (b[3] * cx + b[1] * cz) - (b[2] * cy - b[0] * cw);
     out[1] = (b[3] * cy + b[1] * cw) + (b[2] * cx - b[0] * cz);
     out[2] = (b[3] * cz - b[1] * cx) + (b[2] * cw + b[0] * cy);

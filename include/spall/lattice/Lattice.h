@@ -27,12 +27,12 @@
 
 namespace spall {
 
+struct BondStrainRun;  // src/lattice/BondStrainBatch.h
+
 /// Particles (one per voxel, in the grid's leaf order) and bonds (one per intact link) as flat
 /// arrays. The caller sets externalForceN before a step (it acts through the step); step()
 /// integrates by velocity Verlet, symplectic, so with no damping the energy oscillates but does
 /// not drift. Held particles (the body's anchored voxels) stay where they are.
-struct BondStrainRun;
-
 class Lattice {
 public:
     /// A body's voxels at their world places, moving with the body's rigid velocity field. Each
@@ -146,7 +146,7 @@ private:
     };
     std::vector<BondForceTerms> mBondTerms;
     /// Each bond's stretch as the volumetric strain counts it, apart from the force terms so
-    /// the volumetric pass reads 16 bytes a bond, not the terms' 56.
+    /// the volumetric pass reads 16 bytes a bond (inside the terms it read at their stride).
     struct BondStretch {
         /// Its length change: in tension times √(1 − D), so the bond's own share of the
         /// volumetric force falls with 1 − D as its spring's does and the traction follows the
