@@ -113,6 +113,12 @@ inline Eigen::Matrix3d rotationMatrixOf(const Eigen::Quaterniond& q)
     return m;
 }
 
+/// The rotation from qa to qb in a bond's frame, where the series does not hold (the arctangent).
+inline Eigen::Vector3d largeTurnRad(const Eigen::Matrix3d& frame, const Eigen::Quaterniond& qa, const Eigen::Quaterniond& qb)
+{
+    return frame.transpose() * rotationVector(qb * qa.conjugate());
+}
+
 }  // namespace bond_laws
 
 inline BondStrain Lattice::strainOf(const LatticeBond& bond) const
@@ -141,7 +147,7 @@ inline BondStrain Lattice::strainOf(const LatticeBond& bond) const
         measured.frame[1][2], measured.frame[2][0], measured.frame[2][1], measured.frame[2][2];
     s.displacementM = Eigen::Vector3d(measured.displacementM[0], measured.displacementM[1], measured.displacementM[2]);
     s.rotationRad = smallTurn ? Eigen::Vector3d(measured.rotationRad[0], measured.rotationRad[1], measured.rotationRad[2])
-                              : Eigen::Vector3d(s.frame.transpose() * bond_laws::rotationVector(qb * qa.conjugate()));
+                              : bond_laws::largeTurnRad(s.frame, qa, qb);
     return s;
 }
 

@@ -76,6 +76,14 @@ void storeStrain(const BondStrain& s, size_t lane, BondStrainRun& run)
     }
 }
 
+/// Lane `lane`'s rotation again by the arctangent, in the frame the run measured.
+void storeLargeTurn(const Eigen::Quaterniond& qa, const Eigen::Quaterniond& qb, size_t lane, BondStrainRun& run)
+{
+    const Eigen::Matrix3d frame = StrainInRun(run, lane).frame;
+    const Eigen::Vector3d turnRad = bond_laws::largeTurnRad(frame, qa, qb);
+    for (int r = 0; r < 3; ++r) run.rotationRad[r][lane] = turnRad[r];
+}
+
 // measureBonds reads the particles' and bonds' arrays as flat words.
 static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double) && sizeof(Eigen::Quaterniond) == 4 * sizeof(double));
 static_assert(sizeof(LatticeBond) == 4 * sizeof(uint32_t) && offsetof(LatticeBond, low) == 0 && offsetof(LatticeBond, high) == 4 &&
@@ -94,9 +102,14 @@ uint8_t Lattice::measureBonds(double dtS, bool growDamage)
         BondStrainRun run;
         const size_t first = r * capacity, count = std::min(capacity, bondCount() - first);
         measureBondStrains(inputs, first, count, run);
-        // A pin, or a turn too large for the run's series: measured alone.
-        for (size_t lane = 0; lane < count; ++lane)
-            if (mModel.bonds[first + lane].pinned || run.smallTurn[lane] == 0.0) storeStrain(strainOf(mModel.bonds[first + lane]), lane, run);
+        // A pin is measured alone; a turn too large for the run's series takes the arctangent.
+        for (size_t lane = 0; lane < count; ++lane) {
+            const LatticeBond& bond = mModel.bonds[first + lane];
+            if (bond.pinned)
+                storeStrain(strainOf(bond), lane, run);
+            else if (run.smallTurn[lane] == 0.0)
+                storeLargeTurn(state.orientation[bond.low], state.orientation[bond.high], lane, run);
+        }
         uint8_t runEvents = 0;
         for (size_t lane = 0; lane < count; ++lane) runEvents |= measureBond(first + lane, run, lane, dtS, growDamage);
         if (runEvents) events.fetch_or(runEvents, std::memory_order_relaxed);
