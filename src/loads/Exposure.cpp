@@ -55,20 +55,36 @@ FaceInBox freeFaceDeepestInBoxes(const Body& body, const openvdb::Coord& ijk, co
 }
 
 Exposure::Exposure(const std::vector<Body>& bodies, const std::vector<char>& considered)
-    : mCovered(bodies.size()), mGroup(bodies.size()), mGroupBounds(bodies.size())
+    : mBodies(bodies), mConsidered(considered), mCovered(bodies.size()), mGroup(bodies.size()), mGroupBounds(bodies.size())
 {
     if (bodies.empty()) return;
-    collectCells(bodies, considered);
-    markCells();  // before grouping: bodyAt reads the blocks' bits
-    groupTouchingBodies(bodies, considered);
-    ownBlocks();
-    boundGroups(bodies, considered);
-    boundCells();
+    mCellSizeM = bodies.front().voxelSizeM;
+    // Bodies near no other are each a group of their own, and need no cells to say so.
+    for (size_t b = 0; b < bodies.size(); ++b) mGroup[b] = uint32_t(b);
+    const std::vector<char> near = nearAnother();
+    if (std::find(near.begin(), near.end(), 1) != near.end()) {
+        tbb::collaborative_call_once(mCellsBuilt, [&] {
+            collectCells();
+            groupTouchingBodies(near);  // reads the cells' bits
+            ownBlocks();
+        });
+    }
+    boundGroups();
+    findOnlyGroup();
 }
 
-void Exposure::collectCells(const std::vector<Body>& bodies, const std::vector<char>& considered)
+void Exposure::needCells() const
 {
-    mCellSizeM = bodies.front().voxelSizeM;
+    tbb::collaborative_call_once(mCellsBuilt, [&] {
+        collectCells();
+        ownBlocks();
+    });
+}
+
+void Exposure::collectCells() const
+{
+    const std::vector<Body>& bodies = mBodies;
+    const std::vector<char>& considered = mConsidered;
     // The lattice goes through a voxel centre of the first body considered: the pieces of one
     // object then sit on it exactly, and each lookup is a single cell.
     for (size_t b = 0; b < bodies.size(); ++b)
@@ -90,10 +106,14 @@ void Exposure::collectCells(const std::vector<Body>& bodies, const std::vector<c
         },
         kCheapGrain);
     std::sort(mCells.begin(), mCells.end(), [](const Cell& a, const Cell& c) { return a.key != c.key ? a.key < c.key : a.body < c.body; });
+    markCells();
+    boundCells();
 }
 
-std::vector<char> Exposure::nearAnother(const std::vector<Body>& bodies, const std::vector<char>& considered) const
+std::vector<char> Exposure::nearAnother() const
 {
+    const std::vector<Body>& bodies = mBodies;
+    const std::vector<char>& considered = mConsidered;
     // The world-axis boxes round the bodies' oriented boxes, swept along x.
     std::vector<Eigen::AlignedBox3d> bounds(bodies.size());
     std::vector<uint32_t> order;
@@ -117,17 +137,16 @@ std::vector<char> Exposure::nearAnother(const std::vector<Body>& bodies, const s
     return near;
 }
 
-void Exposure::groupTouchingBodies(const std::vector<Body>& bodies, const std::vector<char>& considered)
+void Exposure::groupTouchingBodies(const std::vector<char>& near)
 {
-    // Per face: is the cell across it another body's? (None is, for a body near no other.)
-    const std::vector<char> near = nearAnother(bodies, considered);
+    // Per face of a body near another: is the cell across it another body's?
+    const std::vector<Body>& bodies = mBodies;
     std::vector<std::vector<uint32_t>> touching(bodies.size());
     forEachIndex(bodies.size(), [&](size_t b) {
-        if (!considered[b]) return;
+        if (!near[b]) return;
         const Body& body = bodies[b];
         const Eigen::Matrix3d rot = body.motion.orientation.toRotationMatrix();
         mCovered[b].assign(body.exposedFaces.size(), 0);
-        if (!near[b]) return;
         LastBlock last;
         for (size_t f = 0; f < body.exposedFaces.size(); ++f) {
             const ExposedFace& face = body.exposedFaces[f];
@@ -145,7 +164,7 @@ void Exposure::groupTouchingBodies(const std::vector<Body>& bodies, const std::v
     for (size_t b = 0; b < bodies.size(); ++b) mGroup[b] = groups.root(uint32_t(b));
 }
 
-void Exposure::markCells()
+void Exposure::markCells() const
 {
     for (const Cell& c : mCells) {
         const int64_t i = std::llround(c.centre[0]), j = std::llround(c.centre[1]), k = std::llround(c.centre[2]);
@@ -154,7 +173,7 @@ void Exposure::markCells()
     }
 }
 
-void Exposure::ownBlocks()
+void Exposure::ownBlocks() const
 {
     // Blocks hold their cells and those next to them: a voxel can contain points of the
     // neighbouring cells (bodies need not share the world's lattice). One of the eight
@@ -178,21 +197,33 @@ void Exposure::ownBlocks()
     }
 }
 
-void Exposure::boundCells()
+void Exposure::boundCells() const
 {
     if (mCells.empty()) return;
     mCellsLo = mCellsHi = Eigen::Vector3d(mCells.front().centre[0], mCells.front().centre[1], mCells.front().centre[2]);
-    mOnlyGroup = mGroup[mCells.front().body];
     for (const Cell& c : mCells) {
         const Eigen::Vector3d u(c.centre[0], c.centre[1], c.centre[2]);
         mCellsLo = mCellsLo.cwiseMin(u);
         mCellsHi = mCellsHi.cwiseMax(u);
-        if (mGroup[c.body] != mOnlyGroup) mOnlyGroup = kManyGroups;
     }
 }
 
-void Exposure::boundGroups(const std::vector<Body>& bodies, const std::vector<char>& considered)
+void Exposure::findOnlyGroup()
 {
+    for (size_t b = 0; b < mBodies.size(); ++b) {
+        if (!mConsidered[b] || mBodies[b].boundaryVoxels.empty()) continue;
+        if (!mAnyCells)
+            mOnlyGroup = mGroup[b];
+        else if (mGroup[b] != mOnlyGroup)
+            mOnlyGroup = kManyGroups;
+        mAnyCells = true;
+    }
+}
+
+void Exposure::boundGroups()
+{
+    const std::vector<Body>& bodies = mBodies;
+    const std::vector<char>& considered = mConsidered;
     mGroupMembers.assign(bodies.size(), 0);
     for (size_t b = 0; b < bodies.size(); ++b)
         if (considered[b]) ++mGroupMembers[mGroup[b]];
@@ -215,7 +246,8 @@ void Exposure::boundGroups(const std::vector<Body>& bodies, const std::vector<ch
 int64_t Exposure::firstBlocker(const Eigen::Vector3d& fromM, const Eigen::Vector3d& toM, size_t excludeGroup) const
 {
     const double h = mCellSizeM, length = (toM - fromM).norm();
-    if (mCells.empty() || !(length > 0) || excludeGroup == mOnlyGroup) return -1;
+    if (!mAnyCells || !(length > 0) || excludeGroup == mOnlyGroup) return -1;
+    needCells();
     const Eigen::Vector3d dir = (toM - fromM) / length;
     // Slab test of the segment against the cells' bounds, a cell wider all round: a segment
     // that misses them meets no voxel.

@@ -8,6 +8,7 @@
 #include <spall/voxel/Body.h>
 
 #include <Eigen/Core>
+#include <tbb/collaborative_call_once.h>
 
 #include <array>
 #include <cstdint>
@@ -31,8 +32,11 @@ FaceInBox freeFaceDeepestInBoxes(const Body& body, const openvdb::Coord& ijk, co
 
 class Exposure {
 public:
-    /// Occupancy of world cells of the bodies' voxel size by the boundary voxels of every body
-    /// `considered` marks, built in parallel and sorted (deterministic whatever the thread count).
+    /// Which faces of the bodies `considered` marks are covered, and which bodies are pressed
+    /// together. `bodies` must outlive the Exposure: the occupancy of world cells by their
+    /// boundary voxels, which a line of sight needs, is built at the first query that needs it
+    /// (a wall alone in the blast, a face on its bounds, never does), in parallel and sorted
+    /// (deterministic whatever the thread count).
     Exposure(const std::vector<Body>& bodies, const std::vector<char>& considered);
 
     /// True when the cell across exposed face `faceIndex` of the body holds a voxel of another
@@ -67,30 +71,42 @@ private:
         uint32_t body;
         float centre[3];  ///< centre of the voxel in cell units from the lattice origin
     };
-    /// The considered bodies' boundary voxels as sorted cells of a lattice through one of them.
-    void collectCells(const std::vector<Body>& bodies, const std::vector<char>& considered);
+    /// The considered bodies' boundary voxels as sorted cells of a lattice through one of them,
+    /// their blocks' bits and their bounds.
+    void collectCells() const;
+    /// The cells, their blocks and the blocks' owners, once, whichever query comes first
+    /// (collaborative: a thread that waits for them helps build them, so a task stolen while
+    /// they are built cannot wait on itself).
+    void needCells() const;
     /// mCovered (faces whose neighbouring cell is another body's) and mGroup (bodies pressed
-    /// together).
-    void groupTouchingBodies(const std::vector<Body>& bodies, const std::vector<char>& considered);
+    /// together), among the bodies `near` marks.
+    void groupTouchingBodies(const std::vector<char>& near);
     /// Per body, whether it is considered and another considered body's box comes within two
     /// voxels of its own: only such a body can touch another (a wall alone in the blast has
     /// millions of faces to look across, and nothing to find).
-    std::vector<char> nearAnother(const std::vector<Body>& bodies, const std::vector<char>& considered) const;
+    std::vector<char> nearAnother() const;
     /// mBlocks' occupancy: each cell's bit.
-    void markCells();
+    void markCells() const;
     /// mBlocks' owners: the group of the cells in or next to each block, or kManyGroups.
-    void ownBlocks();
+    void ownBlocks() const;
     /// mGroupBounds from the groups and the members' oriented boxes.
-    void boundGroups(const std::vector<Body>& bodies, const std::vector<char>& considered);
-    /// mCellsLo, mCellsHi and mOnlyGroup: the cells' bounds and their one group, if one.
-    void boundCells();
+    void boundGroups();
+    /// mCellsLo and mCellsHi: the cells' bounds.
+    void boundCells() const;
+    /// mOnlyGroup and mAnyCells, from the considered bodies' boundary voxels.
+    void findOnlyGroup();
 
     /// World point x in cell units: (x - origin) / h.
     Eigen::Vector3d cellUnits(const Eigen::Vector3d& xM) const { return (xM - mOriginM) / mCellSizeM; }
 
+    const std::vector<Body>& mBodies;
+    std::vector<char> mConsidered;
     double mCellSizeM = 1.0;  ///< a cell per voxel: the bodies' voxel size, read from them (unit: m)
-    Eigen::Vector3d mOriginM = Eigen::Vector3d::Zero();  ///< a lattice point (unit: m)
-    std::vector<Cell> mCells;  ///< sorted by key, then body
+    mutable Eigen::Vector3d mOriginM = Eigen::Vector3d::Zero();  ///< a lattice point (unit: m), chosen with the cells
+    /// The cells, their blocks and their bounds are built once by needCells(), from a const
+    /// query: a cache, hence mutable.
+    mutable tbb::collaborative_once_flag mCellsBuilt;
+    mutable std::vector<Cell> mCells;  ///< sorted by key, then body
     /// Block owners that are no one group: cells of several groups, and (while the blocks are
     /// built) none yet.
     static constexpr size_t kManyGroups = kNoBody - 1, kUnowned = kNoBody - 2;
@@ -101,7 +117,7 @@ private:
         std::array<uint64_t, 8> occupied{};
     };
     /// Every block holding a cell or next to one.
-    std::unordered_map<uint64_t, Block> mBlocks;
+    mutable std::unordered_map<uint64_t, Block> mBlocks;
     /// The last block looked up: a ray or a face's neighbourhood stays in one block for several
     /// cells, and a hash lookup per cell was a third of a step's loads.
     struct LastBlock {
@@ -119,8 +135,9 @@ private:
     /// Bounds of every cell's centre (cell units), and the group all cells belong to when they
     /// belong to one (kManyGroups otherwise): a segment that misses the bounds, or a query that
     /// excludes the only group, meets nothing.
-    Eigen::Vector3d mCellsLo = Eigen::Vector3d::Zero(), mCellsHi = Eigen::Vector3d::Zero();
+    mutable Eigen::Vector3d mCellsLo = Eigen::Vector3d::Zero(), mCellsHi = Eigen::Vector3d::Zero();
     size_t mOnlyGroup = kManyGroups;
+    bool mAnyCells = false;  ///< whether any considered body has a boundary voxel
     std::vector<std::vector<char>> mCovered;  ///< per considered body, per exposed face
     std::vector<uint32_t> mGroup;
     std::vector<uint32_t> mGroupMembers;  ///< per group, at its lowest member's index: its considered bodies
