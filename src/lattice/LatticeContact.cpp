@@ -4,11 +4,13 @@
 // here instead, by the same kind of normal spring along the line of centres.
 #include <spall/lattice/Lattice.h>
 
+#include "LatticeForEach.h"
 #include "ParticleCells.h"
 
 #include <spall/core/Parallel.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <numeric>
 
@@ -66,8 +68,18 @@ void Lattice::listContactCandidates()
 void Lattice::updateContactCandidates()
 {
     const double limit = 0.5 * kContactSkin * mModel.spacingM, limit2 = limit * limit;
-    bool moved = mListedAtM.size() != particleCount();
-    for (size_t p = 0; p < particleCount() && !moved; ++p) moved = (state.positionM[p] - mListedAtM[p]).squaredNorm() > limit2;
+    // Every step looks at every particle: in parallel, each task in blocks that stop once any
+    // task has found one (which one does not matter: the list is made again either way).
+    std::atomic<bool> moved{mListedAtM.size() != particleCount()};
+    if (!moved)
+        forEach((particleCount() + kListingBlock - 1) / kListingBlock, [&](size_t block) {
+            if (moved.load(std::memory_order_relaxed)) return;
+            for (size_t p = block * kListingBlock; p < std::min(particleCount(), (block + 1) * kListingBlock); ++p)
+                if ((state.positionM[p] - mListedAtM[p]).squaredNorm() > limit2) {
+                    moved.store(true, std::memory_order_relaxed);
+                    return;
+                }
+        }, 1);
     if (moved) listContactCandidates();
 }
 
