@@ -35,9 +35,10 @@ public:
     /// Which faces of the bodies `considered` marks are covered, and which bodies are pressed
     /// together. `bodies` must outlive the Exposure: the occupancy of world cells by their
     /// boundary voxels, which a line of sight needs, is built at the first query that needs it
-    /// (a wall alone in the blast, a face on its bounds, never does), in parallel and sorted
-    /// (deterministic whatever the thread count).
+    /// (a wall that is the only body the wave has reached, its faces all on its bounds, never
+    /// does), in parallel and sorted (deterministic whatever the thread count).
     Exposure(const std::vector<Body>& bodies, const std::vector<char>& considered);
+    Exposure(std::vector<Body>&&, const std::vector<char>&) = delete;  // the bodies must outlive it
 
     /// True when the cell across exposed face `faceIndex` of the body holds a voxel of another
     /// body (its centre within half a voxel of where a face neighbour's would be).
@@ -74,9 +75,9 @@ private:
     /// The considered bodies' boundary voxels as sorted cells of a lattice through one of them,
     /// their blocks' bits and their bounds.
     void collectCells() const;
-    /// The cells, their blocks and the blocks' owners, once, whichever query comes first
-    /// (collaborative: a thread that waits for them helps build them, so a task stolen while
-    /// they are built cannot wait on itself).
+    /// The cells, their blocks and the blocks' owners, once, whichever query comes first. The
+    /// thread that builds them runs its parallel loops in isolation (a face's task stolen while
+    /// it waits there would wait on the build itself); threads that come meanwhile help.
     void needCells() const;
     /// mCovered (faces whose neighbouring cell is another body's) and mGroup (bodies pressed
     /// together), among the bodies `near` marks.
@@ -103,8 +104,8 @@ private:
     std::vector<char> mConsidered;
     double mCellSizeM = 1.0;  ///< a cell per voxel: the bodies' voxel size, read from them (unit: m)
     mutable Eigen::Vector3d mOriginM = Eigen::Vector3d::Zero();  ///< a lattice point (unit: m), chosen with the cells
-    /// The cells, their blocks and their bounds are built once by needCells(), from a const
-    /// query: a cache, hence mutable.
+    /// The cells, their blocks and their bounds are built once: by the constructor where bodies
+    /// are near one another, else by needCells() from a const query (a cache, hence mutable).
     mutable tbb::collaborative_once_flag mCellsBuilt;
     mutable std::vector<Cell> mCells;  ///< sorted by key, then body
     /// Block owners that are no one group: cells of several groups, and (while the blocks are
@@ -132,9 +133,10 @@ private:
     /// Whether any cell from lattice point lo to hi (inclusive, at most one block apart) holds a
     /// voxel centre: a test of bits before bodyAt's search of the sorted cells.
     bool anyOccupied(const int64_t lo[3], const int64_t hi[3], LastBlock& last) const;
-    /// Bounds of every cell's centre (cell units), and the group all cells belong to when they
-    /// belong to one (kManyGroups otherwise): a segment that misses the bounds, or a query that
-    /// excludes the only group, meets nothing.
+    /// Bounds of every cell's centre (cell units), and the group all considered bodies with
+    /// boundary voxels belong to when they belong to one (kManyGroups otherwise, found from the
+    /// bodies, without the cells): a segment that misses the bounds, or a query that excludes
+    /// the only group, meets nothing.
     mutable Eigen::Vector3d mCellsLo = Eigen::Vector3d::Zero(), mCellsHi = Eigen::Vector3d::Zero();
     size_t mOnlyGroup = kManyGroups;
     bool mAnyCells = false;  ///< whether any considered body has a boundary voxel
