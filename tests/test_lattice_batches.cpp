@@ -1,11 +1,17 @@
 // The bond pass measures bonds in batches as wide as the machine's vector registers (issue 49):
 // whichever instruction set does it, each bond's strain must be the one the single-bond formula
-// gives, bit for bit, so a run's results do not depend on the machine it runs on.
+// gives, bit for bit, so a run's results do not depend on the machine it runs on; and the bonds
+// the batches find elastic must end each step as the one-bond path would leave them.
+#include "TestUtil.h"
 #include "lattice/BondStrainBatch.h"
 #include "lattice/BondStrainKernel.h"
 
+#include <spall/fracture/Material.h>
+#include <spall/lattice/Lattice.h>
+
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -43,7 +49,7 @@ struct RandomBonds {
         }
         for (size_t b = 0; b < bonds; ++b) {
             const uint32_t low = pick(random), high = pick(random);
-            bondWords.insert(bondWords.end(), {low, high, uint32_t(b % 3), 0u});
+            bondWords.insert(bondWords.end(), {low, high, uint32_t(b % 3), uint32_t(b % 5 < 3 ? 1 : 0)});  // strength classes 1 and 0
         }
     }
 
@@ -59,6 +65,51 @@ struct RandomBonds {
 };
 
 bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+/// What the bond laws read besides the strains, for RandomBonds: two strength classes whose
+/// rows differ, histories some of them undamaged and some not, random volumetric shares.
+struct RandomLaws {
+    std::array<BondLawRow, 6> rows{};
+    std::vector<double> history, sharesPa, lambdaTracesPa;
+    BondLawInputs inputs;
+
+    RandomLaws(size_t particles, size_t bonds)
+    {
+        std::mt19937 random(11);
+        std::uniform_real_distribution<double> unit(0.0, 1.0);
+        for (size_t r = 0; r < rows.size(); ++r) {
+            BondLawRow& row = rows[r];
+            const double scale = 1.0 + 0.1 * double(r);
+            for (int i = 0; i < 3; ++i) row.springNPerM[i] = scale * 1e8 * (i == int(r % 3) ? 2.0 : 1.0), row.turnNmPerRad[i] = scale * 1e3;
+            // Scaled to RandomBonds' strains (a few hundredths of a metre), so that some bonds
+            // stay below their largest stretch and shortening so far, and some pass them.
+            row.peakStretchM = 0.2 * scale, row.tensionIndexPerM = 1.0 / row.peakStretchM, row.shearIndexPerM = 20.0;
+            row.normalIndexPerM = 40.0, row.indexPerPa = 1e-7, row.frictionCoefficient = 0.6;
+            row.compressiveStrengthPa = r < 3 ? 3e10 : 0.0, row.crushingPeakShorteningM = 0.05, row.normalModulusPa = 2e10;
+            row.batches = r == 5 ? 0.0 : 1.0;
+        }
+        for (size_t b = 0; b < bonds; ++b) {
+            const double maxStretchM = b % 4 == 0 ? 0.0 : 0.3 * unit(random);
+            history.insert(history.end(), {1.0, maxStretchM, 1.0, maxStretchM, 0.0, b % 6 == 0 ? 0.1 * unit(random) : 0.0});
+        }
+        for (size_t p = 0; p < 3 * particles; ++p) sharesPa.push_back(1e6 * (unit(random) - 0.5));
+        for (size_t p = 0; p < particles; ++p) lambdaTracesPa.push_back(-1e7 * unit(random));
+        inputs = {rows.data(), history.data(), sharesPa.data(), lambdaTracesPa.data(), 0.06, 1e3};
+    }
+};
+
+/// Every word of a run's elastic results for lanes below count (their terms only where elastic).
+std::vector<double> elasticResults(const BondStrainRun& run, size_t count)
+{
+    std::vector<double> out;
+    for (size_t lane = 0; lane < count; ++lane) {
+        out.push_back(run.elastic[lane]);
+        if (run.elastic[lane] == 0.0) continue;
+        for (int k = 0; k < 3; ++k) out.insert(out.end(), {run.forceOnHighN[k][lane], run.bendingMomentNm[k][lane]});
+        out.insert(out.end(), {run.stretchM[lane], run.volumetricAreaPerArmM[lane]});
+    }
+    return out;
+}
 
 }  // namespace
 
@@ -96,4 +147,105 @@ TEST(LatticeBatches, EveryInstructionSetMeasuresEachBondAsTheSingleBondFormulaDo
     EXPECT_GE(setsRun, 1) << "every x86-64 runs SSE2";
     EXPECT_GT(largeTurns, 0) << "the large turns were meant to be tried";
     std::printf("%d instruction sets agree with the single-bond formula bit for bit\n", setsRun);
+}
+
+TEST(LatticeBatches, EveryInstructionSetFindsTheSameElasticBondsAndTerms)
+{
+    // The widest set's terms equal the one-bond path's (BondsMeasuredAsElastic… below); the
+    // narrower sets must equal it, bit for bit.
+    const RandomBonds lattice(500, 1000);
+    const RandomLaws laws(500, 1000);
+    BondStrainInputs inputs = lattice.inputs();
+    inputs.laws = &laws.inputs;
+    std::vector<double> first;
+    size_t elastic = 0, measured = 0;
+    for (const BondStrainInstructions set : {BondStrainInstructions::Sse2, BondStrainInstructions::Avx2, BondStrainInstructions::Avx512}) {
+        if (!machineRuns(set)) continue;
+        std::vector<double> results;
+        for (size_t begin = 0; begin < 1000; begin += BondStrainRun::kCapacity) {
+            const size_t count = std::min(BondStrainRun::kCapacity, 1000 - begin);
+            BondStrainRun run;
+            measureBondStrainsWith(set, inputs, begin, count, run);
+            const std::vector<double> part = elasticResults(run, count);
+            results.insert(results.end(), part.begin(), part.end());
+            for (size_t lane = 0; lane < count && first.empty(); ++lane) elastic += run.elastic[lane] != 0.0, ++measured;
+        }
+        if (first.empty()) {
+            first = results;
+            continue;
+        }
+        ASSERT_EQ(results.size(), first.size()) << "instruction set " << int(set) << " finds other bonds elastic";
+        EXPECT_EQ(std::memcmp(results.data(), first.data(), results.size() * sizeof(double)), 0) << "instruction set " << int(set);
+    }
+    // Some elastic, some not, so the test sees both sides of every condition it can.
+    EXPECT_GT(elastic, measured / 10);
+    EXPECT_LT(elastic, measured * 9 / 10);
+    std::printf("%zu of %zu bonds elastic, the same in every instruction set\n", elastic, measured);
+}
+
+namespace {
+
+/// Every particle's and bond's state after `steps` steps of a 12³ block at 1 cm on the ground,
+/// its particles given random velocities of `speedMS` (each component's standard deviation),
+/// gravity acting; as flat bytes, with how many bonds broke.
+struct SteppedState {
+    std::vector<unsigned char> bytes;
+    size_t broken = 0, damaged = 0, crushed = 0;
+};
+
+template <typename T>
+void appendBytes(std::vector<unsigned char>& bytes, const T& value)
+{
+    const auto* first = reinterpret_cast<const unsigned char*>(&value);
+    bytes.insert(bytes.end(), first, first + sizeof value);
+}
+
+SteppedState stepBlock(const Material& material, double speedMS, bool batchElasticBonds, int steps)
+{
+    const Body block = test::boxBody(12, 12, 12, 0.01, material.densityKgM3, Eigen::Vector3d(0.0, 0.0, 0.06));
+    Lattice lattice = Lattice::fromBody(block, material, test::groundAtZero());
+    lattice.batchElasticBonds(batchElasticBonds);
+    std::mt19937 random(3);
+    std::normal_distribution<double> velocity(0.0, speedMS);
+    for (Eigen::Vector3d& v : lattice.state.velocityMS) v = Eigen::Vector3d(velocity(random), velocity(random), velocity(random));
+    lattice.refreshForces();
+    const double weightN = -9.81 * lattice.model().particleMassKg;
+    lattice.externalForceN.assign(lattice.particleCount(), Eigen::Vector3d(0.0, 0.0, weightN));
+    for (int i = 0; i < steps; ++i) lattice.step(lattice.stableTimeStepS());
+    SteppedState out;
+    for (size_t p = 0; p < lattice.particleCount(); ++p) {
+        appendBytes(out.bytes, lattice.state.positionM[p]), appendBytes(out.bytes, lattice.state.velocityMS[p]);
+        appendBytes(out.bytes, lattice.state.angularVelocityRadS[p]), appendBytes(out.bytes, lattice.state.orientation[p].coeffs());
+        appendBytes(out.bytes, lattice.state.bondForceN[p]), appendBytes(out.bytes, lattice.state.bondMomentNm[p]);
+    }
+    for (size_t b = 0; b < lattice.bondCount(); ++b) {
+        appendBytes(out.bytes, lattice.state.bondHistory[b]);
+        out.broken += lattice.bondDamage(b) >= 1.0;
+        out.damaged += lattice.bondDamage(b) > 0.0;
+        out.crushed += lattice.crushingDamage(b) > 0.0;
+    }
+    return out;
+}
+
+}  // namespace
+
+TEST(LatticeBatches, BondsMeasuredAsElasticEndEachStepAsTheOneBondPathLeavesThem)
+{
+    // Concrete crushes; masonry has two strength classes; wood's shear is not isotropic, so
+    // its bonds along the grain take the one-bond path; glass snaps at its peak. Slow, the
+    // bonds stay elastic; fast, they crack and crush, and the batches must hand each bond to
+    // the one-bond path the step its damage would start to grow.
+    size_t broken = 0, crushed = 0;
+    for (const char* name : {"concrete", "brick-masonry", "wood", "glass"})
+        for (const double speedMS : {0.05, 2.0}) {
+            const Material& material = findMaterialPreset(name);
+            const SteppedState batched = stepBlock(material, speedMS, true, 150), oneByOne = stepBlock(material, speedMS, false, 150);
+            ASSERT_EQ(batched.bytes.size(), oneByOne.bytes.size());
+            EXPECT_TRUE(batched.bytes == oneByOne.bytes) << name << " at " << speedMS << " m/s: the batched step differs from the one-bond path";
+            std::printf("%-14s %4.2f m/s: %5zu bonds damaged, %5zu broken, %5zu crushed; the same bit for bit\n", name, speedMS, batched.damaged,
+                        batched.broken, batched.crushed);
+            broken += batched.broken, crushed += batched.crushed;
+        }
+    EXPECT_GT(broken, 0u) << "some bonds were meant to break";
+    EXPECT_GT(crushed, 0u) << "some bonds were meant to crush";
 }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "BondStrainBatch.h"
+#include "BondLawKernel.h"
 #include "BondStrainKernel.h"
 
 #include <xsimd/xsimd.hpp>
@@ -10,6 +11,7 @@
 #include <immintrin.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <type_traits>
 
 namespace spall {
@@ -32,6 +34,115 @@ struct MeasureBondStrains {
     void operator()(Arch, const BondStrainInputs& in, size_t first, size_t count, BondStrainRun& out) const;
 };
 
+/// Where a batch's bonds' data lie in the flat arrays, lane by lane (past the run's end, the
+/// last bond again: its results land beyond count, unread).
+template <size_t width>
+struct LaneOffsets {
+    alignas(64) int64_t low3[width], high3[width], low4[width], high4[width];
+    alignas(64) int64_t low[width], high[width], lowShare[width], highShare[width], history[width], row[width];
+    alignas(64) double axis[width], pinned[width];
+
+    LaneOffsets(const BondStrainInputs& in, size_t first, size_t count, size_t lane0)
+    {
+        constexpr int64_t rowWords = sizeof(BondLawRow) / sizeof(double);
+        for (size_t i = 0; i < width; ++i) {
+            const size_t b = first + std::min(lane0 + i, count - 1);
+            const uint32_t* words = in.bondWords + 4 * b;
+            const int64_t axisOf = int32_t(words[2]);
+            low[i] = words[0], high[i] = words[1];
+            low3[i] = 3 * low[i], high3[i] = 3 * high[i];
+            low4[i] = 4 * low[i], high4[i] = 4 * high[i];
+            lowShare[i] = low3[i] + axisOf, highShare[i] = high3[i] + axisOf;
+            history[i] = int64_t(kHistoryWords * b);
+            // LatticeBond's last word: its strength class, then whether it is a pin.
+            row[i] = (3 * int64_t(words[3] & 0xffu) + axisOf) * rowWords;
+            axis[i] = double(axisOf);
+            pinned[i] = double((words[3] >> 8) & 0xffu);
+        }
+    }
+};
+
+/// The field at `offsetInRow` of each lane's row.
+template <class Arch, size_t width>
+xsimd::batch<double, Arch> rowField(const BondLawInputs& laws, const LaneOffsets<width>& at, size_t offsetInRow)
+{
+    return gatherDoubles<Arch>(reinterpret_cast<const double*>(laws.rows) + offsetInRow / sizeof(double), at.row);
+}
+
+/// c where the axis is 0, d where it is 1, e where it is 2.
+template <class Batch>
+Batch byAxis(const Batch& axis, const Batch& c, const Batch& d, const Batch& e)
+{
+    return xsimd::select(axis == Batch(0.0), c, xsimd::select(axis == Batch(1.0), d, e));
+}
+
+/// Which of a batch's bonds stay on their elastic line this step (BondStrainRun::elastic): as
+/// Lattice::measureBond finds them undamaged, with neither their failure index (equivalentStretchM)
+/// nor their crushing (crushingShorteningM, where even unconfined it passes the largest so far)
+/// growing.
+template <class Arch, size_t width>
+auto staysElastic(const BondLawInputs& laws, const LaneOffsets<width>& at, const bond_strain::Strain<xsimd::batch<double, Arch>>& s, double spacingM)
+{
+    using Batch = xsimd::batch<double, Arch>;
+    const Batch axis = Batch::load_aligned(at.axis);
+    const auto field = [&](size_t offsetInRow) { return rowField<Arch>(laws, at, offsetInRow); };
+    const auto history = [&](size_t word) { return gatherDoubles<Arch>(laws.history + word, at.history); };
+    const Batch normalM = byAxis(axis, s.displacementM[0], s.displacementM[1], s.displacementM[2]);
+    const Batch one(1.0);
+    const Batch stretchM = (s.lengthM - Batch(spacingM)) +
+                           bond_law::bendingStretchM(spacingM, one, byAxis(axis, s.rotationRad[1], s.rotationRad[2], s.rotationRad[0]),
+                                                     byAxis(axis, s.rotationRad[2], s.rotationRad[0], s.rotationRad[1]));
+    const Batch shearIndex = bond_law::isotropicShearIndex(field(offsetof(BondLawRow, shearIndexPerM)), s.displacementM, normalM);
+    const Batch sharesPa = gatherDoubles<Arch>(laws.volumetricStressSharePa, at.lowShare) + gatherDoubles<Arch>(laws.volumetricStressSharePa, at.highShare);
+    const Batch peakStretchM = field(offsetof(BondLawRow, peakStretchM));
+    const bond_law::FailureTerms<Batch> terms{peakStretchM, field(offsetof(BondLawRow, tensionIndexPerM)), field(offsetof(BondLawRow, normalIndexPerM)),
+                                              field(offsetof(BondLawRow, indexPerPa)), field(offsetof(BondLawRow, frictionCoefficient))};
+    const Batch equivalentM = xsimd::select(stretchM >= Batch(0.0), bond_law::failureIndexInTension(stretchM, shearIndex, terms),
+                                            bond_law::failureIndexInCompression(normalM, shearIndex, sharesPa, terms)) *
+                              peakStretchM;
+    const Batch scale = history(kStrengthScaleWord), maxEquivalentM = history(kMaxEquivalentStretchWord);
+    const Batch maxCrushingM = history(kMaxCrushingWord), crushingPeakM = field(offsetof(BondLawRow, crushingPeakShorteningM));
+    // Cracking's and crushing's damage 0: the largest driver so far not past its line's peak.
+    const auto undamaged = maxEquivalentM <= (scale * history(kStrengthFactorWord)) * peakStretchM &&
+                           (maxCrushingM <= Batch(0.0) || maxCrushingM <= scale * crushingPeakM);
+    typename Batch::batch_bool_type crushingGrows(false);
+    if (laws.uncrushedLambdaTracePa) {
+        const Batch fcPa = field(offsetof(BondLawRow, compressiveStrengthPa));
+        const Batch lambdaTracesPa = gatherDoubles<Arch>(laws.uncrushedLambdaTracePa, at.low) + gatherDoubles<Arch>(laws.uncrushedLambdaTracePa, at.high);
+        const Batch compressionPa = (field(offsetof(BondLawRow, normalModulusPa)) * normalM / Batch(spacingM) + Batch(0.5) * lambdaTracesPa) * Batch(-1.0);
+        crushingGrows = fcPa > Batch(0.0) && normalM < Batch(0.0) && compressionPa > Batch(0.0) && compressionPa / fcPa * crushingPeakM > maxCrushingM;
+    }
+    return field(offsetof(BondLawRow, batches)) != Batch(0.0) && Batch::load_aligned(at.pinned) == Batch(0.0) && undamaged &&
+           equivalentM <= maxEquivalentM && !crushingGrows;
+}
+
+/// The terms of a batch's bonds as undamaged bonds (Lattice::measureBond's with D = 0), lanes
+/// lane0 … of `out`.
+template <class Arch, size_t width>
+void storeElasticTerms(const BondLawInputs& laws, const LaneOffsets<width>& at, const bond_strain::Strain<xsimd::batch<double, Arch>>& s,
+                       double spacingM, size_t lane0, BondStrainRun& out)
+{
+    using Batch = xsimd::batch<double, Arch>;
+    Batch springNPerM[3], turnNmPerRad[3], forceOnHighN[3], momentNm[3];
+    for (size_t k = 0; k < 3; ++k) {
+        springNPerM[k] = rowField<Arch>(laws, at, offsetof(BondLawRow, springNPerM) + k * sizeof(double));
+        turnNmPerRad[k] = rowField<Arch>(laws, at, offsetof(BondLawRow, turnNmPerRad) + k * sizeof(double));
+    }
+    const Batch one(1.0);
+    bond_law::elasticTerms(s.frame, s.displacementM, s.rotationRad, springNPerM, turnNmPerRad, one, forceOnHighN, momentNm);
+    if (laws.bulkViscosity > 0.0) {
+        const Batch inverseLength = one / s.lengthM;
+        const Batch along[3] = {s.armM[0] * inverseLength, s.armM[1] * inverseLength, s.armM[2] * inverseLength};
+        bond_law::subtractDashpot(one, laws.bulkViscosity, laws.dashpotPerViscosityNSPerM, s.openingRateMS, along, forceOnHighN);
+    }
+    for (int k = 0; k < 3; ++k) {
+        forceOnHighN[k].store_aligned(&out.forceOnHighN[k][lane0]);
+        momentNm[k].store_aligned(&out.bendingMomentNm[k][lane0]);
+    }
+    (s.lengthM - Batch(spacingM)).store_aligned(&out.stretchM[lane0]);
+    (Batch(spacingM * spacingM) / s.lengthM).store_aligned(&out.volumetricAreaPerArmM[lane0]);
+}
+
 template <class Arch>
 void MeasureBondStrains::operator()(Arch, const BondStrainInputs& in, size_t first, size_t count, BondStrainRun& out) const
 {
@@ -39,26 +150,17 @@ void MeasureBondStrains::operator()(Arch, const BondStrainInputs& in, size_t fir
     constexpr size_t width = Batch::size;
     static_assert(BondStrainRun::kCapacity % width == 0, "a run holds whole batches");
     for (size_t lane0 = 0; lane0 < count; lane0 += width) {
-        // Where each end's position (and velocity) and orientation start in the flat arrays.
-        alignas(64) int64_t low3[width], high3[width], low4[width], high4[width];
-        alignas(64) double axis[width];
-        for (size_t i = 0; i < width; ++i) {
-            // Past the run's end, the last bond again (its results land beyond count, unread).
-            const uint32_t* words = in.bondWords + 4 * (first + std::min(lane0 + i, count - 1));
-            low3[i] = 3 * int64_t(words[0]), high3[i] = 3 * int64_t(words[1]);
-            low4[i] = 4 * int64_t(words[0]), high4[i] = 4 * int64_t(words[1]);
-            axis[i] = double(int32_t(words[2]));
-        }
+        const LaneOffsets<width> at(in, first, count, lane0);
         bond_strain::EndState<Batch> a, b;
         for (int k = 0; k < 3; ++k) {
-            a.position[k] = gatherDoubles<Arch>(in.positionM + k, low3), b.position[k] = gatherDoubles<Arch>(in.positionM + k, high3);
-            a.velocity[k] = gatherDoubles<Arch>(in.velocityMS + k, low3), b.velocity[k] = gatherDoubles<Arch>(in.velocityMS + k, high3);
+            a.position[k] = gatherDoubles<Arch>(in.positionM + k, at.low3), b.position[k] = gatherDoubles<Arch>(in.positionM + k, at.high3);
+            a.velocity[k] = gatherDoubles<Arch>(in.velocityMS + k, at.low3), b.velocity[k] = gatherDoubles<Arch>(in.velocityMS + k, at.high3);
         }
         for (int k = 0; k < 4; ++k)
-            a.quaternion[k] = gatherDoubles<Arch>(in.quaternion + k, low4), b.quaternion[k] = gatherDoubles<Arch>(in.quaternion + k, high4);
+            a.quaternion[k] = gatherDoubles<Arch>(in.quaternion + k, at.low4), b.quaternion[k] = gatherDoubles<Arch>(in.quaternion + k, at.high4);
         bond_strain::Strain<Batch> s;
         typename Batch::batch_bool_type small;
-        bond_strain::halfwayStrain(a, b, Batch::load_aligned(axis), in.spacingM, s, small);
+        bond_strain::halfwayStrain(a, b, Batch::load_aligned(at.axis), in.spacingM, s, small);
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 3; ++c) s.frame[r][c].store_aligned(&out.frame[r][c][lane0]);
         for (int k = 0; k < 3; ++k) {
@@ -69,6 +171,10 @@ void MeasureBondStrains::operator()(Arch, const BondStrainInputs& in, size_t fir
         s.lengthM.store_aligned(&out.lengthM[lane0]);
         s.openingRateMS.store_aligned(&out.openingRateMS[lane0]);
         xsimd::select(small, Batch(1.0), Batch(0.0)).store_aligned(&out.smallTurn[lane0]);
+        if (!in.laws) continue;
+        const auto elastic = small && staysElastic<Arch>(*in.laws, at, s, in.spacingM);
+        xsimd::select(elastic, Batch(1.0), Batch(0.0)).store_aligned(&out.elastic[lane0]);
+        if (xsimd::any(elastic)) storeElasticTerms<Arch>(*in.laws, at, s, in.spacingM, lane0, out);
     }
 }
 

@@ -6,6 +6,7 @@
 
 #include <spall/lattice/Lattice.h>
 
+#include "BondLawKernel.h"
 #include "BondStrainKernel.h"
 
 #include <algorithm>
@@ -81,9 +82,8 @@ inline double shearIndexOf(const Eigen::Vector3d& perM, const Vector& displaceme
     const int b = (a + 1) % 3, c = (a + 2) % 3;
     // Equal factors (isotropic): one product, as the golden states were recorded with.
     if (perM[b] == perM[c]) {
-        // Summed left to right, as Eigen sums a 3-vector's squares.
-        const double squaredNorm = displacementM[0] * displacementM[0] + displacementM[1] * displacementM[1] + displacementM[2] * displacementM[2];
-        return perM[b] * std::sqrt(std::max(0.0, squaredNorm - displacementM[a] * displacementM[a]));
+        const double components[3] = {displacementM[0], displacementM[1], displacementM[2]};
+        return bond_law::isotropicShearIndex(perM[b], components, components[a]);
     }
     return std::hypot(perM[b] * displacementM[b], perM[c] * displacementM[c]);
 }
@@ -197,21 +197,16 @@ inline double Lattice::equivalentStretchM(size_t b, const Strain& strain, double
     // centres, t/2 − h/2 from the neutral axis. As the bond softens its moment goes, and its
     // opening alone carries it to the end of the softening line, so it still dissipates Gf.
     const auto& rotation = strain.rotationRad;
-    const double bendingStretchM = 0.5 * mModel.spacingM * (1.0 - damage) * (std::abs(rotation[(a + 1) % 3]) + std::abs(rotation[(a + 2) % 3]));
-    const double stretchM = bond.pinned ? 0.0 : lengthM - mModel.spacingM + bendingStretchM;  // a pin fails in shear
-    double index = 0.0;
-    if (stretchM >= 0.0) {
-        const double tensionIndex = stretchM * terms.tensionIndexPerM;
-        index = std::sqrt(tensionIndex * tensionIndex + shearIndex * shearIndex);
-    } else {
-        // The compression across the bond, over the shear strength: its spring's and its
-        // particles' volumetric share, as the last force pass left them (a substep behind; a
-        // function of the saved state).
-        const double normalIndex =
-            terms.normalIndexPerM * normalM + terms.indexPerPa * (mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a]);
-        index = std::max(0.0, shearIndex - terms.frictionCoefficient * std::max(0.0, -normalIndex));
-    }
-    return index * terms.peakStretchM;
+    const double stretchM = bond.pinned ? 0.0  // a pin fails in shear
+                                        : lengthM - mModel.spacingM + bond_law::bendingStretchM(mModel.spacingM, 1.0 - damage, double(rotation[(a + 1) % 3]),
+                                                                                                double(rotation[(a + 2) % 3]));
+    const bond_law::FailureTerms<double> failure{terms.peakStretchM, terms.tensionIndexPerM, terms.normalIndexPerM, terms.indexPerPa,
+                                                 terms.frictionCoefficient};
+    if (stretchM >= 0.0) return bond_law::failureIndexInTension(stretchM, shearIndex, failure) * terms.peakStretchM;
+    // The compression across the bond: its spring's and its particles' volumetric share, as the
+    // last force pass left them (a substep behind; a function of the saved state).
+    const double sharesPa = mVolumetricStressShare[bond.low][a] + mVolumetricStressShare[bond.high][a];
+    return bond_law::failureIndexInCompression(normalM, shearIndex, sharesPa, failure) * terms.peakStretchM;
 }
 
 inline bool Lattice::growBondDamage(size_t b, double equivalentStretchNowM, double crushingShorteningNowM, double strainRatePerS, double dtS)

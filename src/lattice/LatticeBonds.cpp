@@ -7,6 +7,7 @@
 #include "LatticeForEach.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstddef>
@@ -56,15 +57,18 @@ struct StrainInRun {
     }
 };
 
-/// The frame times a vector, summed as Eigen's SSE2 code sums a 3 × 3 by a 3-vector (the first
-/// two rows as a pair, left to right; the third alone, right first), so results stay bit for bit.
-[[gnu::always_inline]] inline Eigen::Vector3d frameTimes(const StrainInRun& s, const Eigen::Vector3d& v)
-{
-    Eigen::Vector3d out;
-    for (int i = 0; i < 2; ++i) out[i] = (s.frame(i, 0) * v[0] + s.frame(i, 1) * v[1]) + s.frame(i, 2) * v[2];
-    out[2] = s.frame(2, 0) * v[0] + (s.frame(2, 1) * v[1] + s.frame(2, 2) * v[2]);
-    return out;
-}
+/// A lane of a run's 3-vector, read in place as v[i].
+struct LaneVector {
+    const double (*components)[kRunCapacity];
+    size_t lane;
+    double operator[](int i) const { return components[i][lane]; }
+};
+/// A lane of a run's frame, read in place as frame[row][column].
+struct LaneFrame {
+    const double (*rows)[3][kRunCapacity];
+    size_t lane;
+    LaneVector operator[](int r) const { return {rows[r], lane}; }
+};
 
 /// Writes one bond's strain into lane `lane` of a run.
 void storeStrain(const BondStrain& s, size_t lane, BondStrainRun& run)
@@ -84,18 +88,62 @@ void storeLargeTurn(const Eigen::Quaterniond& qa, const Eigen::Quaterniond& qb, 
     for (int r = 0; r < 3; ++r) run.rotationRad[r][lane] = turnRad[r];
 }
 
+/// force += magnitude × along, element by element.
+void addAlong(double magnitudeN, const double (&along)[3], double (&forceN)[3])
+{
+    for (int i = 0; i < 3; ++i) forceN[i] += magnitudeN * along[i];
+}
+
+/// The rows the batches read for each strength class and axis (BondLawRow).
+std::array<BondLawRow, 6> bondLawRows(const LatticeModel& model)
+{
+    const LatticeStiffness& k = model.stiffness;
+    std::array<BondLawRow, 6> rows{};
+    for (size_t strengthClass = 0; strengthClass < 2; ++strengthClass)
+        for (size_t a = 0; a < 3; ++a) {
+            const LatticeModel::FailureTerms& terms = model.failureTerms[strengthClass][a];
+            const LatticeStiffness::Strength& strength = k.strength[strengthClass];
+            BondLawRow& row = rows[3 * strengthClass + a];
+            for (size_t i = 0; i < 3; ++i) {
+                row.springNPerM[i] = i == a ? k.normalNPerM[a] : k.shearNPerM[a][int(i)];
+                row.turnNmPerRad[i] = i == a ? k.twistingNmPerRad[a] : k.bendingNmPerRad[a];
+            }
+            const double shearB = terms.shearIndexPerM[int((a + 1) % 3)], shearC = terms.shearIndexPerM[int((a + 2) % 3)];
+            row.peakStretchM = terms.peakStretchM, row.tensionIndexPerM = terms.tensionIndexPerM, row.shearIndexPerM = shearB;
+            row.normalIndexPerM = terms.normalIndexPerM, row.indexPerPa = terms.indexPerPa, row.frictionCoefficient = terms.frictionCoefficient;
+            row.compressiveStrengthPa = strength.compressiveStrengthPa, row.crushingPeakShorteningM = strength.crushingPeakShorteningM;
+            row.normalModulusPa = k.normalModulusPa[a];
+            // One peak for the index and the softening line, and one shear index across the axis.
+            row.batches = shearB == shearC && terms.peakStretchM == strength.peakStretchM ? 1.0 : 0.0;
+        }
+    return rows;
+}
+
 // measureBonds reads the particles' and bonds' arrays as flat words.
 static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double) && sizeof(Eigen::Quaterniond) == 4 * sizeof(double));
 static_assert(sizeof(LatticeBond) == 4 * sizeof(uint32_t) && offsetof(LatticeBond, low) == 0 && offsetof(LatticeBond, high) == 4 &&
-              offsetof(LatticeBond, axis) == 8 && sizeof(LatticeBond::axis) == 4);
+              offsetof(LatticeBond, axis) == 8 && sizeof(LatticeBond::axis) == 4 && offsetof(LatticeBond, strengthClass) == 12 &&
+              offsetof(LatticeBond, pinned) == 13);
+static_assert(sizeof(BondHistory) == kHistoryWords * sizeof(double) && offsetof(BondHistory, strengthScale) == kStrengthScaleWord * sizeof(double) &&
+              offsetof(BondHistory, maxEquivalentStretchM) == kMaxEquivalentStretchWord * sizeof(double) &&
+              offsetof(BondHistory, strengthFactor) == kStrengthFactorWord * sizeof(double) &&
+              offsetof(BondHistory, maxCrushingShorteningM) == kMaxCrushingWord * sizeof(double));
 
 }  // namespace
 
 uint8_t Lattice::measureBonds(double dtS, bool growDamage)
 {
     if (bondCount() == 0) return 0;
-    const BondStrainInputs inputs{state.positionM.front().data(), state.velocityMS.front().data(), state.orientation.front().coeffs().data(),
-                                  reinterpret_cast<const uint32_t*>(mModel.bonds.data()), mModel.spacingM};
+    BondStrainInputs inputs{state.positionM.front().data(), state.velocityMS.front().data(), state.orientation.front().coeffs().data(),
+                            reinterpret_cast<const uint32_t*>(mModel.bonds.data()), mModel.spacingM};
+    // The batches find the bonds that stay elastic where that is all a step can do to them:
+    // damage grows on the softening line (Davison–Stevens grows it every step).
+    const std::array<BondLawRow, 6> rows = bondLawRows(mModel);
+    const BondLawInputs laws{rows.data(), &state.bondHistory.front().strengthScale, mVolumetricStressShare.front().data(),
+                             mUncrushedLambdaTracePa.empty() ? nullptr : mUncrushedLambdaTracePa.data(), mModel.bulkViscosity,
+                             mModel.dashpotPerViscosityNSPerM};
+    if (mBatchesElasticBonds && growDamage && mModel.damageLaw == LatticeDamageLaw::Softening && mVolumetricStressShare.size() == particleCount())
+        inputs.laws = &laws;
     constexpr size_t capacity = BondStrainRun::kCapacity;
     std::atomic<uint8_t> events{0};
     forEach((bondCount() + capacity - 1) / capacity, [&](size_t r) {
@@ -111,10 +159,23 @@ uint8_t Lattice::measureBonds(double dtS, bool growDamage)
                 storeLargeTurn(state.orientation[bond.low], state.orientation[bond.high], lane, run);
         }
         uint8_t runEvents = 0;
-        for (size_t lane = 0; lane < count; ++lane) runEvents |= measureBond(first + lane, run, lane, dtS, growDamage);
+        for (size_t lane = 0; lane < count; ++lane) {
+            if (inputs.laws && run.elastic[lane] != 0.0)
+                takeElasticTerms(first + lane, run, lane);
+            else
+                runEvents |= measureBond(first + lane, run, lane, dtS, growDamage);
+        }
         if (runEvents) events.fetch_or(runEvents, std::memory_order_relaxed);
     }, std::max<size_t>(1, kCheapGrain / capacity));  // as many bonds a task as one bond at a time had
     return events.load();
+}
+
+void Lattice::takeElasticTerms(size_t b, const BondStrainRun& run, size_t lane)
+{
+    BondForceTerms& terms = mBondTerms[b];
+    for (int k = 0; k < 3; ++k) terms.forceOnHighN[k] = run.forceOnHighN[k][lane], terms.bendingMomentNm[k] = run.bendingMomentNm[k][lane];
+    terms.volumetricAreaPerArmM = run.volumetricAreaPerArmM[lane];
+    mBondStretch[b].effectiveM = mBondStretch[b].uncrushedM = run.stretchM[lane];
 }
 
 uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, double dtS, bool growDamage)
@@ -124,9 +185,9 @@ uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, do
     const StrainInRun s(run, lane);
     const int a = bond.axis;
     BondForceTerms& terms = mBondTerms[b];
-    const Eigen::Vector3d armM(run.armM[0][lane], run.armM[1][lane], run.armM[2][lane]);
     const double lengthM = run.lengthM[lane];
-    const Eigen::Vector3d along = armM * (1.0 / lengthM);
+    const double inverseLength = 1.0 / lengthM;
+    const double along[3] = {run.armM[0][lane] * inverseLength, run.armM[1][lane] * inverseLength, run.armM[2][lane] * inverseLength};
     const double openingRateMS = run.openingRateMS[lane];
     const BondHistory& history = state.bondHistory[b];
     const LatticeStiffness::Strength& strength = k.strength[bond.strengthClass];
@@ -144,13 +205,16 @@ uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, do
     if (snapped) mSnapped[b] = 1;
     const double intact = 1.0 - damage, sqrtIntact = std::sqrt(intact);
     const bool opening = lengthM > mModel.spacingM;
-    // Element by element (a store into element a after a store of the whole made its next read
-    // wait for both).
-    Eigen::Vector3d local;
-    for (int i = 0; i < 3; ++i) local[i] = (i == a ? -intact * k.normalNPerM[a] : -intact * k.shearNPerM[a][i]) * s.displacementM[i];
-    terms.forceOnHighN = frameTimes(s, local);
+    double forceOnHighN[3], momentNm[3], springNPerM[3], turnNmPerRad[3];
+    for (int i = 0; i < 3; ++i) {
+        springNPerM[i] = i == a ? k.normalNPerM[a] : k.shearNPerM[a][i];
+        turnNmPerRad[i] = i == a ? k.twistingNmPerRad[a] : k.bendingNmPerRad[a];
+    }
+    bond_law::elasticTerms(LaneFrame{run.frame, lane}, LaneVector{run.displacementM, lane}, LaneVector{run.rotationRad, lane}, springNPerM,
+                           turnNmPerRad, intact, forceOnHighN, momentNm);
     if (bond.pinned) {
         // Across its axis only: no contact, dashpot, moment or volumetric share.
+        terms.forceOnHighN = Eigen::Vector3d(forceOnHighN[0], forceOnHighN[1], forceOnHighN[2]);
         terms.bendingMomentNm.setZero();
         terms.volumetricAreaPerArmM = 0.0;
         mBondStretch[b] = BondStretch();
@@ -160,16 +224,16 @@ uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, do
     // only while the two cubes overlap. (In the bond's frame it would push apart particles that
     // have slid past each other or turned over, which feeds energy into a shattered lattice.)
     const double overlapM = mModel.spacingM - lengthM;
-    if (intact < uncrushed && overlapM > 0.0) terms.forceOnHighN += (uncrushed - intact) * k.normalNPerM[a] * overlapM * along;
+    if (intact < uncrushed && overlapM > 0.0) addAlong((uncrushed - intact) * k.normalNPerM[a] * overlapM, along, forceOnHighN);
     // The crushed part's rubble carries again once squeezed past the softening line's end:
     // k (D_c overlap − uf), which grows with D_c from nothing, so no force jumps in.
     const double rubbleM = crushed * overlapM - strength.crushingEndShorteningM;
-    if (crushed > 0.0 && rubbleM > 0.0) terms.forceOnHighN += k.normalNPerM[a] * rubbleM * along;
+    if (crushed > 0.0 && rubbleM > 0.0) addAlong(k.normalNPerM[a] * rubbleM, along, forceOnHighN);
     // A crack opening carries no viscous stress either: the dashpot softens with the spring.
-    if (mModel.bulkViscosity > 0.0) terms.forceOnHighN -= (opening ? intact : uncrushed) * mModel.bulkViscosity * mModel.dashpotPerViscosityNSPerM * openingRateMS * along;
-    Eigen::Vector3d bending;
-    for (int i = 0; i < 3; ++i) bending[i] = (i == a ? -intact * k.twistingNmPerRad[a] : -intact * k.bendingNmPerRad[a]) * s.rotationRad[i];
-    terms.bendingMomentNm = frameTimes(s, bending);
+    if (mModel.bulkViscosity > 0.0)
+        bond_law::subtractDashpot(opening ? intact : uncrushed, mModel.bulkViscosity, mModel.dashpotPerViscosityNSPerM, openingRateMS, along, forceOnHighN);
+    terms.forceOnHighN = Eigen::Vector3d(forceOnHighN[0], forceOnHighN[1], forceOnHighN[2]);
+    terms.bendingMomentNm = Eigen::Vector3d(momentNm[0], momentNm[1], momentNm[2]);
     const double sqrtUncrushed = crushed == 0.0 ? 1.0 : std::sqrt(uncrushed);
     BondStretch& stretch = mBondStretch[b];
     stretch.uncrushedM = opening ? sqrtIntact * (lengthM - mModel.spacingM) : lengthM - mModel.spacingM;
