@@ -1,7 +1,7 @@
 // The bond pass measures bonds in batches as wide as the machine's vector registers (issue 49):
 // whichever instruction set does it, each bond's strain must be the one the single-bond formula
 // gives, bit for bit, so a run's results do not depend on the machine it runs on; and the bonds
-// the batches find settled must end each step as the one-bond path would leave them.
+// the batches find elastic must end each step as the one-bond path would leave them.
 #include "TestUtil.h"
 #include "lattice/BondStrainBatch.h"
 #include "lattice/BondStrainKernel.h"
@@ -85,9 +85,7 @@ struct RandomLaws {
             // stay below their largest stretch and shortening so far, and some pass them.
             row.peakStretchM = 0.2 * scale, row.tensionIndexPerM = 1.0 / row.peakStretchM, row.shearIndexPerM = 20.0;
             row.normalIndexPerM = 40.0, row.indexPerPa = 1e-7, row.frictionCoefficient = 0.6;
-            row.zeroTractionStretchM = r == 4 ? row.peakStretchM : 4.0 * row.peakStretchM;  // class 1's y axis snaps at its peak
-            row.compressiveStrengthPa = r < 3 ? 3e10 : 0.0, row.crushingPeakShorteningM = 0.05, row.crushingEndShorteningM = 0.2;
-            row.normalModulusPa = 2e10;
+            row.compressiveStrengthPa = r < 3 ? 3e10 : 0.0, row.crushingPeakShorteningM = 0.05, row.normalModulusPa = 2e10;
             row.batches = r == 5 ? 0.0 : 1.0;
         }
         for (size_t b = 0; b < bonds; ++b) {
@@ -100,15 +98,15 @@ struct RandomLaws {
     }
 };
 
-/// Every word of a run's settled bonds' results for lanes below count (their terms only where settled).
-std::vector<double> settledResults(const BondStrainRun& run, size_t count)
+/// Every word of a run's elastic results for lanes below count (their terms only where elastic).
+std::vector<double> elasticResults(const BondStrainRun& run, size_t count)
 {
     std::vector<double> out;
     for (size_t lane = 0; lane < count; ++lane) {
-        out.push_back(run.settled[lane]);
-        if (run.settled[lane] == 0.0) continue;
+        out.push_back(run.elastic[lane]);
+        if (run.elastic[lane] == 0.0) continue;
         for (int k = 0; k < 3; ++k) out.insert(out.end(), {run.forceOnHighN[k][lane], run.bendingMomentNm[k][lane]});
-        out.insert(out.end(), {run.effectiveStretchM[lane], run.uncrushedStretchM[lane], run.volumetricAreaPerArmM[lane]});
+        out.insert(out.end(), {run.stretchM[lane], run.volumetricAreaPerArmM[lane]});
     }
     return out;
 }
@@ -151,16 +149,16 @@ TEST(LatticeBatches, EveryInstructionSetMeasuresEachBondAsTheSingleBondFormulaDo
     std::printf("%d instruction sets agree with the single-bond formula bit for bit\n", setsRun);
 }
 
-TEST(LatticeBatches, EveryInstructionSetFindsTheSameSettledBondsAndTerms)
+TEST(LatticeBatches, EveryInstructionSetFindsTheSameElasticBondsAndTerms)
 {
-    // The widest set's terms equal the one-bond path's (SettledBondsEndEachStep… below); the
+    // The widest set's terms equal the one-bond path's (BondsMeasuredAsElastic… below); the
     // narrower sets must equal it, bit for bit.
     const RandomBonds lattice(500, 1000);
     const RandomLaws laws(500, 1000);
     BondStrainInputs inputs = lattice.inputs();
     inputs.laws = &laws.inputs;
     std::vector<double> first;
-    size_t settled = 0, measured = 0;
+    size_t elastic = 0, measured = 0;
     for (const BondStrainInstructions set : {BondStrainInstructions::Sse2, BondStrainInstructions::Avx2, BondStrainInstructions::Avx512}) {
         if (!machineRuns(set)) continue;
         std::vector<double> results;
@@ -168,21 +166,21 @@ TEST(LatticeBatches, EveryInstructionSetFindsTheSameSettledBondsAndTerms)
             const size_t count = std::min(BondStrainRun::kCapacity, 1000 - begin);
             BondStrainRun run;
             measureBondStrainsWith(set, inputs, begin, count, run);
-            const std::vector<double> part = settledResults(run, count);
+            const std::vector<double> part = elasticResults(run, count);
             results.insert(results.end(), part.begin(), part.end());
-            for (size_t lane = 0; lane < count && first.empty(); ++lane) settled += run.settled[lane] != 0.0, ++measured;
+            for (size_t lane = 0; lane < count && first.empty(); ++lane) elastic += run.elastic[lane] != 0.0, ++measured;
         }
         if (first.empty()) {
             first = results;
             continue;
         }
-        ASSERT_EQ(results.size(), first.size()) << "instruction set " << int(set) << " finds other bonds settled";
+        ASSERT_EQ(results.size(), first.size()) << "instruction set " << int(set) << " finds other bonds elastic";
         EXPECT_EQ(std::memcmp(results.data(), first.data(), results.size() * sizeof(double)), 0) << "instruction set " << int(set);
     }
-    // Some settled, some not, so the test sees both sides of every condition it can.
-    EXPECT_GT(settled, measured / 10);
-    EXPECT_LT(settled, measured * 9 / 10);
-    std::printf("%zu of %zu bonds settled, the same in every instruction set\n", settled, measured);
+    // Some elastic, some not, so the test sees both sides of every condition it can.
+    EXPECT_GT(elastic, measured / 10);
+    EXPECT_LT(elastic, measured * 9 / 10);
+    std::printf("%zu of %zu bonds elastic, the same in every instruction set\n", elastic, measured);
 }
 
 namespace {
@@ -202,11 +200,11 @@ void appendBytes(std::vector<unsigned char>& bytes, const T& value)
     bytes.insert(bytes.end(), first, first + sizeof value);
 }
 
-SteppedState stepBlock(const Material& material, double speedMS, bool batchSettledBonds, int steps)
+SteppedState stepBlock(const Material& material, double speedMS, bool batchElasticBonds, int steps)
 {
     const Body block = test::boxBody(12, 12, 12, 0.01, material.densityKgM3, Eigen::Vector3d(0.0, 0.0, 0.06));
     Lattice lattice = Lattice::fromBody(block, material, test::groundAtZero());
-    lattice.batchSettledBonds(batchSettledBonds);
+    lattice.batchElasticBonds(batchElasticBonds);
     std::mt19937 random(3);
     std::normal_distribution<double> velocity(0.0, speedMS);
     for (Eigen::Vector3d& v : lattice.state.velocityMS) v = Eigen::Vector3d(velocity(random), velocity(random), velocity(random));
@@ -231,12 +229,12 @@ SteppedState stepBlock(const Material& material, double speedMS, bool batchSettl
 
 }  // namespace
 
-TEST(LatticeBatches, SettledBondsEndEachStepAsTheOneBondPathLeavesThem)
+TEST(LatticeBatches, BondsMeasuredAsElasticEndEachStepAsTheOneBondPathLeavesThem)
 {
     // Concrete crushes; masonry has two strength classes; wood's shear is not isotropic, so
     // its bonds along the grain take the one-bond path; glass snaps at its peak. Slow, the
     // bonds stay elastic; fast, they crack and crush, and the batches must hand each bond to
-    // the one-bond path in the steps its damage grows, and take it back, damaged, after.
+    // the one-bond path the step its damage would start to grow.
     size_t broken = 0, crushed = 0;
     for (const char* name : {"concrete", "brick-masonry", "wood", "glass"})
         for (const double speedMS : {0.05, 2.0}) {

@@ -1,14 +1,13 @@
-// A bond's damage, force terms and failure index, written once for one bond (T = double: the
-// bond pass's Lattice::measureBond) and for a batch of bonds side by side (T = an xsimd batch of
-// doubles: the bonds whose damage does not grow in the step, BondStrainBatchImpl.h), so both
-// round alike, bit for bit (issue 49). Like BondStrainKernel.h: no Eigen, and an unnamed namespace,
+// A bond's elastic terms and failure index, written once for one bond (T = double: the bond
+// pass's Lattice::measureBond) and for a batch of bonds side by side (T = an xsimd batch of
+// doubles: the bonds that stay on their elastic line, BondStrainBatchImpl.h), so both round
+// alike, bit for bit (issue 49). Like BondStrainKernel.h: no Eigen, and an unnamed namespace,
 // since the batch translation units are compiled for wider instruction sets than the rest.
 #pragma once
 
 #include "BondStrainKernel.h"
 
 #include <cmath>
-#include <type_traits>
 
 namespace spall {
 namespace {
@@ -59,101 +58,6 @@ void subtractDashpot(const T& intact, double bulkViscosity, double dashpotPerVis
 {
     const T forceN = intact * T(bulkViscosity) * T(dashpotPerViscosityNSPerM) * openingRateMS;
     for (int i = 0; i < 3; ++i) forceOnHighN[i] = forceOnHighN[i] - forceN * along[i];
-}
-
-/// Damage on a linear softening line from u0 to uf at the driver κ: the secant stiffness
-/// (1 − D) κ / u0 = (uf − κ) / (uf − u0) (Bažant & Oh 1983's crack band, linear).
-template <typename T>
-T lineDamage(const T& kappa, const T& u0, const T& uf)
-{
-    // One bond: most are before their peak, and need no division.
-    if constexpr (std::is_same_v<T, double>)
-        if (kappa <= u0) return 0.0;
-    const T onLine = T(1.0) - (u0 / kappa) * (uf - kappa) / (uf - u0);
-    return selectLanes(kappa <= u0, T(0.0), selectLanes(kappa >= uf, T(1.0), onLine));
-}
-
-/// A bond's damage, 1 − (1 − D_t)(1 − D_c), from D_t (cracking) and D_c (crushing); without
-/// crushing exactly D_t (1 − (1 − D_t) need not round back to it).
-template <typename T>
-T combinedDamage(const T& cracked, const T& crushed)
-{
-    return selectLanes(crushed == T(0.0), cracked, T(1.0) - (T(1.0) - cracked) * (T(1.0) - crushed));
-}
-
-/// What a bond's laws give the force pass (Lattice::BondForceTerms and BondStretch).
-template <typename T>
-struct BondTerms {
-    T forceOnHighN[3], momentNm[3];
-    T effectiveStretchM, uncrushedStretchM, volumetricAreaPerArmM;
-};
-
-/// What the terms take from the bond's strain besides its frame, displacement and rotation.
-template <typename T>
-struct ArmState {
-    T along[3], lengthM, openingRateMS;
-};
-
-/// What the terms take from the bond's stiffness and strength: the springs and turns as
-/// elasticTerms takes them, its normal spring, and where crushing's softening line ends.
-template <typename T>
-struct TermConstants {
-    T springNPerM[3], turnNmPerRad[3], normalNPerM, crushingEndShorteningM;
-};
-
-/// A bond's terms at damage `damage` (D), of which crushing's is `crushed` (D_c), for a bond of
-/// rest length `spacingM` (Lattice::BondForceTerms, BondStretch): the springs and turns carry
-/// 1 − D of their stiffness; what cracking took still carries compression, as contact, along the
-/// line of centres while the cubes overlap (in the bond's frame it would push apart particles
-/// that slid past each other or turned over, which feeds energy into a shattered lattice); the
-/// crushed part's rubble carries again once squeezed past its softening line's end, k (D_c
-/// overlap − uf), growing with D_c from nothing so no force jumps in; the dashpot softens with
-/// the spring (1 − D opening, 1 − D_c closing: a crack carries no viscous stress). The stretch
-/// and the volumetric area take √(1 − D) opening and √(1 − D_c) closing, so the bond's
-/// volumetric share falls as its spring does.
-template <typename Frame, typename Vector, typename T>
-BondTerms<T> bondTerms(const Frame& frame, const Vector& displacementM, const Vector& rotationRad, const ArmState<T>& arm, const TermConstants<T>& k,
-                       const T& damage, const T& crushed, double spacingM, double bulkViscosity, double dashpotPerViscosityNSPerM)
-{
-    using std::sqrt;
-    BondTerms<T> out;
-    const T intact = T(1.0) - damage, uncrushed = T(1.0) - crushed;
-    elasticTerms(frame, displacementM, rotationRad, k.springNPerM, k.turnNmPerRad, intact, out.forceOnHighN, out.momentNm);
-    const T overlapM = T(spacingM) - arm.lengthM;
-    // Added only where they act (x + 0 would turn a −0 into +0).
-    const auto inContact = intact < uncrushed && overlapM > T(0.0);
-    const T contactN = (uncrushed - intact) * k.normalNPerM * overlapM;
-    const T rubbleM = crushed * overlapM - k.crushingEndShorteningM;
-    const auto onRubble = crushed > T(0.0) && rubbleM > T(0.0);
-    const T rubbleN = k.normalNPerM * rubbleM;
-    for (int i = 0; i < 3; ++i) {
-        out.forceOnHighN[i] = selectLanes(inContact, out.forceOnHighN[i] + contactN * arm.along[i], out.forceOnHighN[i]);
-        out.forceOnHighN[i] = selectLanes(onRubble, out.forceOnHighN[i] + rubbleN * arm.along[i], out.forceOnHighN[i]);
-    }
-    const auto opening = arm.lengthM > T(spacingM);
-    if (bulkViscosity > 0.0)
-        subtractDashpot(selectLanes(opening, intact, uncrushed), bulkViscosity, dashpotPerViscosityNSPerM, arm.openingRateMS, arm.along, out.forceOnHighN);
-    const T sqrtIntact = sqrt(intact), sqrtUncrushed = selectLanes(crushed == T(0.0), T(1.0), sqrt(uncrushed));
-    const T stretchM = arm.lengthM - T(spacingM);
-    out.uncrushedStretchM = selectLanes(opening, sqrtIntact * stretchM, stretchM);
-    out.effectiveStretchM = selectLanes(opening, out.uncrushedStretchM, sqrtUncrushed * out.uncrushedStretchM);
-    out.volumetricAreaPerArmM = selectLanes(opening, sqrtIntact, sqrtUncrushed) * T(spacingM) * T(spacingM) / arm.lengthM;
-    return out;
-}
-
-/// bondTerms at D = D_c = 0, without the terms that are then nothing (the same bits: 1 × x = x,
-/// √1 = 1, and no contact, rubble or softening).
-template <typename Frame, typename Vector, typename T>
-BondTerms<T> intactBondTerms(const Frame& frame, const Vector& displacementM, const Vector& rotationRad, const ArmState<T>& arm,
-                             const TermConstants<T>& k, double spacingM, double bulkViscosity, double dashpotPerViscosityNSPerM)
-{
-    BondTerms<T> out;
-    const T one(1.0);
-    elasticTerms(frame, displacementM, rotationRad, k.springNPerM, k.turnNmPerRad, one, out.forceOnHighN, out.momentNm);
-    if (bulkViscosity > 0.0) subtractDashpot(one, bulkViscosity, dashpotPerViscosityNSPerM, arm.openingRateMS, arm.along, out.forceOnHighN);
-    out.effectiveStretchM = out.uncrushedStretchM = arm.lengthM - T(spacingM);
-    out.volumetricAreaPerArmM = T(spacingM * spacingM) / arm.lengthM;
-    return out;
 }
 
 /// The shear index of a bond whose shear springs are equal across its axis `a`: k_s |d across a| /

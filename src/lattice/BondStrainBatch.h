@@ -1,7 +1,7 @@
 // The bond pass's strain measurement for a run of consecutive bonds at once, in batches as wide
 // as the machine's vector registers (xsimd; AVX-512, AVX2 or SSE2, chosen at run time), the
-// same formulas as one bond's (BondStrainKernel.h), bit for bit; and, for the bonds whose damage
-// does not grow in the step, their laws' terms too (BondLawKernel.h).
+// same formulas as one bond's (BondStrainKernel.h), bit for bit; and, for the bonds that stay on
+// their elastic line, their laws' terms too (BondLawKernel.h).
 #pragma once
 
 #include <cstddef>
@@ -19,11 +19,8 @@ struct BondLawRow {
     /// LatticeModel::FailureTerms, the shear index's the same across both directions; its
     /// peak stretch is also the softening line's (Strength::peakStretchM).
     double peakStretchM, tensionIndexPerM, shearIndexPerM, normalIndexPerM, indexPerPa, frictionCoefficient;
-    /// The softening line's end (Strength::zeroTractionStretchM).
-    double zeroTractionStretchM;
-    /// Crushing (Strength): fc (0: never), its softening line's peak and end shortening, d
-    /// (LatticeStiffness::normalModulusPa).
-    double compressiveStrengthPa, crushingPeakShorteningM, crushingEndShorteningM, normalModulusPa;
+    /// Crushing (Strength): fc (0: never), its peak shortening, d (LatticeStiffness::normalModulusPa).
+    double compressiveStrengthPa, crushingPeakShorteningM, normalModulusPa;
     /// 1 where a batch may measure the class's bonds along the axis (shear isotropic across
     /// the axis), else 0: they are measured one at a time.
     double batches;
@@ -32,7 +29,7 @@ struct BondLawRow {
 /// Where BondHistory's fields lie among its doubles (LatticeBonds.cpp checks them).
 enum BondHistoryWord : size_t { kStrengthScaleWord = 0, kMaxEquivalentStretchWord = 1, kStrengthFactorWord = 2, kMaxCrushingWord = 5, kHistoryWords = 6 };
 
-/// What the settled bonds' laws read besides the strains (LatticeBonds.cpp's measureBonds):
+/// What the elastic bonds' laws read besides the strains (LatticeBonds.cpp's measureBonds):
 /// the rows, the bonds' histories, the particles' volumetric stress shares (3 a particle) and,
 /// for a material that crushes, their uncrushed λ tr ε (1 a particle; else null) (unit: Pa).
 struct BondLawInputs {
@@ -52,7 +49,7 @@ struct BondStrainInputs {
     const double* quaternion = nullptr;
     const uint32_t* bondWords = nullptr;
     double spacingM = 0.0;
-    /// Given, the batches also find the bonds that settle (BondStrainRun::settled).
+    /// Given, the batches also find the bonds that stay on their elastic line (BondStrainRun::elastic).
     const BondLawInputs* laws = nullptr;
 };
 
@@ -68,17 +65,15 @@ struct BondStrainRun {
     alignas(64) double openingRateMS[kCapacity];
     /// 1 where the rotation's series held; 0 where the bond must be measured alone.
     alignas(64) double smallTurn[kCapacity];
-    /// With BondStrainInputs::laws: 1 where a bond settles this step, its damage staying what
-    /// it was, so its terms below are all its laws give (Lattice::measureBond's): its turn small,
-    /// not a pin, its class batched, and neither its failure index nor its crushing past the
-    /// largest so far; else 0.
-    alignas(64) double settled[kCapacity];
-    /// Lattice::BondForceTerms and BondStretch (units: N, N m, m, m, m).
-    alignas(64) double forceOnHighN[3][kCapacity];
-    alignas(64) double bendingMomentNm[3][kCapacity];
-    alignas(64) double effectiveStretchM[kCapacity];
-    alignas(64) double uncrushedStretchM[kCapacity];
-    alignas(64) double volumetricAreaPerArmM[kCapacity];
+    /// With BondStrainInputs::laws: 1 where a bond stays on its elastic line this step, so its
+    /// terms below are all its laws give (Lattice::measureBond's for an undamaged bond): its turn
+    /// small, not a pin, its class batched, its cracking and crushing damage 0, and neither its
+    /// failure index nor its crushing past the largest so far; else 0.
+    alignas(64) double elastic[kCapacity];
+    alignas(64) double forceOnHighN[3][kCapacity];     ///< its spring and dashpot (unit: N)
+    alignas(64) double bendingMomentNm[3][kCapacity];  ///< on high (unit: N m)
+    alignas(64) double stretchM[kCapacity];            ///< its length less h (unit: m)
+    alignas(64) double volumetricAreaPerArmM[kCapacity];  ///< h² / length (unit: m)
 };
 
 /// Measures bonds first … first + count − 1 (count ≤ kCapacity) into `out`, lane i for bond

@@ -76,57 +76,35 @@ Batch byAxis(const Batch& axis, const Batch& c, const Batch& d, const Batch& e)
     return xsimd::select(axis == Batch(0.0), c, xsimd::select(axis == Batch(1.0), d, e));
 }
 
-/// A batch's bonds' damage before the step (Lattice's bond_laws::bondDamage under the softening
-/// law): all of it, and crushing's; `intact` where every lane's is 0.
-template <class Batch>
-struct LaneDamage {
-    Batch damage, crushed;
-    bool intact = false;
-};
-
-/// Which of a batch's bonds settle this step (BondStrainRun::settled): neither their failure
-/// index (Lattice::equivalentStretchM, at their damage so far) nor their crushing
-/// (crushingShorteningM, where even unconfined it passes the largest so far) grows, so their
-/// damage stays what it was; `damage` is that damage.
+/// Which of a batch's bonds stay on their elastic line this step (BondStrainRun::elastic): as
+/// Lattice::measureBond finds them undamaged, with neither their failure index (equivalentStretchM)
+/// nor their crushing (crushingShorteningM, where even unconfined it passes the largest so far)
+/// growing.
 template <class Arch, size_t width>
-auto settles(const BondLawInputs& laws, const LaneOffsets<width>& at, const bond_strain::Strain<xsimd::batch<double, Arch>>& s, double spacingM,
-             LaneDamage<xsimd::batch<double, Arch>>& damage)
+auto staysElastic(const BondLawInputs& laws, const LaneOffsets<width>& at, const bond_strain::Strain<xsimd::batch<double, Arch>>& s, double spacingM)
 {
     using Batch = xsimd::batch<double, Arch>;
     const Batch axis = Batch::load_aligned(at.axis);
     const auto field = [&](size_t offsetInRow) { return rowField<Arch>(laws, at, offsetInRow); };
     const auto history = [&](size_t word) { return gatherDoubles<Arch>(laws.history + word, at.history); };
-    const Batch peakStretchM = field(offsetof(BondLawRow, peakStretchM));
-    const Batch scale = history(kStrengthScaleWord), maxEquivalentM = history(kMaxEquivalentStretchWord);
-    const Batch maxCrushingM = history(kMaxCrushingWord), crushingPeakM = field(offsetof(BondLawRow, crushingPeakShorteningM));
-    // The softening line's ends for the bond's strength scale and rate factor.
-    const Batch lineScale = scale * history(kStrengthFactorWord), u0 = lineScale * peakStretchM;
-    // Most batches are wholly undamaged, their drivers not past their lines' peaks: D = 0
-    // without the lines' divisions.
-    const Batch crushingU0 = scale * crushingPeakM;
-    damage.intact = xsimd::all(maxEquivalentM <= u0 && (maxCrushingM <= Batch(0.0) || maxCrushingM <= crushingU0));
-    if (damage.intact) {
-        damage.damage = damage.crushed = Batch(0.0);
-    } else {
-        // A bond whose voxels are too large to soften breaks at its peak.
-        const Batch zeroTractionM = field(offsetof(BondLawRow, zeroTractionStretchM));
-        const Batch cracked = xsimd::select(maxEquivalentM > u0 && zeroTractionM <= peakStretchM, Batch(1.0),
-                                            bond_law::lineDamage(maxEquivalentM, u0, zeroTractionM / lineScale));
-        damage.crushed = xsimd::select(maxCrushingM <= Batch(0.0), Batch(0.0),
-                                       bond_law::lineDamage(maxCrushingM, crushingU0, field(offsetof(BondLawRow, crushingEndShorteningM)) / scale));
-        damage.damage = bond_law::combinedDamage(cracked, damage.crushed);
-    }
     const Batch normalM = byAxis(axis, s.displacementM[0], s.displacementM[1], s.displacementM[2]);
+    const Batch one(1.0);
     const Batch stretchM = (s.lengthM - Batch(spacingM)) +
-                           bond_law::bendingStretchM(spacingM, Batch(1.0) - damage.damage, byAxis(axis, s.rotationRad[1], s.rotationRad[2], s.rotationRad[0]),
+                           bond_law::bendingStretchM(spacingM, one, byAxis(axis, s.rotationRad[1], s.rotationRad[2], s.rotationRad[0]),
                                                      byAxis(axis, s.rotationRad[2], s.rotationRad[0], s.rotationRad[1]));
     const Batch shearIndex = bond_law::isotropicShearIndex(field(offsetof(BondLawRow, shearIndexPerM)), s.displacementM, normalM);
     const Batch sharesPa = gatherDoubles<Arch>(laws.volumetricStressSharePa, at.lowShare) + gatherDoubles<Arch>(laws.volumetricStressSharePa, at.highShare);
+    const Batch peakStretchM = field(offsetof(BondLawRow, peakStretchM));
     const bond_law::FailureTerms<Batch> terms{peakStretchM, field(offsetof(BondLawRow, tensionIndexPerM)), field(offsetof(BondLawRow, normalIndexPerM)),
                                               field(offsetof(BondLawRow, indexPerPa)), field(offsetof(BondLawRow, frictionCoefficient))};
     const Batch equivalentM = xsimd::select(stretchM >= Batch(0.0), bond_law::failureIndexInTension(stretchM, shearIndex, terms),
                                             bond_law::failureIndexInCompression(normalM, shearIndex, sharesPa, terms)) *
                               peakStretchM;
+    const Batch scale = history(kStrengthScaleWord), maxEquivalentM = history(kMaxEquivalentStretchWord);
+    const Batch maxCrushingM = history(kMaxCrushingWord), crushingPeakM = field(offsetof(BondLawRow, crushingPeakShorteningM));
+    // Cracking's and crushing's damage 0: the largest driver so far not past its line's peak.
+    const auto undamaged = maxEquivalentM <= (scale * history(kStrengthFactorWord)) * peakStretchM &&
+                           (maxCrushingM <= Batch(0.0) || maxCrushingM <= scale * crushingPeakM);
     typename Batch::batch_bool_type crushingGrows(false);
     if (laws.uncrushedLambdaTracePa) {
         const Batch fcPa = field(offsetof(BondLawRow, compressiveStrengthPa));
@@ -134,38 +112,35 @@ auto settles(const BondLawInputs& laws, const LaneOffsets<width>& at, const bond
         const Batch compressionPa = (field(offsetof(BondLawRow, normalModulusPa)) * normalM / Batch(spacingM) + Batch(0.5) * lambdaTracesPa) * Batch(-1.0);
         crushingGrows = fcPa > Batch(0.0) && normalM < Batch(0.0) && compressionPa > Batch(0.0) && compressionPa / fcPa * crushingPeakM > maxCrushingM;
     }
-    return field(offsetof(BondLawRow, batches)) != Batch(0.0) && Batch::load_aligned(at.pinned) == Batch(0.0) && equivalentM <= maxEquivalentM &&
-           !crushingGrows;
+    return field(offsetof(BondLawRow, batches)) != Batch(0.0) && Batch::load_aligned(at.pinned) == Batch(0.0) && undamaged &&
+           equivalentM <= maxEquivalentM && !crushingGrows;
 }
 
-/// The terms of a batch's bonds at their damage (Lattice::measureBond's), lanes lane0 … of `out`.
+/// The terms of a batch's bonds as undamaged bonds (Lattice::measureBond's with D = 0), lanes
+/// lane0 … of `out`.
 template <class Arch, size_t width>
-void storeTerms(const BondLawInputs& laws, const LaneOffsets<width>& at, const bond_strain::Strain<xsimd::batch<double, Arch>>& s, double spacingM,
-                const LaneDamage<xsimd::batch<double, Arch>>& damage, size_t lane0, BondStrainRun& out)
+void storeElasticTerms(const BondLawInputs& laws, const LaneOffsets<width>& at, const bond_strain::Strain<xsimd::batch<double, Arch>>& s,
+                       double spacingM, size_t lane0, BondStrainRun& out)
 {
     using Batch = xsimd::batch<double, Arch>;
-    bond_law::TermConstants<Batch> k;
-    for (size_t i = 0; i < 3; ++i) {
-        k.springNPerM[i] = rowField<Arch>(laws, at, offsetof(BondLawRow, springNPerM) + i * sizeof(double));
-        k.turnNmPerRad[i] = rowField<Arch>(laws, at, offsetof(BondLawRow, turnNmPerRad) + i * sizeof(double));
+    Batch springNPerM[3], turnNmPerRad[3], forceOnHighN[3], momentNm[3];
+    for (size_t k = 0; k < 3; ++k) {
+        springNPerM[k] = rowField<Arch>(laws, at, offsetof(BondLawRow, springNPerM) + k * sizeof(double));
+        turnNmPerRad[k] = rowField<Arch>(laws, at, offsetof(BondLawRow, turnNmPerRad) + k * sizeof(double));
     }
-    k.normalNPerM = byAxis(Batch::load_aligned(at.axis), k.springNPerM[0], k.springNPerM[1], k.springNPerM[2]);
-    if (!damage.intact) k.crushingEndShorteningM = rowField<Arch>(laws, at, offsetof(BondLawRow, crushingEndShorteningM));
-    const Batch inverseLength = Batch(1.0) / s.lengthM;
-    const bond_law::ArmState<Batch> arm{{s.armM[0] * inverseLength, s.armM[1] * inverseLength, s.armM[2] * inverseLength}, s.lengthM, s.openingRateMS};
-    bond_law::BondTerms<Batch> terms;
-    if (damage.intact)
-        terms = bond_law::intactBondTerms(s.frame, s.displacementM, s.rotationRad, arm, k, spacingM, laws.bulkViscosity, laws.dashpotPerViscosityNSPerM);
-    else
-        terms = bond_law::bondTerms(s.frame, s.displacementM, s.rotationRad, arm, k, damage.damage, damage.crushed, spacingM, laws.bulkViscosity,
-                                    laws.dashpotPerViscosityNSPerM);
-    for (int i = 0; i < 3; ++i) {
-        terms.forceOnHighN[i].store_aligned(&out.forceOnHighN[i][lane0]);
-        terms.momentNm[i].store_aligned(&out.bendingMomentNm[i][lane0]);
+    const Batch one(1.0);
+    bond_law::elasticTerms(s.frame, s.displacementM, s.rotationRad, springNPerM, turnNmPerRad, one, forceOnHighN, momentNm);
+    if (laws.bulkViscosity > 0.0) {
+        const Batch inverseLength = one / s.lengthM;
+        const Batch along[3] = {s.armM[0] * inverseLength, s.armM[1] * inverseLength, s.armM[2] * inverseLength};
+        bond_law::subtractDashpot(one, laws.bulkViscosity, laws.dashpotPerViscosityNSPerM, s.openingRateMS, along, forceOnHighN);
     }
-    terms.effectiveStretchM.store_aligned(&out.effectiveStretchM[lane0]);
-    terms.uncrushedStretchM.store_aligned(&out.uncrushedStretchM[lane0]);
-    terms.volumetricAreaPerArmM.store_aligned(&out.volumetricAreaPerArmM[lane0]);
+    for (int k = 0; k < 3; ++k) {
+        forceOnHighN[k].store_aligned(&out.forceOnHighN[k][lane0]);
+        momentNm[k].store_aligned(&out.bendingMomentNm[k][lane0]);
+    }
+    (s.lengthM - Batch(spacingM)).store_aligned(&out.stretchM[lane0]);
+    (Batch(spacingM * spacingM) / s.lengthM).store_aligned(&out.volumetricAreaPerArmM[lane0]);
 }
 
 template <class Arch>
@@ -197,10 +172,9 @@ void MeasureBondStrains::operator()(Arch, const BondStrainInputs& in, size_t fir
         s.openingRateMS.store_aligned(&out.openingRateMS[lane0]);
         xsimd::select(small, Batch(1.0), Batch(0.0)).store_aligned(&out.smallTurn[lane0]);
         if (!in.laws) continue;
-        LaneDamage<Batch> damage;
-        const auto settled = small && settles<Arch>(*in.laws, at, s, in.spacingM, damage);
-        xsimd::select(settled, Batch(1.0), Batch(0.0)).store_aligned(&out.settled[lane0]);
-        if (xsimd::any(settled)) storeTerms<Arch>(*in.laws, at, s, in.spacingM, damage, lane0, out);
+        const auto elastic = small && staysElastic<Arch>(*in.laws, at, s, in.spacingM);
+        xsimd::select(elastic, Batch(1.0), Batch(0.0)).store_aligned(&out.elastic[lane0]);
+        if (xsimd::any(elastic)) storeElasticTerms<Arch>(*in.laws, at, s, in.spacingM, lane0, out);
     }
 }
 

@@ -18,10 +18,13 @@ namespace spall {
 
 namespace bond_laws {
 
-/// Damage on a linear softening line from u0 to uf at the driver κ (BondLawKernel.h).
+/// Damage on a linear softening line from u0 to uf at the driver κ: the secant stiffness
+/// (1 − D) κ / u0 = (uf − κ) / (uf − u0) (Bažant & Oh 1983's crack band, linear).
 inline double lineDamage(double kappa, double u0, double uf)
 {
-    return bond_law::lineDamage(kappa, u0, uf);
+    if (kappa <= u0) return 0.0;
+    if (kappa >= uf) return 1.0;
+    return 1.0 - (u0 / kappa) * (uf - kappa) / (uf - u0);
 }
 
 /// The softening line's peak stretch u0 and the stretch uf where it carries nothing, for the
@@ -67,7 +70,9 @@ inline double crackingDamage(const BondHistory& history, const LatticeStiffness:
 /// Cracking and crushing together, 1 − (1 − D_t)(1 − D_c).
 inline double bondDamage(const BondHistory& history, const LatticeStiffness::Strength& strength, LatticeDamageLaw law)
 {
-    return bond_law::combinedDamage(crackingDamage(history, strength, law), crushingDamage(history, strength));
+    const double cracked = crackingDamage(history, strength, law), crushed = crushingDamage(history, strength);
+    // Without crushing, exactly D_t (1 − (1 − D_t) need not round back to it).
+    return crushed == 0.0 ? cracked : 1.0 - (1.0 - cracked) * (1.0 - crushed);
 }
 
 /// The shear traction over the shear strength: |(k_b d_b, k_c d_c)| / (h² c) across axis a.

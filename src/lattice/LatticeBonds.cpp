@@ -88,19 +88,10 @@ void storeLargeTurn(const Eigen::Quaterniond& qa, const Eigen::Quaterniond& qb, 
     for (int r = 0; r < 3; ++r) run.rotationRad[r][lane] = turnRad[r];
 }
 
-/// What a bond's terms take from its stiffness and strength (bond_law::bondTerms).
-bond_law::TermConstants<double> termConstants(const LatticeModel& model, const LatticeBond& bond)
+/// force += magnitude × along, element by element.
+void addAlong(double magnitudeN, const double (&along)[3], double (&forceN)[3])
 {
-    const LatticeStiffness& k = model.stiffness;
-    const int a = bond.axis;
-    bond_law::TermConstants<double> constants;
-    for (int i = 0; i < 3; ++i) {
-        constants.springNPerM[i] = i == a ? k.normalNPerM[size_t(a)] : k.shearNPerM[size_t(a)][i];
-        constants.turnNmPerRad[i] = i == a ? k.twistingNmPerRad[size_t(a)] : k.bendingNmPerRad[size_t(a)];
-    }
-    constants.normalNPerM = k.normalNPerM[size_t(a)];
-    constants.crushingEndShorteningM = k.strength[bond.strengthClass].crushingEndShorteningM;
-    return constants;
+    for (int i = 0; i < 3; ++i) forceN[i] += magnitudeN * along[i];
 }
 
 /// The rows the batches read for each strength class and axis (BondLawRow).
@@ -120,9 +111,7 @@ std::array<BondLawRow, 6> bondLawRows(const LatticeModel& model)
             const double shearB = terms.shearIndexPerM[int((a + 1) % 3)], shearC = terms.shearIndexPerM[int((a + 2) % 3)];
             row.peakStretchM = terms.peakStretchM, row.tensionIndexPerM = terms.tensionIndexPerM, row.shearIndexPerM = shearB;
             row.normalIndexPerM = terms.normalIndexPerM, row.indexPerPa = terms.indexPerPa, row.frictionCoefficient = terms.frictionCoefficient;
-            row.zeroTractionStretchM = strength.zeroTractionStretchM;
             row.compressiveStrengthPa = strength.compressiveStrengthPa, row.crushingPeakShorteningM = strength.crushingPeakShorteningM;
-            row.crushingEndShorteningM = strength.crushingEndShorteningM;
             row.normalModulusPa = k.normalModulusPa[a];
             // One peak for the index and the softening line, and one shear index across the axis.
             row.batches = shearB == shearC && terms.peakStretchM == strength.peakStretchM ? 1.0 : 0.0;
@@ -147,13 +136,13 @@ uint8_t Lattice::measureBonds(double dtS, bool growDamage)
     if (bondCount() == 0) return 0;
     BondStrainInputs inputs{state.positionM.front().data(), state.velocityMS.front().data(), state.orientation.front().coeffs().data(),
                             reinterpret_cast<const uint32_t*>(mModel.bonds.data()), mModel.spacingM};
-    // The batches find the bonds that settle where a step can leave a bond's damage as it was:
-    // on the softening line (Davison–Stevens grows it every step).
+    // The batches find the bonds that stay elastic where that is all a step can do to them:
+    // damage grows on the softening line (Davison–Stevens grows it every step).
     const std::array<BondLawRow, 6> rows = bondLawRows(mModel);
     const BondLawInputs laws{rows.data(), &state.bondHistory.front().strengthScale, mVolumetricStressShare.front().data(),
                              mUncrushedLambdaTracePa.empty() ? nullptr : mUncrushedLambdaTracePa.data(), mModel.bulkViscosity,
                              mModel.dashpotPerViscosityNSPerM};
-    if (mBatchesSettledBonds && growDamage && mModel.damageLaw == LatticeDamageLaw::Softening && mVolumetricStressShare.size() == particleCount())
+    if (mBatchesElasticBonds && growDamage && mModel.damageLaw == LatticeDamageLaw::Softening && mVolumetricStressShare.size() == particleCount())
         inputs.laws = &laws;
     constexpr size_t capacity = BondStrainRun::kCapacity;
     std::atomic<uint8_t> events{0};
@@ -171,8 +160,8 @@ uint8_t Lattice::measureBonds(double dtS, bool growDamage)
         }
         uint8_t runEvents = 0;
         for (size_t lane = 0; lane < count; ++lane) {
-            if (inputs.laws && run.settled[lane] != 0.0)
-                takeSettledTerms(first + lane, run, lane);
+            if (inputs.laws && run.elastic[lane] != 0.0)
+                takeElasticTerms(first + lane, run, lane);
             else
                 runEvents |= measureBond(first + lane, run, lane, dtS, growDamage);
         }
@@ -181,13 +170,12 @@ uint8_t Lattice::measureBonds(double dtS, bool growDamage)
     return events.load();
 }
 
-void Lattice::takeSettledTerms(size_t b, const BondStrainRun& run, size_t lane)
+void Lattice::takeElasticTerms(size_t b, const BondStrainRun& run, size_t lane)
 {
     BondForceTerms& terms = mBondTerms[b];
     for (int k = 0; k < 3; ++k) terms.forceOnHighN[k] = run.forceOnHighN[k][lane], terms.bendingMomentNm[k] = run.bendingMomentNm[k][lane];
     terms.volumetricAreaPerArmM = run.volumetricAreaPerArmM[lane];
-    mBondStretch[b].effectiveM = run.effectiveStretchM[lane];
-    mBondStretch[b].uncrushedM = run.uncrushedStretchM[lane];
+    mBondStretch[b].effectiveM = mBondStretch[b].uncrushedM = run.stretchM[lane];
 }
 
 uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, double dtS, bool growDamage)
@@ -208,31 +196,49 @@ uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, do
     if (growDamage && growBondDamage(b, equivalentStretchM(b, s, lengthM, damage), crushingShorteningM(b, s.displacementM[a]),
                                      std::abs(openingRateMS) / mModel.spacingM, dtS))
         damage = bond_laws::bondDamage(history, strength, mModel.damageLaw);
+    // Compression carries what crushing left (a crack in tension or shear closes on itself).
+    const double crushed = bond_laws::crushingDamage(history, strength), uncrushed = 1.0 - crushed;
     const bool broke = damage >= 1.0 && damageBefore < 1.0;
     // What a pin held is lost where it fails (the glazing's own dissipation).
     const bool snapped = broke && mModel.damageLaw == LatticeDamageLaw::Softening && bond_laws::snapsAtPeak(strength) && !bond.pinned &&
                          bond_laws::crackingDamage(history, strength, mModel.damageLaw) >= 1.0;
     if (snapped) mSnapped[b] = 1;
+    const double intact = 1.0 - damage, sqrtIntact = std::sqrt(intact);
+    const bool opening = lengthM > mModel.spacingM;
+    double forceOnHighN[3], momentNm[3], springNPerM[3], turnNmPerRad[3];
+    for (int i = 0; i < 3; ++i) {
+        springNPerM[i] = i == a ? k.normalNPerM[a] : k.shearNPerM[a][i];
+        turnNmPerRad[i] = i == a ? k.twistingNmPerRad[a] : k.bendingNmPerRad[a];
+    }
+    bond_law::elasticTerms(LaneFrame{run.frame, lane}, LaneVector{run.displacementM, lane}, LaneVector{run.rotationRad, lane}, springNPerM,
+                           turnNmPerRad, intact, forceOnHighN, momentNm);
     if (bond.pinned) {
         // Across its axis only: no contact, dashpot, moment or volumetric share.
-        const bond_law::TermConstants<double> constants = termConstants(mModel, bond);
-        double forceOnHighN[3], momentNm[3];
-        bond_law::elasticTerms(LaneFrame{run.frame, lane}, LaneVector{run.displacementM, lane}, LaneVector{run.rotationRad, lane}, constants.springNPerM,
-                               constants.turnNmPerRad, 1.0 - damage, forceOnHighN, momentNm);
         terms.forceOnHighN = Eigen::Vector3d(forceOnHighN[0], forceOnHighN[1], forceOnHighN[2]);
         terms.bendingMomentNm.setZero();
         terms.volumetricAreaPerArmM = 0.0;
         mBondStretch[b] = BondStretch();
         return uint8_t(broke ? kBroke : 0);
     }
-    const bond_law::BondTerms<double> measured =
-        bond_law::bondTerms(LaneFrame{run.frame, lane}, LaneVector{run.displacementM, lane}, LaneVector{run.rotationRad, lane},
-                            bond_law::ArmState<double>{{along[0], along[1], along[2]}, lengthM, openingRateMS}, termConstants(mModel, bond),
-                            damage, bond_laws::crushingDamage(history, strength), mModel.spacingM, mModel.bulkViscosity, mModel.dashpotPerViscosityNSPerM);
-    terms.forceOnHighN = Eigen::Vector3d(measured.forceOnHighN[0], measured.forceOnHighN[1], measured.forceOnHighN[2]);
-    terms.bendingMomentNm = Eigen::Vector3d(measured.momentNm[0], measured.momentNm[1], measured.momentNm[2]);
-    terms.volumetricAreaPerArmM = measured.volumetricAreaPerArmM;
-    mBondStretch[b] = {measured.effectiveStretchM, measured.uncrushedStretchM};
+    // What cracking took still carries compression, as contact: along the line of centres, and
+    // only while the two cubes overlap. (In the bond's frame it would push apart particles that
+    // have slid past each other or turned over, which feeds energy into a shattered lattice.)
+    const double overlapM = mModel.spacingM - lengthM;
+    if (intact < uncrushed && overlapM > 0.0) addAlong((uncrushed - intact) * k.normalNPerM[a] * overlapM, along, forceOnHighN);
+    // The crushed part's rubble carries again once squeezed past the softening line's end:
+    // k (D_c overlap − uf), which grows with D_c from nothing, so no force jumps in.
+    const double rubbleM = crushed * overlapM - strength.crushingEndShorteningM;
+    if (crushed > 0.0 && rubbleM > 0.0) addAlong(k.normalNPerM[a] * rubbleM, along, forceOnHighN);
+    // A crack opening carries no viscous stress either: the dashpot softens with the spring.
+    if (mModel.bulkViscosity > 0.0)
+        bond_law::subtractDashpot(opening ? intact : uncrushed, mModel.bulkViscosity, mModel.dashpotPerViscosityNSPerM, openingRateMS, along, forceOnHighN);
+    terms.forceOnHighN = Eigen::Vector3d(forceOnHighN[0], forceOnHighN[1], forceOnHighN[2]);
+    terms.bendingMomentNm = Eigen::Vector3d(momentNm[0], momentNm[1], momentNm[2]);
+    const double sqrtUncrushed = crushed == 0.0 ? 1.0 : std::sqrt(uncrushed);
+    BondStretch& stretch = mBondStretch[b];
+    stretch.uncrushedM = opening ? sqrtIntact * (lengthM - mModel.spacingM) : lengthM - mModel.spacingM;
+    stretch.effectiveM = opening ? stretch.uncrushedM : sqrtUncrushed * stretch.uncrushedM;
+    terms.volumetricAreaPerArmM = (opening ? sqrtIntact : sqrtUncrushed) * mModel.spacingM * mModel.spacingM / lengthM;
     return uint8_t((snapped ? kSnapped : 0) | (broke ? kBroke : 0));
 }
 

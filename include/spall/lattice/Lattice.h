@@ -118,10 +118,10 @@ public:
     double surfaceStiffnessNPerM() const;
     /// What it was built with (fromBody), unchanged since.
     const LatticeModel& model() const { return mModel; }
-    /// Whether the bond pass measures the bonds whose damage does not grow in a step side by side
-    /// (BondStrainRun::settled; on unless turned off). Off, every bond takes the one-bond path
+    /// Whether the bond pass measures the bonds that stay on their elastic line side by side
+    /// (BondStrainRun::elastic; on unless turned off). Off, every bond takes the one-bond path
     /// (measureBond), which gives the same results bit for bit: a test compares them.
-    void batchSettledBonds(bool on) { mBatchesSettledBonds = on; }
+    void batchElasticBonds(bool on) { mBatchesElasticBonds = on; }
     /// Whether a support bears on its voxel: while they touch, its bond broken or not (a floor
     /// rests on a cracked head), the voxel within a quarter voxel of where the support held it.
     bool bears(const LatticeModel::BearingLoad& load) const;
@@ -233,9 +233,9 @@ private:
     /// One bond's damage and force terms, its strain lane `lane` of `run`; writes only the bond's
     /// own entries, so bonds measure in parallel. Returns what happened to it.
     uint8_t measureBond(size_t b, const BondStrainRun& run, size_t lane, double dtS, bool growDamage);
-    /// A bond's terms as the batch measured them, for a bond that settled.
-    void takeSettledTerms(size_t b, const BondStrainRun& run, size_t lane);
-    bool mBatchesSettledBonds = true;
+    /// A bond's terms as the batch measured them, for a bond that stays on its elastic line.
+    void takeElasticTerms(size_t b, const BondStrainRun& run, size_t lane);
+    bool mBatchesElasticBonds = true;
     /// What measureBond reports: the bond snapped at its peak (releaseSnapEnergies), or broke
     /// by any law (the pieces may have changed).
     static constexpr uint8_t kSnapped = 1, kBroke = 2;
