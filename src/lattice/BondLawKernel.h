@@ -70,10 +70,11 @@ T isotropicShearIndex(const T& shearIndexPerM, const T (&displacementM)[3], cons
     return shearIndexPerM * sqrt(positivePart(squaredNorm - normalM * normalM));
 }
 
-/// What the failure index takes from a bond's strength class and axis (LatticeModel::FailureTerms).
+/// What the failure index takes from a bond's strength class and axis (LatticeModel::FailureTerms;
+/// the caller scales the index by its peak stretch).
 template <typename T>
 struct FailureTerms {
-    T peakStretchM, tensionIndexPerM, normalIndexPerM, indexPerPa, frictionCoefficient;
+    T tensionIndexPerM, normalIndexPerM, indexPerPa, frictionCoefficient;
 };
 
 /// The failure index (Lattice::equivalentStretchM says why each term) in tension, the stretch

@@ -10,7 +10,8 @@
 namespace spall {
 
 /// What the laws of a bond take from its strength class and axis: one row per class and axis
-/// (class × 3 + axis), all doubles, so a batch gathers a field by one index.
+/// (class × 3 + axis), all doubles, so a batch gathers a field by one index. (Read only for the
+/// rows that batch.)
 struct BondLawRow {
     /// Per component of the bond's frame: the normal spring along its axis, the shear springs
     /// across it (unit: N/m); the twisting stiffness about its axis, the bending about the
@@ -25,6 +26,8 @@ struct BondLawRow {
     /// the axis), else 0: they are measured one at a time.
     double batches;
 };
+
+static_assert(sizeof(BondLawRow) == 16 * sizeof(double), "a row is doubles alone");
 
 /// Where BondHistory's fields lie among its doubles (LatticeBonds.cpp checks them).
 enum BondHistoryWord : size_t { kStrengthScaleWord = 0, kMaxEquivalentStretchWord = 1, kStrengthFactorWord = 2, kMaxCrushingWord = 5, kHistoryWords = 6 };

@@ -95,7 +95,7 @@ auto staysElastic(const BondLawInputs& laws, const LaneOffsets<width>& at, const
     const Batch shearIndex = bond_law::isotropicShearIndex(field(offsetof(BondLawRow, shearIndexPerM)), s.displacementM, normalM);
     const Batch sharesPa = gatherDoubles<Arch>(laws.volumetricStressSharePa, at.lowShare) + gatherDoubles<Arch>(laws.volumetricStressSharePa, at.highShare);
     const Batch peakStretchM = field(offsetof(BondLawRow, peakStretchM));
-    const bond_law::FailureTerms<Batch> terms{peakStretchM, field(offsetof(BondLawRow, tensionIndexPerM)), field(offsetof(BondLawRow, normalIndexPerM)),
+    const bond_law::FailureTerms<Batch> terms{field(offsetof(BondLawRow, tensionIndexPerM)), field(offsetof(BondLawRow, normalIndexPerM)),
                                               field(offsetof(BondLawRow, indexPerPa)), field(offsetof(BondLawRow, frictionCoefficient))};
     const Batch equivalentM = xsimd::select(stretchM >= Batch(0.0), bond_law::failureIndexInTension(stretchM, shearIndex, terms),
                                             bond_law::failureIndexInCompression(normalM, shearIndex, sharesPa, terms)) *

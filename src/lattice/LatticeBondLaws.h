@@ -200,8 +200,7 @@ inline double Lattice::equivalentStretchM(size_t b, const Strain& strain, double
     const double stretchM = bond.pinned ? 0.0  // a pin fails in shear
                                         : lengthM - mModel.spacingM + bond_law::bendingStretchM(mModel.spacingM, 1.0 - damage, double(rotation[(a + 1) % 3]),
                                                                                                 double(rotation[(a + 2) % 3]));
-    const bond_law::FailureTerms<double> failure{terms.peakStretchM, terms.tensionIndexPerM, terms.normalIndexPerM, terms.indexPerPa,
-                                                 terms.frictionCoefficient};
+    const bond_law::FailureTerms<double> failure{terms.tensionIndexPerM, terms.normalIndexPerM, terms.indexPerPa, terms.frictionCoefficient};
     if (stretchM >= 0.0) return bond_law::failureIndexInTension(stretchM, shearIndex, failure) * terms.peakStretchM;
     // The compression across the bond: its spring's and its particles' volumetric share, as the
     // last force pass left them (a substep behind; a function of the saved state).

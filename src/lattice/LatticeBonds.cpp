@@ -1,5 +1,6 @@
 // The bonds' pass of a lattice step: each bond's strain in its half-way frame, its damage and its
-// spring, dashpot and bending terms (measureBond, each bond writing only its own entry); each
+// force terms (in batches for the bonds that stay on their elastic line, BondStrainBatch.h; else
+// measureBond, each bond writing only its own entry); each
 // particle's volumetric strain; and each particle gathering its six bonds' forces in face order,
 // each completed with the volumetric force, so the sums do not depend on the thread count.
 #include "BondStrainBatch.h"
@@ -138,14 +139,17 @@ uint8_t Lattice::measureBonds(double dtS, bool growDamage)
                             reinterpret_cast<const uint32_t*>(mModel.bonds.data()), mModel.spacingM};
     // The batches find the bonds that stay elastic where that is all a step can do to them:
     // damage grows on the softening line (Davison–Stevens grows it every step).
+    // (The volumetric shares are sized by the first force pass, after its bonds are measured.)
     const std::array<BondLawRow, 6> rows = bondLawRows(mModel);
-    const BondLawInputs laws{rows.data(), &state.bondHistory.front().strengthScale, mVolumetricStressShare.front().data(),
-                             mUncrushedLambdaTracePa.empty() ? nullptr : mUncrushedLambdaTracePa.data(), mModel.bulkViscosity,
-                             mModel.dashpotPerViscosityNSPerM};
-    if (mBatchesElasticBonds && growDamage && mModel.damageLaw == LatticeDamageLaw::Softening && mVolumetricStressShare.size() == particleCount())
+    BondLawInputs laws;
+    if (mBatchesElasticBonds && growDamage && mModel.damageLaw == LatticeDamageLaw::Softening && mVolumetricStressShare.size() == particleCount()) {
+        laws = {rows.data(), &state.bondHistory.front().strengthScale, mVolumetricStressShare.front().data(),
+                mUncrushedLambdaTracePa.empty() ? nullptr : mUncrushedLambdaTracePa.data(), mModel.bulkViscosity, mModel.dashpotPerViscosityNSPerM};
         inputs.laws = &laws;
+    }
     constexpr size_t capacity = BondStrainRun::kCapacity;
     std::atomic<uint8_t> events{0};
+    std::atomic<size_t> elastic{0};
     forEach((bondCount() + capacity - 1) / capacity, [&](size_t r) {
         BondStrainRun run;
         const size_t first = r * capacity, count = std::min(capacity, bondCount() - first);
@@ -159,14 +163,19 @@ uint8_t Lattice::measureBonds(double dtS, bool growDamage)
                 storeLargeTurn(state.orientation[bond.low], state.orientation[bond.high], lane, run);
         }
         uint8_t runEvents = 0;
+        size_t runElastic = 0;
         for (size_t lane = 0; lane < count; ++lane) {
-            if (inputs.laws && run.elastic[lane] != 0.0)
+            if (inputs.laws && run.elastic[lane] != 0.0) {
                 takeElasticTerms(first + lane, run, lane);
-            else
+                ++runElastic;
+            } else {
                 runEvents |= measureBond(first + lane, run, lane, dtS, growDamage);
+            }
         }
         if (runEvents) events.fetch_or(runEvents, std::memory_order_relaxed);
+        elastic.fetch_add(runElastic, std::memory_order_relaxed);
     }, std::max<size_t>(1, kCheapGrain / capacity));  // as many bonds a task as one bond at a time had
+    mBondsElasticInLastPass = elastic.load();
     return events.load();
 }
 

@@ -122,6 +122,8 @@ public:
     /// (BondStrainRun::elastic; on unless turned off). Off, every bond takes the one-bond path
     /// (measureBond), which gives the same results bit for bit: a test compares them.
     void batchElasticBonds(bool on) { mBatchesElasticBonds = on; }
+    /// How many bonds the last bond pass measured in its batches as elastic.
+    size_t bondsElasticInLastPass() const { return mBondsElasticInLastPass; }
     /// Whether a support bears on its voxel: while they touch, its bond broken or not (a floor
     /// rests on a cracked head), the voxel within a quarter voxel of where the support held it.
     bool bears(const LatticeModel::BearingLoad& load) const;
@@ -138,7 +140,7 @@ private:
     /// stress it carried when its force was last completed, tension positive (unit: Pa).
     std::vector<double> mUncrushedLambdaTracePa;
     std::vector<double> mBondNormalStressPa;
-    /// What the force pass takes from each bond, measured once per substep (measureBond); the
+    /// What the force pass takes from each bond, measured once per substep (measureBonds); the
     /// arm between its particles is found again from their places where it is needed.
     struct BondForceTerms {
         /// On high: the spring and dashpot, before the volumetric term (unit: N).
@@ -184,6 +186,8 @@ private:
     };
     static constexpr size_t kDampingChunk = 4096;
     bool mPiecesStale = true;
+    bool mBatchesElasticBonds = true;  ///< batchElasticBonds
+    size_t mBondsElasticInLastPass = 0;
     /// What happened to bonds in the step under way (kSnapped, kBroke): moveAndMeasure's, for finishStep.
     uint8_t mStepEvents = 0;
     /// Velocity Verlet's half-kick of a step: dt/2 over a particle's mass and inertia.
@@ -227,15 +231,15 @@ private:
     /// Each particle's tr ε: per axis, the mean stretch (length change / h) of its bonds along it.
     void computeVolumetricStrain();
     /// Every bond's strain, damage (grown over dtS when `growDamage`) and force terms, from the
-    /// state, in runs of consecutive bonds whose strains are measured side by side
-    /// (BondStrainBatch.h). Returns what happened to any (kSnapped, kBroke).
+    /// state, in runs of consecutive bonds whose strains, and the terms of those that stay
+    /// elastic, are measured side by side (BondStrainBatch.h). Returns what happened to any
+    /// (kSnapped, kBroke).
     uint8_t measureBonds(double dtS, bool growDamage);
     /// One bond's damage and force terms, its strain lane `lane` of `run`; writes only the bond's
     /// own entries, so bonds measure in parallel. Returns what happened to it.
     uint8_t measureBond(size_t b, const BondStrainRun& run, size_t lane, double dtS, bool growDamage);
     /// A bond's terms as the batch measured them, for a bond that stays on its elastic line.
     void takeElasticTerms(size_t b, const BondStrainRun& run, size_t lane);
-    bool mBatchesElasticBonds = true;
     /// What measureBond reports: the bond snapped at its peak (releaseSnapEnergies), or broke
     /// by any law (the pieces may have changed).
     static constexpr uint8_t kSnapped = 1, kBroke = 2;
