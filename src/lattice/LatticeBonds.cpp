@@ -47,18 +47,8 @@ namespace {
 
 constexpr int kRunCapacity = int(BondStrainRun::kCapacity);
 
-/// Lane `lane` of a run's strains, read in place: its elements lie kCapacity doubles apart, so
+/// A lane of a run's 3-vector, read in place as v[i]: its elements lie kCapacity doubles apart, so
 /// nothing reads in pairs what the run wrote one by one (a pair's load would wait for both stores).
-struct StrainInRun {
-    Eigen::Map<const Eigen::Matrix3d, 0, Eigen::Stride<kRunCapacity, 3 * kRunCapacity>> frame;
-    Eigen::Map<const Eigen::Vector3d, 0, Eigen::InnerStride<kRunCapacity>> displacementM, rotationRad;
-    StrainInRun(const BondStrainRun& run, size_t lane)
-        : frame(&run.frame[0][0][lane]), displacementM(&run.displacementM[0][lane]), rotationRad(&run.rotationRad[0][lane])
-    {
-    }
-};
-
-/// A lane of a run's 3-vector, read in place as v[i].
 struct LaneVector {
     const double (*components)[kRunCapacity];
     size_t lane;
@@ -69,6 +59,10 @@ struct LaneFrame {
     const double (*rows)[3][kRunCapacity];
     size_t lane;
     LaneVector operator[](int r) const { return {rows[r], lane}; }
+};
+/// A lane of a run's displacement and rotation, as Lattice::equivalentStretchM reads a strain.
+struct LaneStrain {
+    LaneVector displacementM, rotationRad;
 };
 
 /// Writes one bond's strain into lane `lane` of a run.
@@ -84,7 +78,9 @@ void storeStrain(const BondStrain& s, size_t lane, BondStrainRun& run)
 /// Lane `lane`'s rotation again by the arctangent, in the frame the run measured.
 void storeLargeTurn(const Eigen::Quaterniond& qa, const Eigen::Quaterniond& qb, size_t lane, BondStrainRun& run)
 {
-    const Eigen::Matrix3d frame = StrainInRun(run, lane).frame;
+    Eigen::Matrix3d frame;
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) frame(r, c) = run.frame[r][c][lane];
     const Eigen::Vector3d turnRad = bond_laws::largeTurnRad(frame, qa, qb);
     for (int r = 0; r < 3; ++r) run.rotationRad[r][lane] = turnRad[r];
 }
@@ -93,6 +89,32 @@ void storeLargeTurn(const Eigen::Quaterniond& qa, const Eigen::Quaterniond& qb, 
 void addAlong(double magnitudeN, const double (&along)[3], double (&forceN)[3])
 {
     for (int i = 0; i < 3; ++i) forceN[i] += magnitudeN * along[i];
+}
+
+/// The compression what cracking and crushing took still carries, along the line of centres (a
+/// unit vector `along`), added to the force on high: cracking's part as contact while the two
+/// cubes overlap (in the bond's frame it would push apart particles that have slid past each
+/// other or turned over, which feeds energy into a shattered lattice); the crushed part's rubble
+/// once squeezed past the softening line's end (`crushingEndM`), k (D_c overlap − uf), which
+/// grows with D_c from nothing, so no force jumps in.
+void addClosedCrackForces(double intact, double crushed, double overlapM, double normalNPerM, double crushingEndM, const double (&along)[3],
+                          double (&forceOnHighN)[3])
+{
+    const double uncrushed = 1.0 - crushed;
+    if (intact < uncrushed && overlapM > 0.0) addAlong((uncrushed - intact) * normalNPerM * overlapM, along, forceOnHighN);
+    const double rubbleM = crushed * overlapM - crushingEndM;
+    if (crushed > 0.0 && rubbleM > 0.0) addAlong(normalNPerM * rubbleM, along, forceOnHighN);
+}
+
+/// Per component of the frame of a bond along axis `a`: its normal spring along the axis and its
+/// shear springs across it; its twisting stiffness about the axis and its bending about the
+/// others (bond_law::elasticTerms).
+void axisStiffnesses(const LatticeStiffness& k, int a, double (&springNPerM)[3], double (&turnNmPerRad)[3])
+{
+    for (int i = 0; i < 3; ++i) {
+        springNPerM[i] = i == a ? k.normalNPerM[size_t(a)] : k.shearNPerM[size_t(a)][i];
+        turnNmPerRad[i] = i == a ? k.twistingNmPerRad[size_t(a)] : k.bendingNmPerRad[size_t(a)];
+    }
 }
 
 /// The rows the batches read for each strength class and axis (BondLawRow).
@@ -105,10 +127,7 @@ std::array<BondLawRow, 6> bondLawRows(const LatticeModel& model)
             const LatticeModel::FailureTerms& terms = model.failureTerms[strengthClass][a];
             const LatticeStiffness::Strength& strength = k.strength[strengthClass];
             BondLawRow& row = rows[3 * strengthClass + a];
-            for (size_t i = 0; i < 3; ++i) {
-                row.springNPerM[i] = i == a ? k.normalNPerM[a] : k.shearNPerM[a][int(i)];
-                row.turnNmPerRad[i] = i == a ? k.twistingNmPerRad[a] : k.bendingNmPerRad[a];
-            }
+            axisStiffnesses(k, int(a), row.springNPerM, row.turnNmPerRad);
             const double shearB = terms.shearIndexPerM[int((a + 1) % 3)], shearC = terms.shearIndexPerM[int((a + 2) % 3)];
             row.peakStretchM = terms.peakStretchM, row.tensionIndexPerM = terms.tensionIndexPerM, row.shearIndexPerM = shearB;
             row.normalIndexPerM = terms.normalIndexPerM, row.indexPerPa = terms.indexPerPa, row.frictionCoefficient = terms.frictionCoefficient;
@@ -140,9 +159,10 @@ uint8_t Lattice::measureBonds(double dtS, bool growDamage)
     // The batches find the bonds that stay elastic where that is all a step can do to them:
     // damage grows on the softening line (Davison–Stevens grows it every step).
     // (The volumetric shares are sized by the first force pass, after its bonds are measured.)
-    const std::array<BondLawRow, 6> rows = bondLawRows(mModel);
+    std::array<BondLawRow, 6> rows;
     BondLawInputs laws;
     if (mBatchesElasticBonds && growDamage && mModel.damageLaw == LatticeDamageLaw::Softening && mVolumetricStressShare.size() == particleCount()) {
+        rows = bondLawRows(mModel);
         laws = {rows.data(), &state.bondHistory.front().strengthScale, mVolumetricStressShare.front().data(),
                 mUncrushedLambdaTracePa.empty() ? nullptr : mUncrushedLambdaTracePa.data(), mModel.bulkViscosity, mModel.dashpotPerViscosityNSPerM};
         inputs.laws = &laws;
@@ -191,7 +211,7 @@ uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, do
 {
     const LatticeBond& bond = mModel.bonds[b];
     const LatticeStiffness& k = mModel.stiffness;
-    const StrainInRun s(run, lane);
+    const LaneStrain s{{run.displacementM, lane}, {run.rotationRad, lane}};
     const int a = bond.axis;
     BondForceTerms& terms = mBondTerms[b];
     const double lengthM = run.lengthM[lane];
@@ -215,12 +235,8 @@ uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, do
     const double intact = 1.0 - damage, sqrtIntact = std::sqrt(intact);
     const bool opening = lengthM > mModel.spacingM;
     double forceOnHighN[3], momentNm[3], springNPerM[3], turnNmPerRad[3];
-    for (int i = 0; i < 3; ++i) {
-        springNPerM[i] = i == a ? k.normalNPerM[a] : k.shearNPerM[a][i];
-        turnNmPerRad[i] = i == a ? k.twistingNmPerRad[a] : k.bendingNmPerRad[a];
-    }
-    bond_law::elasticTerms(LaneFrame{run.frame, lane}, LaneVector{run.displacementM, lane}, LaneVector{run.rotationRad, lane}, springNPerM,
-                           turnNmPerRad, intact, forceOnHighN, momentNm);
+    axisStiffnesses(k, a, springNPerM, turnNmPerRad);
+    bond_law::elasticTerms(LaneFrame{run.frame, lane}, s.displacementM, s.rotationRad, springNPerM, turnNmPerRad, intact, forceOnHighN, momentNm);
     if (bond.pinned) {
         // Across its axis only: no contact, dashpot, moment or volumetric share.
         terms.forceOnHighN = Eigen::Vector3d(forceOnHighN[0], forceOnHighN[1], forceOnHighN[2]);
@@ -229,15 +245,7 @@ uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, do
         mBondStretch[b] = BondStretch();
         return uint8_t(broke ? kBroke : 0);
     }
-    // What cracking took still carries compression, as contact: along the line of centres, and
-    // only while the two cubes overlap. (In the bond's frame it would push apart particles that
-    // have slid past each other or turned over, which feeds energy into a shattered lattice.)
-    const double overlapM = mModel.spacingM - lengthM;
-    if (intact < uncrushed && overlapM > 0.0) addAlong((uncrushed - intact) * k.normalNPerM[a] * overlapM, along, forceOnHighN);
-    // The crushed part's rubble carries again once squeezed past the softening line's end:
-    // k (D_c overlap − uf), which grows with D_c from nothing, so no force jumps in.
-    const double rubbleM = crushed * overlapM - strength.crushingEndShorteningM;
-    if (crushed > 0.0 && rubbleM > 0.0) addAlong(k.normalNPerM[a] * rubbleM, along, forceOnHighN);
+    addClosedCrackForces(intact, crushed, mModel.spacingM - lengthM, k.normalNPerM[a], strength.crushingEndShorteningM, along, forceOnHighN);
     // A crack opening carries no viscous stress either: the dashpot softens with the spring.
     if (mModel.bulkViscosity > 0.0)
         bond_law::subtractDashpot(opening ? intact : uncrushed, mModel.bulkViscosity, mModel.dashpotPerViscosityNSPerM, openingRateMS, along, forceOnHighN);
