@@ -269,7 +269,7 @@ TEST(Deformable, PiecesShownBeforeACheckpointKeepTheirIdsAfterIt)
     ASSERT_GT(straight.showPieces().size(), straight.bodies().size()) << "the wall is meant to show pieces at 2 ms";
     ASSERT_GT(interrupted.showPieces().size(), interrupted.bodies().size());
     const std::string path = testing::TempDir() + "/spall-test-shown-pieces.checkpoint";
-    writeCheckpoint(path, {1, 12, 10, sceneToJson(interrupted.scene()).dump(), interrupted.state()});
+    writeCheckpoint(path, {1, 12, 10, sceneToJson(interrupted.scene()).dump(), interrupted.state(), {}});
     Checkpoint back = readCheckpoint(path);
     Simulation resumed(parseScene(back.sceneJson, "checkpoint", "."), std::move(back.state));
     for (double t = 0.0025; t < 0.03; t += 0.0005) {

@@ -2,6 +2,7 @@
 // that resume bit for bit, runs that report progress, refuse a second writer and damaged files.
 #include "TestUtil.h"
 
+#include <spall/output/History.h>
 #include <spall/scene/Scene.h>
 #include <spall/sim/Checkpoint.h>
 #include <spall/sim/MemoryBudget.h>
@@ -16,6 +17,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -133,7 +135,7 @@ TEST(Checkpoint, ResumedSimulationEndsBitForBitAsTheUninterruptedOne)
     interrupted.advanceTo(0.1);
     EXPECT_GT(interrupted.fractureEvents().size(), 0u);
     EXPECT_GT(interrupted.dust().size(), 0u);
-    writeCheckpoint(path, {3, 12, 77, sceneToJson(interrupted.scene()).dump(), interrupted.state()});
+    writeCheckpoint(path, {3, 12, 77, sceneToJson(interrupted.scene()).dump(), interrupted.state(), {}});
     Checkpoint back = readCheckpoint(path);
     EXPECT_EQ(back.framesDone, 3);
     EXPECT_EQ(back.frameCount, 12);
@@ -160,7 +162,7 @@ TEST(Checkpoint, ResumedInTheDeformablePhaseEndsBitForBitAsTheUninterruptedOne)
     straight.advanceTo(0.006);
     interrupted.advanceTo(0.006);
     ASSERT_FALSE(interrupted.state().deformable.empty()) << "the checkpoint is meant to fall inside the deformable phase";
-    writeCheckpoint(path, {1, 12, 10, sceneToJson(interrupted.scene()).dump(), interrupted.state()});
+    writeCheckpoint(path, {1, 12, 10, sceneToJson(interrupted.scene()).dump(), interrupted.state(), {}});
     Checkpoint back = readCheckpoint(path);
     Simulation resumed(parseScene(back.sceneJson, "checkpoint", "."), std::move(back.state));
     straight.advanceTo(0.08);
@@ -172,7 +174,7 @@ TEST(Checkpoint, ResumedInTheDeformablePhaseEndsBitForBitAsTheUninterruptedOne)
         EXPECT_EQ(straight.state().handOffs[i].discardedEnergyJ, resumed.state().handOffs[i].discardedEnergyJ);
     // What the phase left in the bonds that survived goes through a checkpoint too.
     ASSERT_TRUE(std::any_of(straight.bodies().begin(), straight.bodies().end(), [](const Body& b) { return b.linkDamage != nullptr; }));
-    writeCheckpoint(path, {2, 12, 20, sceneToJson(straight.scene()).dump(), straight.state()});
+    writeCheckpoint(path, {2, 12, 20, sceneToJson(straight.scene()).dump(), straight.state(), {}});
     expectSameBodies(straight.bodies(), readCheckpoint(path).state.bodies);
 }
 
@@ -322,6 +324,51 @@ TEST(Checkpoint, RunStoppedWithinAFrameResumesAndEndsAsTheUninterruptedOne)
     EXPECT_FALSE(std::filesystem::exists(cut + "/" + kCheckpointFileName));
 }
 
+TEST(Checkpoint, RunStoppedWithinAFrameAfterAFractureWritesThatFramesEventsWhenResumed)
+{
+    // A stop within a frame can fall after fracture events of that frame: the checkpoint's state
+    // holds them and history.h5 does not yet. The resumed run must take up the history where its
+    // frames end and write those events with their frame (a resume once refused such a run:
+    // "child_offset has 366 rows, fewer than the checkpoint's 396").
+    const Scene scene = latticeWallScene(1000.0);
+    const int frameCount = scene.frameCount();
+    // The step after which the run first stands within a frame with a fracture event, counted as
+    // the run counts them (one question to the interrupter before each step).
+    int64_t steps = 0, stopAfterSteps = 0;
+    {
+        Simulation sim(scene);
+        sim.setStepObserver([&](const Simulation& s, const StepRecord& r) {
+            ++steps;
+            const double frames = r.timeS * scene.frameRateHz;
+            if (stopAfterSteps == 0 && !s.fractureEvents().empty() && std::abs(frames - std::round(frames)) > 1e-6) stopAfterSteps = steps;
+        });
+        for (int f = 1; f < frameCount && stopAfterSteps == 0; ++f) sim.advanceTo(f / scene.frameRateHz);
+    }
+    ASSERT_GT(stopAfterSteps, 0) << "the wall must break within the run";
+
+    const std::string whole = testing::TempDir() + "/spall-events-whole", cut = testing::TempDir() + "/spall-events-cut";
+    for (const std::string& dir : {whole, cut}) std::filesystem::remove_all(dir);
+    RunOptions options;
+    options.outputDirectory = whole;
+    ASSERT_TRUE(runScene(scene, options, {}).complete);
+    StopOnce stop(int(stopAfterSteps) + 1);
+    options.outputDirectory = cut;
+    options.interrupter = &stop;
+    ASSERT_FALSE(runScene(scene, options, {}).complete);
+    const Checkpoint saved = readCheckpoint(cut + "/" + kCheckpointFileName);
+    ASSERT_LT(saved.written.fractureEvents, int64_t(saved.state.events.size())) << "the stop was meant to fall after an event of the frame under way";
+
+    options.interrupter = nullptr;
+    ASSERT_TRUE(resumeRun(options, {}).complete);
+    const History straight = readHistory(whole + "/history.h5"), resumed = readHistory(cut + "/history.h5");
+    EXPECT_TRUE(resumed.runComplete);
+    EXPECT_EQ(resumed.eventTimeS, straight.eventTimeS);
+    EXPECT_EQ(resumed.eventParentId, straight.eventParentId);
+    EXPECT_EQ(resumed.eventChildOffset, straight.eventChildOffset);
+    EXPECT_EQ(resumed.bodyId, straight.bodyId);
+    EXPECT_EQ(resumed.dustMassKg, straight.dustMassKg);
+}
+
 TEST(Checkpoint, AStepGivenUpWithinItsLatticeStepsResumesFromTheLastCheckpointAndEndsAsTheUninterruptedOne)
 {
     // A step of a large lattice can take a minute: a stop that waits too long gives the step up
@@ -403,7 +450,7 @@ TEST(Checkpoint, DamagedFilesAreRefusedNamingTheFile)
     Simulation sim(scene);
     sim.advanceTo(0.004);
     const std::string path = testing::TempDir() + "/spall-test-damaged.checkpoint";
-    writeCheckpoint(path, {1, 12, 5, sceneToJson(sim.scene()).dump(), sim.state()});
+    writeCheckpoint(path, {1, 12, 5, sceneToJson(sim.scene()).dump(), sim.state(), {}});
     const auto size = std::filesystem::file_size(path);
     const auto messageOf = [&]() -> std::string {
         try {
@@ -417,7 +464,7 @@ TEST(Checkpoint, DamagedFilesAreRefusedNamingTheFile)
         std::filesystem::resize_file(path, cut);
         const std::string message = messageOf();
         EXPECT_NE(message.find(path), std::string::npos) << cut << ": " << message;
-        writeCheckpoint(path, {1, 12, 5, sceneToJson(sim.scene()).dump(), sim.state()});
+        writeCheckpoint(path, {1, 12, 5, sceneToJson(sim.scene()).dump(), sim.state(), {}});
     }
     {
         // A length that the file cannot hold (the scene text's, after magic, version, frames and steps).

@@ -59,8 +59,8 @@ FrameRow frameTotals(const Simulation& sim, const FrameStamp& frame, std::vector
 
 class HistorySink : public FrameSink {
 public:
-    HistorySink(std::unique_ptr<HistoryWriter> writer, const Simulation& sim)
-        : mWriter(std::move(writer)), mEventsWritten(sim.fractureEvents().size()), mDustWritten(sim.dust().size())
+    HistorySink(std::unique_ptr<HistoryWriter> writer, const RecordsWritten& written)
+        : mWriter(std::move(writer)), mEventsWritten(size_t(written.fractureEvents)), mDustWritten(size_t(written.dust))
     {
     }
 
@@ -157,9 +157,9 @@ std::unique_ptr<FrameSink> makeVdbSink(const std::string& directory, const Outpu
     return std::make_unique<VdbSink>(directory, settings, std::move(materials));
 }
 
-std::unique_ptr<FrameSink> makeHistorySink(std::unique_ptr<HistoryWriter> writer, const Simulation& sim)
+std::unique_ptr<FrameSink> makeHistorySink(std::unique_ptr<HistoryWriter> writer, const RecordsWritten& written)
 {
-    return std::make_unique<HistorySink>(std::move(writer), sim);
+    return std::make_unique<HistorySink>(std::move(writer), written);
 }
 
 std::unique_ptr<FrameSink> makePreviewSink(const std::string& path, int sheetFrames, int frameCount, const Scene& scene,

@@ -30,12 +30,13 @@ namespace {
 /// The sinks the scene and the options ask for, in the order they write: frames, history,
 /// preview, glTF (which meshes the frames once the run completes).
 std::vector<std::unique_ptr<FrameSink>> frameSinks(const Simulation& sim, const RunOptions& options, int frameCount,
-                                                   std::unique_ptr<HistoryWriter> history, std::optional<GltfExportReport>& gltf)
+                                                   std::unique_ptr<HistoryWriter> history, const RecordsWritten& written,
+                                                   std::optional<GltfExportReport>& gltf)
 {
     const OutputSettings& output = sim.scene().output;
     std::vector<std::unique_ptr<FrameSink>> sinks;
     if (output.vdb) sinks.push_back(makeVdbSink(options.outputDirectory, output, sim.scene().materials));
-    if (history) sinks.push_back(makeHistorySink(std::move(history), sim));
+    if (history) sinks.push_back(makeHistorySink(std::move(history), written));
     if (!options.previewPath.empty() && options.previewFrames > 0)
         sinks.push_back(makePreviewSink(options.previewPath, options.previewFrames, frameCount, sim.scene(), options.outputDirectory));
     if (!options.gltfPath.empty()) sinks.push_back(makeGltfSink(options.outputDirectory, options.gltfPath, options.onGltfFrame, gltf));
@@ -83,10 +84,11 @@ FrameAdvance advanceToFrame(Simulation& sim, double timeS, Interrupter* interrup
     }
 }
 
-/// Writes frames firstFrame .. frameCount-1 of a simulation that stands at firstFrame's start.
-/// After each frame's outputs, a checkpoint when output.checkpoint_every_s of wall-clock time
-/// has passed since the last, or when the callback asks to stop.
-RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t stepsSoFar, const RunOptions& options,
+/// Writes frames firstFrame .. frameCount-1 of a simulation that stands at or within firstFrame's
+/// start, the frames before it holding `written` of its records. After each frame's outputs, a
+/// checkpoint when output.checkpoint_every_s of wall-clock time has passed since the last, or
+/// when the callback asks to stop.
+RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t stepsSoFar, RecordsWritten written, const RunOptions& options,
                     const std::function<bool(const RunProgress&)>& onFrame, std::unique_ptr<HistoryWriter> historyWriter)
 {
     const auto start = std::chrono::steady_clock::now();
@@ -97,10 +99,10 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
     const std::string checkpointScene = sceneToJson(scene).dump();
     RunReport report;
     report.framesWritten = firstFrame;  // a resumed run's frames before its checkpoint are written too
-    const auto sinks = frameSinks(sim, options, frameCount, std::move(historyWriter), report.gltf);
+    const auto sinks = frameSinks(sim, options, frameCount, std::move(historyWriter), written, report.gltf);
     report.totalSteps = stepsSoFar;
     const auto saveCheckpoint = [&](int framesDone) {
-        writeCheckpoint(checkpointPath.string(), {framesDone, frameCount, report.totalSteps, checkpointScene, sim.state()});
+        writeCheckpoint(checkpointPath.string(), {framesDone, frameCount, report.totalSteps, checkpointScene, sim.state(), written});
     };
     auto lastReport = start;
     int64_t latticeStepsDone = 0;  // in the frames written
@@ -129,6 +131,7 @@ RunReport runFrames(Simulation& sim, int firstFrame, int frameCount, int64_t ste
         latticeStepsDone += stats.latticeParticleSteps;
         const std::vector<Body> shown = sim.showPieces();
         for (const auto& sink : sinks) sink->write(sim, {f, t, stats, shown});
+        written = {int64_t(sim.fractureEvents().size()), int64_t(sim.dust().size())};
         report.framesWritten = f + 1;
         const auto now = std::chrono::steady_clock::now();
         lastReport = now;
@@ -236,7 +239,7 @@ RunReport runSceneInLockedDirectory(const Scene& scene, const RunOptions& option
         for (const Charge& c : scene.charges) header.charges.push_back({c.positionM, c.tntKg, c.detonationTimeS, enumName(c.burst)});
         history = std::make_unique<HistoryWriter>((dir / "history.h5").string(), header);
     }
-    return runFrames(sim, 0, frameCount, 0, options, onFrame, std::move(history));
+    return runFrames(sim, 0, frameCount, 0, {}, options, onFrame, std::move(history));
 }
 
 }  // namespace
@@ -315,10 +318,10 @@ RunReport resumeRun(const RunOptions& options, const std::function<bool(const Ru
     if (scene.output.history)
         history = std::make_unique<HistoryWriter>(
             (dir / "history.h5").string(),
-            HistoryResumePoint{checkpoint.framesDone, static_cast<int64_t>(checkpoint.state.events.size()),
-                               static_cast<int64_t>(checkpoint.state.dust.size())});
+            HistoryResumePoint{checkpoint.framesDone, checkpoint.written.fractureEvents, checkpoint.written.dust});
     Simulation sim(scene, std::move(checkpoint.state));
-    return runFrames(sim, checkpoint.framesDone, checkpoint.frameCount, checkpoint.totalSteps, options, onFrame, std::move(history));
+    return runFrames(sim, checkpoint.framesDone, checkpoint.frameCount, checkpoint.totalSteps, checkpoint.written, options, onFrame,
+                     std::move(history));
 }
 
 }  // namespace spall

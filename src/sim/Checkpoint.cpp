@@ -175,6 +175,8 @@ void transferFields(Archive& a, C& c, std::vector<uint8_t>& extraGrids)
     a.pod(c.frameCount, "frame count");
     a.pod(c.totalSteps, "total steps");
     a.text(c.sceneJson, "scene");
+    a.pod(c.written.fractureEvents, "fracture events written");
+    a.pod(c.written.dust, "dust records written");
     a.pod(s.timeS, "time");
     a.pod(s.nextId, "next id");
     a.pod(s.initialVoxels, "initial voxels");
@@ -291,6 +293,10 @@ Checkpoint readCheckpoint(const std::string& path)
         r.fail("contact points out of order");
     if (c.framesDone < 1 || c.frameCount < c.framesDone)
         r.fail("frames done " + std::to_string(c.framesDone) + " of " + std::to_string(c.frameCount));
+    if (c.written.fractureEvents < 0 || size_t(c.written.fractureEvents) > c.state.events.size() || c.written.dust < 0 ||
+        size_t(c.written.dust) > c.state.dust.size())
+        r.fail("the frames hold " + std::to_string(c.written.fractureEvents) + " fracture events and " + std::to_string(c.written.dust) +
+               " dust records, more than the state's " + std::to_string(c.state.events.size()) + " and " + std::to_string(c.state.dust.size()));
     SimulationState& s = c.state;
     std::string vdbBytes;
     r.text(vdbBytes, "grids");

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <spall/output/GltfExport.h>
+#include <spall/sim/Checkpoint.h>
 #include <spall/sim/Simulation.h>
 
 #include <functional>
@@ -44,8 +45,8 @@ public:
 std::unique_ptr<FrameSink> makeVdbSink(const std::string& directory, const OutputSettings& settings, std::vector<Material> materials);
 
 /// history.h5's rows: per-frame totals and per-body rows, with the fracture events and dust since
-/// the last frame; marked whole when the run completes.
-std::unique_ptr<FrameSink> makeHistorySink(std::unique_ptr<HistoryWriter> writer, const Simulation& sim);
+/// the last frame (the first frame it writes: since `written`); marked whole when the run completes.
+std::unique_ptr<FrameSink> makeHistorySink(std::unique_ptr<HistoryWriter> writer, const RecordsWritten& written);
 
 /// A contact sheet (PNG at `path`) of `sheetFrames` frames spread over the run's `frameCount`,
 /// rendered from the bodies in memory; after a resumed run, from the frame files in `directory`.

@@ -11,7 +11,14 @@
 namespace spall {
 
 inline constexpr const char* kCheckpointFileName = "checkpoint.spall";
-inline constexpr uint32_t kCheckpointFormatVersion = 18;
+inline constexpr uint32_t kCheckpointFormatVersion = 19;
+
+/// What the frames written so far hold of the state's records (history.h5's rows of fracture
+/// events and dust). A state saved within a frame holds more: the records of the frame under way.
+struct RecordsWritten {
+    int64_t fractureEvents = 0;
+    int64_t dust = 0;
+};
 
 struct Checkpoint {
     int framesDone = 0;       ///< frames 0 .. framesDone-1 are written (the state may lie within frame framesDone)
@@ -19,6 +26,7 @@ struct Checkpoint {
     int64_t totalSteps = 0;   ///< steps taken so far
     std::string sceneJson;    ///< the simulation's scene with every default filled in
     SimulationState state;
+    RecordsWritten written;  ///< of the state's records, those frames 0 .. framesDone-1 hold
 };
 
 /// Writes atomically. Throws IoError naming the file (e.g. when the disk is full).
