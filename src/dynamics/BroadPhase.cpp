@@ -39,15 +39,13 @@ public:
         size_t begin, end;
     };
 
-    explicit HierarchicalGrid(const std::vector<Body>& bodies)
+    HierarchicalGrid(const std::vector<Eigen::Vector3d>& centresM, const std::vector<double>& radiiM)
     {
         double smallest = std::numeric_limits<double>::infinity();
-        for (const Body& b : bodies) smallest = std::min(smallest, b.boundingRadiusM);
+        for (const double r : radiiM) smallest = std::min(smallest, r);
         mBase = 2.0 * std::max(smallest, 1e-9);
-        std::vector<std::pair<Cell, int>> entries(bodies.size());
-        forEachIndex(bodies.size(), [&](size_t i) {
-            entries[i] = {cellAt(bodies[i].motion.positionM, levelOf(bodies[i].boundingRadiusM)), static_cast<int>(i)};
-        }, kCheapGrain);
+        std::vector<std::pair<Cell, int>> entries(centresM.size());
+        forEachIndex(centresM.size(), [&](size_t i) { entries[i] = {cellAt(centresM[i], levelOf(radiiM[i])), static_cast<int>(i)}; }, kCheapGrain);
         std::sort(entries.begin(), entries.end(),
                   [](const auto& x, const auto& y) { return x.first < y.first || (!(y.first < x.first) && x.second < y.second); });
         // Occupied cells as runs of entries; the bodies of one cell share every search.
@@ -108,21 +106,19 @@ private:
     std::vector<int> mLevels;  ///< occupied levels, ascending
 };
 
-}  // namespace
-
-std::vector<BodyPair> findCandidatePairs(const std::vector<Body>& bodies)
+/// Pairs of spheres that overlap and that `keep(i, j)` keeps, sorted.
+template <typename Keep>
+std::vector<BodyPair> overlappingSpheres(const std::vector<Eigen::Vector3d>& centresM, const std::vector<double>& radiiM, Keep&& keep)
 {
-    if (bodies.empty()) return {};
-    const HierarchicalGrid grid(bodies);
+    if (centresM.empty()) return {};
+    const HierarchicalGrid grid(centresM, radiiM);
     const auto& runs = grid.runs();
     constexpr size_t kBlock = 64;
     std::vector<std::vector<BodyPair>> found((runs.size() + kBlock - 1) / kBlock);
     forEachIndex(found.size(), [&](size_t block) {
         auto test = [&](int i, int j) {
-            const Body& a = bodies[i];
-            const Body& b = bodies[j];
-            const double reach = a.boundingRadiusM + b.boundingRadiusM;
-            if ((a.motion.positionM - b.motion.positionM).squaredNorm() > reach * reach || !pairCanInteract(a, b)) return;
+            const double reach = radiiM[size_t(i)] + radiiM[size_t(j)];
+            if ((centresM[size_t(i)] - centresM[size_t(j)]).squaredNorm() > reach * reach || !keep(i, j)) return;
             found[block].push_back({std::min(i, j), std::max(i, j)});
         };
         for (size_t r = block * kBlock; r < std::min(runs.size(), (block + 1) * kBlock); ++r) {
@@ -139,6 +135,31 @@ std::vector<BodyPair> findCandidatePairs(const std::vector<Body>& bodies)
     for (const auto& f : found) pairs.insert(pairs.end(), f.begin(), f.end());
     tbb::parallel_sort(pairs.begin(), pairs.end());  // pairs are unique: the order is
     return pairs;
+}
+
+std::vector<Eigen::Vector3d> centresOf(const std::vector<Body>& bodies)
+{
+    std::vector<Eigen::Vector3d> centres(bodies.size());
+    for (size_t i = 0; i < bodies.size(); ++i) centres[i] = bodies[i].motion.positionM;
+    return centres;
+}
+
+}  // namespace
+
+std::vector<BodyPair> findCandidatePairs(const std::vector<Body>& bodies)
+{
+    std::vector<double> radii(bodies.size());
+    for (size_t i = 0; i < bodies.size(); ++i) radii[i] = bodies[i].boundingRadiusM;
+    return overlappingSpheres(centresOf(bodies), radii, [&](int i, int j) { return pairCanInteract(bodies[size_t(i)], bodies[size_t(j)]); });
+}
+
+std::vector<char> withinReachOfAnotherBody(const std::vector<Body>& bodies, const std::vector<double>& reachM)
+{
+    std::vector<double> radii(bodies.size());
+    for (size_t i = 0; i < bodies.size(); ++i) radii[i] = bodies[i].boundingRadiusM + reachM[i];
+    std::vector<char> near(bodies.size(), 0);
+    for (const BodyPair& p : overlappingSpheres(centresOf(bodies), radii, [](int, int) { return true; })) near[size_t(p.a)] = near[size_t(p.b)] = 1;
+    return near;
 }
 
 }  // namespace spall

@@ -13,6 +13,18 @@ namespace {
 
 using narrow::kContactMarginVoxels;
 
+/// Whether the body's bounding sphere comes within `reachM` of the ground's plane or of the box.
+bool groundWithinReach(const Body& body, const GroundPlane& ground, double reachM)
+{
+    return ground.enabled && ground.normal.dot(body.motion.positionM) - ground.offsetM <= body.boundingRadiusM + reachM;
+}
+bool boxWithinReach(const Body& body, const StaticBox& box, double reachM)
+{
+    const Eigen::Vector3d local = box.orientation.inverse() * (body.motion.positionM - box.centreM);
+    const Eigen::Vector3d outside = (local.cwiseAbs() - box.halfExtentM).cwiseMax(0.0);
+    return outside.norm() <= body.boundingRadiusM + reachM;
+}
+
 /// Corners of the body's boundary voxels inside the ground or a static box, into `contacts`
 /// (emptied first).
 void findCorners(const Body& body, const WorldSettings& world, std::vector<StaticContact>& contacts)
@@ -23,14 +35,10 @@ void findCorners(const Body& body, const WorldSettings& world, std::vector<Stati
     const double margin = kContactMarginVoxels * h;
     const double voxelRadius = 0.5 * std::sqrt(3.0) * h + margin;
     const GroundPlane& ground = world.ground;
-    const bool nearGround = ground.enabled && ground.normal.dot(body.motion.positionM) - ground.offsetM <= body.boundingRadiusM + margin;
+    const bool nearGround = groundWithinReach(body, ground, margin);
     std::vector<int> nearBoxes;
-    for (size_t b = 0; b < world.colliders.size(); ++b) {
-        const StaticBox& box = world.colliders[b];
-        const Eigen::Vector3d local = box.orientation.inverse() * (body.motion.positionM - box.centreM);
-        const Eigen::Vector3d outside = (local.cwiseAbs() - box.halfExtentM).cwiseMax(0.0);
-        if (outside.norm() <= body.boundingRadiusM + margin) nearBoxes.push_back(static_cast<int>(b));
-    }
+    for (size_t b = 0; b < world.colliders.size(); ++b)
+        if (boxWithinReach(body, world.colliders[b], margin)) nearBoxes.push_back(static_cast<int>(b));
     if (!nearGround && nearBoxes.empty()) return;
 
     for (const openvdb::Coord& voxel : body.boundaryVoxels) {
@@ -107,6 +115,12 @@ std::vector<StaticContact> findStaticContacts(const Body& body, const WorldSetti
     thread_local std::vector<VoxelContact> points;
     findCorners(body, world, corners);
     return reduceStaticContacts(corners, done, group, points);
+}
+
+bool withinReachOfStatics(const Body& body, const WorldSettings& world, double reachM)
+{
+    return groundWithinReach(body, world.ground, reachM) ||
+           std::any_of(world.colliders.begin(), world.colliders.end(), [&](const StaticBox& box) { return boxWithinReach(body, box, reachM); });
 }
 
 double fastestClosingSpeedMS(const Body& body, const std::vector<StaticContact>& contacts, double groundShare)

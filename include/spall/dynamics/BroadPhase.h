@@ -1,4 +1,5 @@
-// Broad phase (paper section 4.2, sped up): the pairs of bodies whose bounding spheres overlap.
+// Broad phase (paper section 4.2, sped up): the pairs of bodies whose bounding spheres overlap,
+// and which bodies could meet another within a reach.
 #pragma once
 
 #include <spall/voxel/Body.h>
@@ -21,5 +22,9 @@ bool pairCanInteract(const Body& a, const Body& b);
 /// Pairs whose bounding spheres overlap (found with a hierarchical grid) and that can interact,
 /// sorted.
 std::vector<BodyPair> findCandidatePairs(const std::vector<Body>& bodies);
+
+/// Per body, whether its bounding sphere grown by `reachM[i]` meets another's grown by theirs
+/// (every body counts: anchored, asleep, in the deformable phase).
+std::vector<char> withinReachOfAnotherBody(const std::vector<Body>& bodies, const std::vector<double>& reachM);
 
 }  // namespace spall

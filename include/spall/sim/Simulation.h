@@ -119,7 +119,8 @@ public:
     void setStepObserver(std::function<void(const Simulation&, const StepRecord&)> observer) { mObserver = std::move(observer); }
 
     /// Chooses the next step: fine while a front crosses a body, coarse in free flight, never
-    /// letting a voxel travel more than a fraction of a voxel, shorter while contacts are deep.
+    /// letting a voxel of a body that could meet something travel more than a fraction of a
+    /// voxel, shorter while contacts are deep.
     double chooseTimeStep(const std::vector<OpenWindow>& windows) const;
 
 private:
@@ -172,6 +173,9 @@ private:
     /// The paper's adaptive step: halve while bodies still closing on each other interpenetrate
     /// beyond the tolerance.
     void adaptStepToPenetration(double closingPenetrationM);
+    /// The speed rule of chooseTimeStep for a step of at most `longestS` (unit: s; infinite when
+    /// no body needs it).
+    double speedLimitedStepS(double longestS) const;
     std::pair<Eigen::Vector3d, Eigen::Vector3d> totalMomenta() const;
     /// A note when the memory available could not hold every voxel as a fragment of its own.
     void noteFragmentMemory();
