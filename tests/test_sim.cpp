@@ -339,10 +339,14 @@ TEST(Checkpoint, RunStoppedWithinAFrameAfterAFractureWritesThatFramesEventsWhenR
     int64_t steps = 0, stopAfterSteps = 0;
     {
         Simulation sim(scene);
+        size_t eventsAtLastFrame = 0;
         sim.setStepObserver([&](const Simulation& s, const StepRecord& r) {
             ++steps;
             const double frames = r.timeS * scene.frameRateHz;
-            if (stopAfterSteps == 0 && !s.fractureEvents().empty() && std::abs(frames - std::round(frames)) > 1e-6) stopAfterSteps = steps;
+            if (std::abs(frames - std::round(frames)) < 1e-6)
+                eventsAtLastFrame = s.fractureEvents().size();
+            else if (stopAfterSteps == 0 && s.fractureEvents().size() > eventsAtLastFrame)
+                stopAfterSteps = steps;
         });
         for (int f = 1; f < frameCount && stopAfterSteps == 0; ++f) sim.advanceTo(f / scene.frameRateHz);
     }

@@ -39,6 +39,10 @@ Eigen::Quaterniond quaternionRate(const Eigen::Quaterniond& q, const Eigen::Vect
 /// stays on the energy surface to O(dt²) without drift, where turning by the step's starting ω
 /// lets a long thin spinning piece gain energy without bound (the rotation error feeds the
 /// spin about its axis of least inertia, the direction of highest energy for its momentum).
+/// Its error grows as the square of the turn: a chip spinning at thousands of rad/s turns
+/// several radians in a long step, and there it gained 45 % of its energy in half a second. So
+/// the flow is taken in pieces of at most kMaxTurnRad each (a few for such a chip, one for nearly
+/// every body).
 constexpr double kMaxTurnRad = 0.1;
 
 Eigen::Quaterniond rotateTorqueFree(const Body& body, const Eigen::Quaterniond& q, const Eigen::Vector3d& l, double dt)
@@ -52,13 +56,10 @@ Eigen::Quaterniond rotateTorqueFree(const Body& body, const Eigen::Quaterniond& 
         const double angle = frame.col(axis).dot(l) / moments[axis] * time;
         frame = frame * Eigen::AngleAxisd(angle, Eigen::Vector3d::Unit(axis)).toRotationMatrix();
     };
-    // Its error grows as the square of the turn in a step: a chip spinning at thousands of
-    // rad/s turns several radians in a long step, and there it gained 45 % of its energy in
-    // half a second. So the flow is taken in pieces of at most kMaxTurnRad each (a few for such
-    // a chip, one for nearly every body).
-    double fastest = 0.0;
-    for (int axis = 0; axis < 3; ++axis) fastest = std::max(fastest, std::abs(frame.col(axis).dot(l) / moments[axis]));
-    const int pieces = std::max(1, static_cast<int>(std::ceil(fastest * dt / kMaxTurnRad)));
+    // |ω| ≤ |l| / I_min however l moves among the axes (eigenvalues come in increasing order);
+    // a non-finite turn is left to the caller's check of the motion (refuseNonFiniteMotion).
+    const double turns = l.norm() / moments[0] * dt / kMaxTurnRad;
+    const int pieces = std::isfinite(turns) ? static_cast<int>(std::clamp(std::ceil(turns), 1.0, 1e6)) : 1;
     const double piece = dt / pieces;
     for (int k = 0; k < pieces; ++k) {
         turnAbout(0, 0.5 * piece);

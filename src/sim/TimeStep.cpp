@@ -4,6 +4,7 @@
 #include <spall/dynamics/BroadPhase.h>
 #include <spall/dynamics/Integrate.h>
 #include <spall/dynamics/StaticContacts.h>
+#include <spall/loads/BlastLoads.h>
 
 #include <algorithm>
 #include <cmath>
@@ -56,11 +57,11 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
                 dt = std::min(dt, std::max(arrival - t, ts.frontFraction * front / mField->shockSpeedMS(static_cast<int>(c), reach[c].nearM)));
         }
     }
-    dt = std::min(dt, speedLimitedStepS(dt));
+    dt = std::min(dt, speedLimitedStepS(std::max(dt, ts.minTimeStepS), windows));
     return std::max(dt * mState.penetrationStepScale, ts.minTimeStepS);
 }
 
-double Simulation::speedLimitedStepS(double longestS) const
+double Simulation::speedLimitedStepS(double longestS, const std::vector<OpenWindow>& windows) const
 {
     // No voxel of a body that could meet something within the step moves more than
     // speedFraction of a voxel, so no contact is stepped over. A rigid body that can meet
@@ -84,9 +85,11 @@ double Simulation::speedLimitedStepS(double longestS) const
     const std::vector<char> nearBody = withinReachOfAnotherBody(bodies, reachM);
     for (size_t i = 0; i < bodies.size(); ++i) {
         if (!(ts.speedFraction * h < speedMS[i] * longestS)) continue;
-        // A lattice's particles step on their own clock; its rigid motion keeps the rule, as
-        // does every body under the integrators that do not turn it by exact rotations.
-        const bool freeFlightExact = ts.integrator == Integrator::SemiImplicitEuler && !bodies[i].motion.deformable;
+        // A lattice's particles step on their own clock; its rigid motion keeps the rule, as do
+        // a body the blast may break within the step (its parts' shapes turn with it) and every
+        // body under the integrators that do not turn it by exact rotations.
+        const bool freeFlightExact = ts.integrator == Integrator::SemiImplicitEuler && !bodies[i].motion.deformable &&
+                                     !bodyInWindows(bodies[i], *mField, windows);
         if (!freeFlightExact || nearBody[i] || withinReachOfStatics(bodies[i], mScene.world, reachM[i]))
             dt = std::min(dt, ts.speedFraction * h / speedMS[i]);
     }

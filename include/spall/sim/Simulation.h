@@ -173,9 +173,9 @@ private:
     /// The paper's adaptive step: halve while bodies still closing on each other interpenetrate
     /// beyond the tolerance.
     void adaptStepToPenetration(double closingPenetrationM);
-    /// The speed rule of chooseTimeStep for a step of at most `longestS` (unit: s; infinite when
-    /// no body needs it).
-    double speedLimitedStepS(double longestS) const;
+    /// The speed rule of chooseTimeStep for a step of at most `longestS` with the blast's
+    /// `windows` open (unit: s; infinite when no body needs it).
+    double speedLimitedStepS(double longestS, const std::vector<OpenWindow>& windows) const;
     std::pair<Eigen::Vector3d, Eigen::Vector3d> totalMomenta() const;
     /// A note when the memory available could not hold every voxel as a fragment of its own.
     void noteFragmentMemory();
