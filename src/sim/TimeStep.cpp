@@ -68,30 +68,33 @@ double Simulation::speedLimitedStepS(double longestS, const std::vector<OpenWind
     // nothing within the longest step at its speed is in free flight, which needs no shorter
     // step than a slow body's: its turn is made of exact rotations (rotateTorqueFree) however
     // fast it spins, and its path is stepped as every other's. One chip of a few voxels
-    // spinning at 1 750 rad/s had set every body's step (docs/performance.md).
+    // spinning at thousands of rad/s had set every body's step (docs/performance.md).
     const TimeStepSettings& ts = mScene.timeStep;
     const double h = mScene.voxelSizeM;
     const std::vector<Body>& bodies = mState.bodies;
-    std::vector<double> speedMS(bodies.size(), 0.0), reachM(bodies.size(), h);
+    // Per body: its fastest voxel's speed when the rule would shorten the longest step (else 0),
+    // and how far it may reach within that step.
+    std::vector<double> limitingSpeedMS(bodies.size(), 0.0), reachM(bodies.size(), h);
     bool anyLimits = false;
     for (size_t i = 0; i < bodies.size(); ++i) {
         if (bodies[i].anchored || bodies[i].motion.asleep) continue;
-        speedMS[i] = maxVoxelSpeedMS(bodies[i]);
-        reachM[i] += speedMS[i] * longestS;
-        anyLimits = anyLimits || ts.speedFraction * h < speedMS[i] * longestS;
+        const double speedMS = maxVoxelSpeedMS(bodies[i]);
+        reachM[i] += speedMS * longestS;
+        if (ts.speedFraction * h < speedMS * longestS) limitingSpeedMS[i] = speedMS;
+        anyLimits = anyLimits || limitingSpeedMS[i] > 0.0;
     }
     double dt = std::numeric_limits<double>::infinity();
     if (!anyLimits) return dt;
     const std::vector<char> nearBody = withinReachOfAnotherBody(bodies, reachM);
     for (size_t i = 0; i < bodies.size(); ++i) {
-        if (!(ts.speedFraction * h < speedMS[i] * longestS)) continue;
+        if (limitingSpeedMS[i] == 0.0) continue;
         // A lattice's particles step on their own clock; its rigid motion keeps the rule, as do
         // a body the blast may break within the step (its parts' shapes turn with it) and every
         // body under the integrators that do not turn it by exact rotations.
         const bool freeFlightExact = ts.integrator == Integrator::SemiImplicitEuler && !bodies[i].motion.deformable &&
                                      !bodyInWindows(bodies[i], *mField, windows);
         if (!freeFlightExact || nearBody[i] || withinReachOfStatics(bodies[i], mScene.world, reachM[i]))
-            dt = std::min(dt, ts.speedFraction * h / speedMS[i]);
+            dt = std::min(dt, ts.speedFraction * h / limitingSpeedMS[i]);
     }
     return dt;
 }
