@@ -246,7 +246,9 @@ TEST(LatticeBatches, BondsMeasuredAsElasticEndEachStepAsTheOneBondPathLeavesThem
             EXPECT_TRUE(batched.bytes == oneByOne.bytes) << name << " at " << speedMS << " m/s: the batched step differs from the one-bond path";
             // Slowly, bonds stay elastic and the batches take them; fast, every bond is damaged
             // and takes the one-bond path.
-            if (speedMS < 1.0) EXPECT_GT(batched.elasticInLastPass, 0u) << name << ": the batches were meant to take bonds";
+            if (speedMS < 1.0) {
+                EXPECT_GT(batched.elasticInLastPass, 0u) << name << ": the batches were meant to take bonds";
+            }
             EXPECT_EQ(oneByOne.elasticInLastPass, 0u);
             std::printf("%-14s %4.2f m/s: %5zu bonds damaged, %5zu broken, %5zu crushed, %5zu elastic in the last pass; the same bit for bit\n",
                         name, speedMS, batched.damaged, batched.broken, batched.crushed, batched.elasticInLastPass);

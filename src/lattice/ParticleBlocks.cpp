@@ -38,7 +38,6 @@ Body coarsenedBody(const Body& body, const VoxelBlocks& blocks)
     coarse.parentId = body.parentId;
     coarse.materialIndex = body.materialIndex;
     coarse.voxelSizeM = k * body.voxelSizeM;
-    coarse.densityKgM3 = body.densityKgM3;
     coarse.grid = LinkGrid::create(0);
     auto cells = coarse.grid->getAccessor();
     for (auto it = body.grid->constTree().cbeginValueOn(); it; ++it) {
@@ -52,17 +51,17 @@ Body coarsenedBody(const Body& body, const VoxelBlocks& blocks)
             if ((*it & (1 << face)) && particleCell(voxel + faceOffset(face), blocks) != block) bits |= 1 << face;
         cells.setValueOn(block, bits);
     }
+    // The blocks share the body's mass: its density times the fraction of their cells it fills.
+    const int64_t blockCells = int64_t(k) * k * k * int64_t(coarse.grid->activeVoxelCount());
+    coarse.densityKgM3 = body.densityKgM3 * double(body.grid->activeVoxelCount()) / double(blockCells);
     refreshDerivedData(coarse);
-    // Placed where the body's motion puts the blocks, with the body's linear and angular
-    // momentum (so the phase starts with exactly the body's, and hands back its own).
+    // Placed where the body's motion puts the blocks, moving as the body's points there move, so
+    // a lattice that does not deform gives the body back exactly its motion (setMotionsFromFit).
     const Eigen::Vector3d shift = body.motion.orientation *
                                   (coarse.mass.centreOfMassLocalM + blockCentreOffsetM(body.voxelSizeM, blocks) - body.mass.centreOfMassLocalM);
-    const Eigen::Vector3d momentum = body.mass.massKg * body.motion.linearVelocityMS;
-    const Eigen::Vector3d angularMomentum = body.worldInertiaKgM2() * body.motion.angularVelocityRadS - shift.cross(momentum);
     coarse.motion = body.motion;
     coarse.motion.positionM = body.motion.positionM + shift;
-    coarse.motion.linearVelocityMS = momentum / coarse.mass.massKg;
-    coarse.motion.angularVelocityRadS = coarse.worldInertiaKgM2().ldlt().solve(angularMomentum);
+    coarse.motion.linearVelocityMS = body.motion.linearVelocityMS + body.motion.angularVelocityRadS.cross(shift);
     return coarse;
 }
 

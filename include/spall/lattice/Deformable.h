@@ -86,16 +86,17 @@ int64_t advanceDeformable(DeformableBody& deformable, double dtS, const std::fun
 /// simulation's time. Returns the particle-steps taken.
 int64_t catchUpDeformable(DeformableBody& deformable);
 
-/// Particles taken as one rigid body: the motion with their linear and angular momentum, at the
-/// pose that fits their places best (least squares; Kabsch's rotation).
+/// Particles taken as one rigid body: the motion with their linear and angular momentum (as
+/// velocities: the centre's and the spin their inertia gives), at the pose that fits their places
+/// best (least squares; Kabsch's rotation).
 struct RigidFit {
     Eigen::Vector3d centreM = Eigen::Vector3d::Zero();
     Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< body frame (index h) to world
     Eigen::Vector3d velocityMS = Eigen::Vector3d::Zero();  ///< of the centre
-    Eigen::Vector3d linearMomentumKgMS = Eigen::Vector3d::Zero();
     /// The particles' mean rest place in the lattice's body frame (index × its h) (unit: m).
     Eigen::Vector3d restCentreM = Eigen::Vector3d::Zero();
     Eigen::Vector3d angularMomentumKgM2S = Eigen::Vector3d::Zero();  ///< about the centre
+    Eigen::Vector3d angularVelocityRadS = Eigen::Vector3d::Zero();
     double kineticEnergyJ = 0.0;  ///< the particles' own, translation and spin
 };
 RigidFit fitRigidMotion(const Lattice& lattice, const std::vector<uint32_t>& particles);

@@ -45,10 +45,11 @@ void forEachCellOfBlock(const openvdb::Coord& block, const VoxelBlocks& blocks, 
 
 /// The body as blocks of k³ voxels: a block is in it when any of its voxels is, linked to a
 /// neighbouring block when any link joins their voxels, anchored when any of its voxels is;
-/// voxels of k h, the same density, placed where the body is, with the body's linear and angular
-/// momentum. The blocks' mass is that of whole blocks: exact where the body's outline follows
-/// the blocks, heavier by up to a layer of k − 1 voxels over its surface elsewhere, so they move
-/// a little slower for the same momentum.
+/// voxels of k h placed where the body is, moving with its velocity field. Blocks at the surface
+/// are partly empty, so the blocks share the body's mass evenly (their density is the body's
+/// times the fraction of their cells it fills): the lattice weighs what the body does and takes
+/// the same loads at the same acceleration. A block of few voxels moves as heavier than they are
+/// (mass scaling: its own voxels' mass would shorten the stable step by the root of its fill).
 Body coarsenedBody(const Body& body, const VoxelBlocks& blocks);
 
 /// Where a block's centre lies in the body's own frame (index × h), against the coarsened body's
