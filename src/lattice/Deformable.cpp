@@ -148,7 +148,7 @@ void setExternalForces(DeformableBody& deformable, const Body& body, const std::
                        const Eigen::Vector3d& gravityMS2)
 {
     Lattice& lattice = deformable.lattice;
-    // The body's weight, over its particles (blocks at the surface are heavier than its voxels).
+    // The body's weight, shared by its particles as its mass is (blocks share it evenly).
     const Eigen::Vector3d weight = body.mass.massKg / double(lattice.model().voxelParticleCount) * gravityMS2;
     for (size_t p = 0; p < lattice.particleCount(); ++p) lattice.externalForceN[p] = lattice.model().held[p] ? Eigen::Vector3d::Zero() : weight;
     for (const LatticeModel::BearingLoad& load : lattice.model().bearingLoads)

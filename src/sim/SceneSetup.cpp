@@ -4,6 +4,7 @@
 #include <spall/sim/Simulation.h>
 
 #include <spall/core/Error.h>
+#include <spall/lattice/ParticleBlocks.h>
 #include <spall/voxel/VdbIo.h>
 #include <spall/sim/MemoryBudget.h>
 
@@ -267,6 +268,17 @@ constexpr double kLatticeBytesPerParticle = 277.0 + 3.0 * 136.0;
 constexpr double kLatticeCostWorthANoteS = 300.0;
 constexpr double kLatticeMemoryWorthANoteBytes = 1e9;
 
+/// How many lattice particles the body makes in blocks of k³ voxels (ParticleBlocks.h).
+double particleCount(const Body& body, int k)
+{
+    if (k == 1) return double(body.mass.voxelCount);
+    const VoxelBlocks blocks = blocksFor(body, k);
+    openvdb::MaskGrid cells;
+    auto cell = cells.getAccessor();
+    for (auto it = body.grid->cbeginValueOn(); it; ++it) cell.setValueOn(particleCell(it.getCoord(), blocks));
+    return double(cells.activeVoxelCount());
+}
+
 }  // namespace
 
 void Simulation::noteDeformablePhaseCost()
@@ -277,8 +289,9 @@ void Simulation::noteDeformablePhaseCost()
     double particles = 0.0, particleSteps = 0.0;
     for (size_t i = 0; i < mState.bodies.size(); ++i) {
         const Material& material = mScene.material(mScene.objects[i].material);
-        const double count = double(mState.bodies[i].mass.voxelCount) / (k * k * k);
-        const double stepS = stableTimeStepS(calibrateLattice(material, particleM), particleM, material.densityKgM3 * std::pow(particleM, 3));
+        // The particles share the body's mass (coarsenedBody).
+        const double count = particleCount(mState.bodies[i], k);
+        const double stepS = stableTimeStepS(calibrateLattice(material, particleM), particleM, mState.bodies[i].mass.massKg / count);
         // A body stays in the phase while the blast acts on it and at most max_vibration_s after.
         double blastS = 0.0;
         for (const Charge& charge : mScene.charges) {

@@ -52,7 +52,7 @@ struct DeformableBody {
 void nameParts(DeformableBody& deformable, std::vector<Body>& parts, int64_t* nextId);
 
 /// The lattice of a body entering the phase, moving with the body: a particle per voxel, or per
-/// block of settings.particleVoxels³ voxels (ParticleBlocks.h) with the body's momenta.
+/// block of settings.particleVoxels³ voxels (ParticleBlocks.h) moving as the body's points there.
 DeformableBody enterDeformablePhase(const Body& body, const Material& material, const LatticeSettings& settings,
                                     const StaticWorld& supports, uint64_t seed, double timeS);
 
@@ -143,8 +143,10 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
 /// The body back as rigid bodies: each bond broken at hand-off (Lattice::brokenAtHandOff: broken,
 /// or left with less than a stated fraction of its strength) breaks the links across its face
 /// (the frames' fracture surface), each such support bond clears its voxels' anchor bits, and
-/// each connected part gets its particles' momenta and best-fit pose (parts that share a piece
-/// of the lattice, its rigid motion with the piece's momenta); anchored parts stay where they are. Part ids
+/// each connected part gets its particles' best-fit pose and their rigid motion (parts that share
+/// a piece of the lattice, the piece's): with a particle per voxel, exactly the particles' linear
+/// and angular momentum; with blocks, their velocities (setMotionsFromFit). Anchored parts stay
+/// where they are. Part ids
 /// are left to the caller; with one part, it is the body.
 struct HandOff {
     std::vector<Body> parts;

@@ -92,7 +92,7 @@ public:
                                      double timeS, double dtS, std::vector<HandOffRecord>& records);
     /// The bodies as a frame shows them: a body whose lattice has come apart (some bond broken at
     /// hand-off, Lattice::brokenAtHandOff) as the parts a hand-off now would give, at their
-    /// particles' best-fit poses with their momenta (handOff), after it in `bodies`' order. A
+    /// particles' best-fit poses and rigid motion (handOff), after it in `bodies`' order. A
     /// part keeps the id it was first shown with, which a hand-off gives it too
     /// (leaveQuietPieces), so its path through the frames runs on; new ids come from `nextId`.
     std::vector<Body> showPieces(const std::vector<Body>& bodies, int64_t& nextId);
