@@ -135,8 +135,8 @@ Lattice Lattice::fromBody(const Body& wholeBody, const Material& material, const
     lattice.mModel.dampingRatio = material.dampingRatio;
     const double h = body.voxelSizeM;
     lattice.mModel.spacingM = h;
-    // Blocks share the body's mass (coarsenedBody); a particle per voxel has the material's.
-    lattice.mModel.particleMassKg = material.densityKgM3 * (blocks.voxels > 1 ? coarse.densityKgM3 / wholeBody.densityKgM3 : 1.0) * h * h * h;
+    // The body's density; blocks share the body's mass (coarsenedBody).
+    lattice.mModel.particleMassKg = body.densityKgM3 * h * h * h;
     lattice.mModel.particleInertiaKgM2 = lattice.mModel.particleMassKg * h * h / 6.0;
     lattice.mModel.stiffness = calibrateLattice(material, h);
     if (rateDamage) {
