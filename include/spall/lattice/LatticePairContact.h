@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -21,6 +22,10 @@ namespace spall {
 
 /// The fastest a particle moves (unit: m/s).
 double fastestParticleSpeedMS(const Lattice& lattice);
+
+/// At least the farthest a particle of `lattice` moved in the step of dtS it has just drifted
+/// (Lattice::moveAndMeasure: dt times its velocity then), rounding included (unit: m).
+double stepTravelBoundM(const Lattice& lattice, double dtS);
 
 /// The box that holds a lattice's particles' centres.
 Eigen::AlignedBox3d particleBox(const Lattice& lattice);
@@ -48,7 +53,9 @@ public:
     /// again); none: the deepest overlap now.
     LatticePairContact(const Lattice& a, const Lattice& b, std::optional<double> overlapExcuseM = std::nullopt);
     /// Adds the contact forces at the particles' present places to a's and b's bondForceN.
-    void addForces(Lattice& a, Lattice& b);
+    /// `travelAM`, `travelBM`: at least the farthest a particle of each moved since the last
+    /// call (stepTravelBoundM; infinity when not known).
+    void addForces(Lattice& a, Lattice& b, double travelAM, double travelBM);
     double stiffnessNPerM() const { return mStiffnessNPerM; }
     /// How much closer than touching the particles are before they push (unit: m).
     double overlapExcuseM() const { return mOverlapExcuseM; }
@@ -61,7 +68,11 @@ private:
     /// skin since.
     std::vector<std::pair<uint32_t, uint32_t>> mCandidates;
     std::vector<Eigen::Vector3d> mListedAM, mListedBM;
-    bool movedHalfTheSkin(const Lattice& a, const Lattice& b) const;
+    /// At least the farthest a particle of a and of b has moved since the list was made: the
+    /// particles are measured only once either passes half the skin, and the list is made
+    /// again exactly when it would be if they were measured every step.
+    double mMovedBoundAM = std::numeric_limits<double>::infinity(), mMovedBoundBM = std::numeric_limits<double>::infinity();
+    bool movedHalfTheSkin(const Lattice& a, const Lattice& b, double travelAM, double travelBM);
     /// The most a listed pair's particles overlap now (0: none does) (unit: m).
     double deepestOverlapM(const Lattice& a, const Lattice& b) const;
     void listCandidates(const Lattice& a, const Lattice& b);
