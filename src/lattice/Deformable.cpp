@@ -67,7 +67,7 @@ double rigidKineticEnergyJ(const Lattice& lattice, const std::vector<uint32_t>& 
 DeformableBody latticeInBlocks(const Body& body, const VoxelBlocks& blocks, const Material& material, const LatticeSettings& settings,
                                const StaticWorld& supports, uint64_t seed, double timeS)
 {
-    DeformableBody d{body.id, blocks, Lattice::fromBody(body, material, supports, settings, blocks, seed), timeS, timeS, {}, 0.0, {},
+    DeformableBody d{body.id, blocks, Lattice::fromBody(body, material, supports, settings, blocks, seed), timeS, timeS, 0.0, 0.0, {}, 0.0, {},
                      body.motion.positionM, body.motion.orientation, {}};
     // Faces come in leaf order, a voxel's together: a particle is looked up once per voxel.
     d.particleOfFace.reserve(body.exposedFaces.size());
@@ -119,6 +119,8 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
     atEntry.motion.orientation = saved.entryOrientation;
     DeformableBody fresh = latticeInBlocks(atEntry, saved.blocks, material, settings, supports, seed, saved.enteredS);
     fresh.lastLoadedS = saved.lastLoadedS;
+    fresh.awaitedImpactS = saved.awaitedImpactS;
+    fresh.awaitImpactUntilS = saved.awaitImpactUntilS;
     Lattice& to = fresh.lattice;
     Lattice& from = saved.lattice;
     const size_t n = to.particleCount(), bonds = to.bondCount();
@@ -347,6 +349,8 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
 {
     DeformableBody d = latticeInBlocks(part, whole.blocks, material, settings, supports, seed, whole.enteredS);
     d.lastLoadedS = whole.lastLoadedS;
+    d.awaitedImpactS = whole.awaitedImpactS;
+    d.awaitImpactUntilS = whole.awaitImpactUntilS;
     const Lattice& from = whole.lattice;
     Lattice& to = d.lattice;
     // The part's own lattice may hold a voxel by another face than the whole's did (a lone

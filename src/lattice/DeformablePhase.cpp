@@ -134,12 +134,33 @@ int64_t DeformablePhase::deform(std::vector<Body>& bodies, const std::vector<std
         pairOverlapExcuses.push_back({idA, idB, contact.overlapExcuseM()});
     }
     std::sort(pairOverlapExcuses.begin(), pairOverlapExcuses.end(), byPair);
+    awaitImpacts(timeS, dtS);
     for (size_t k = 0; k < lattices.size(); ++k) {
         Body& body = bodies[bodyIndex(k, bodies)];
         followLattice(body, lattices[k].lattice);
         if (reached(body)) lattices[k].lastLoadedS = timeS + dtS;
     }
     return particleSteps;
+}
+
+void DeformablePhase::awaitImpacts(double timeS, double dtS)
+{
+    std::vector<int64_t> pushedIds;
+    for (const auto& [ids, contact] : mPairContacts)
+        if (contact.pushed()) pushedIds.insert(pushedIds.end(), {ids.first, ids.second});
+    std::sort(pushedIds.begin(), pushedIds.end());
+    const double nowS = timeS + dtS;
+    for (DeformableBody& d : lattices) {
+        if (d.awaitedImpactS == 0.0) continue;
+        if (d.lattice.pressedOnASurface() || std::binary_search(pushedIds.begin(), pushedIds.end(), d.bodyId)) {
+            d.lastLoadedS = std::max(d.lastLoadedS, nowS + d.awaitedImpactS);
+            d.awaitedImpactS = 0.0;
+        } else if (nowS >= d.awaitImpactUntilS) {
+            d.awaitedImpactS = 0.0;  // it missed: what it struck as a rigid body its particles never reached
+        } else {
+            d.lastLoadedS = std::max(d.lastLoadedS, nowS);
+        }
+    }
 }
 
 std::vector<LatticePairContact*> DeformablePhase::contactsOf(const TouchingGroup& group, std::vector<std::pair<int64_t, int64_t>>& used)

@@ -135,6 +135,7 @@ void LatticePairContact::addForces(Lattice& a, Lattice& b, double travelAM, doub
         const Eigen::Vector3d onB = (mStiffnessNPerM * (pushFromM - distanceM) / distanceM) * apartM;
         b.state.bondForceN[q] += onB;
         a.state.bondForceN[p] -= onB;
+        mPushed = true;
     }
     mOverlapExcuseM = std::min(mOverlapExcuseM, deepestM);
 }

@@ -117,12 +117,15 @@ void Lattice::addSurfaceForces(double dtS)
 {
     const bool ground = mModel.ground.enabled, boxes = !mModel.keptOut.empty();
     const LatticeModel::SurfaceContact onGround = ground ? groundContact(dtS) : LatticeModel::SurfaceContact{};
-    if (ground || boxes)
+    if (ground || boxes) {
+        std::atomic<bool> pressed{false};
         forEach(particleCount(), [&](size_t p) {
             if (mModel.held[p]) return;
-            if (ground && !bondedToGround(p)) pressOnGround(p, onGround, dtS);
-            if (boxes) pressOnColliders(p, dtS);
+            const bool onTheGround = ground && !bondedToGround(p) && pressOnGround(p, onGround, dtS);
+            if ((boxes && pressOnColliders(p, dtS)) || onTheGround) pressed.store(true, std::memory_order_relaxed);
         });
+        mPressedOnASurface = mPressedOnASurface || pressed.load();
+    }
     // Few, each on its own voxel.
     for (const LatticeModel::BearingLoad& load : mModel.bearingLoads) holdByBearing(load, dtS);
 }
@@ -146,11 +149,13 @@ void Lattice::measureColliderSlack()
             if (const auto sunk = depthInCollider(p, box)) mModel.colliderSlackM[p] = std::max(mModel.colliderSlackM[p], float(sunk->depthM));
 }
 
-void Lattice::pressOnColliders(size_t p, double dtS)
+bool Lattice::pressOnColliders(size_t p, double dtS)
 {
+    bool pushed = false;
     for (const LatticeModel::KeptOut& box : mModel.keptOut)
         if (const auto sunk = depthInCollider(p, box); sunk && sunk->depthM > mModel.colliderSlackM[p])
-            pressOn(p, sunk->outward, sunk->depthM - mModel.colliderSlackM[p], box.contact, dtS);
+            pushed = pressOn(p, sunk->outward, sunk->depthM - mModel.colliderSlackM[p], box.contact, dtS) || pushed;
+    return pushed;
 }
 
 bool Lattice::bears(const LatticeModel::BearingLoad& load) const
@@ -169,13 +174,13 @@ void Lattice::holdByBearing(const LatticeModel::BearingLoad& load, double dtS)
     state.bondForceN[p] += frictionForceN(v - across.dot(v) * across, load.friction * normalN, mModel.particleMassKg, dtS);
 }
 
-void Lattice::pressOnGround(size_t p, const LatticeModel::SurfaceContact& ground, double dtS)
+bool Lattice::pressOnGround(size_t p, const LatticeModel::SurfaceContact& ground, double dtS)
 {
     const double depth = depthInGroundM(mModel, state.positionM[p]);
-    if (depth > 0.0) pressOn(p, mModel.ground.normal, depth, ground, dtS);
+    return depth > 0.0 && pressOn(p, mModel.ground.normal, depth, ground, dtS);
 }
 
-void Lattice::pressOn(size_t p, const Eigen::Vector3d& outward, double depthM, const LatticeModel::SurfaceContact& surface, double dtS)
+bool Lattice::pressOn(size_t p, const Eigen::Vector3d& outward, double depthM, const LatticeModel::SurfaceContact& surface, double dtS)
 {
     const Eigen::Vector3d& v = state.velocityMS[p];
     const double closingMS = -outward.dot(v);
@@ -184,8 +189,9 @@ void Lattice::pressOn(size_t p, const Eigen::Vector3d& outward, double depthM, c
     // ground's, which takes the waves it carries away both ways.
     const double normalN =
         std::max(0.0, surface.stiffnessNPerM * depthM + surface.dashpotNSPerM * std::min(closingMS, 0.0) + surface.radiationNSPerM * closingMS);
-    if (normalN == 0.0) return;
+    if (normalN == 0.0) return false;
     state.bondForceN[p] += normalN * outward + frictionForceN(v + closingMS * outward, surface.friction * normalN, mModel.particleMassKg, dtS);
+    return true;
 }
 
 }  // namespace spall

@@ -120,6 +120,8 @@ void transferDeformable(Archive& a, D& d)
     a.pod(d.bodyId, "deformable body");
     a.pod(d.enteredS, "deformable since");
     a.pod(d.lastLoadedS, "deformable last loaded");
+    a.pod(d.awaitedImpactS, "deformable awaited impact");
+    a.pod(d.awaitImpactUntilS, "deformable awaits impact until");
     a.pod(d.blocks.voxels, "particle voxels");
     a.vec(d.entryPositionM, "deformable entry position");
     a.doubles(d.entryOrientation.coeffs().data(), 4, "deformable entry orientation");

@@ -257,7 +257,10 @@ void Simulation::separateBeforeEntering(const ContactManifold& m)
     Body& a = mState.bodies[size_t(m.a)];
     Body& b = mState.bodies[size_t(m.b)];
     const auto inverseMass = [](const Body& body) { return body.anchored || body.motion.deformable ? 0.0 : 1.0 / body.mass.massKg; };
-    const double wa = inverseMass(a), wb = inverseMass(b), depthM = std::max(0.0, m.maxDepthM);
+    // Pieces that left the phase overlapping each other keep that overlap excused (the rigid
+    // solver's slack, BodyMotion::overlapSlackM): their particles were that far apart.
+    const double excusedM = std::min(std::max(a.motion.overlapSlackM, 0.0), std::max(b.motion.overlapSlackM, 0.0));
+    const double wa = inverseMass(a), wb = inverseMass(b), depthM = std::max(0.0, m.maxDepthM - excusedM);
     if (wa + wb == 0.0 || depthM == 0.0) return;
     // The normal points from b to a.
     a.motion.positionM += (depthM * wa / (wa + wb)) * m.normal;
@@ -268,6 +271,7 @@ void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
 {
     if (mScene.fracture.algorithm != FractureAlgorithm::Lattice || !mScene.lattice.impactFracture) return;
     std::vector<char> striking(mState.bodies.size(), 0), struck(mState.bodies.size(), 0);
+    std::vector<double> closingAtEntryMS(mState.bodies.size(), 0.0);
     for (size_t i = 0; i < mState.bodies.size(); ++i) {
         Body& body = mState.bodies[i];
         if (body.motion.deformable || body.linkCount == 0 || contacts.statics[i].empty()) continue;
@@ -275,6 +279,7 @@ void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
             fastestClosingSpeedMS(body, contacts.statics[i], groundShareOfImpact(mScene.materials[body.materialIndex], mScene.world.ground));
         struck[i] = striking[i] = strikesHardEnoughToCrack(closingMS, body, 1.0, dtS);
         if (!striking[i]) continue;
+        closingAtEntryMS[i] = closingMS;
         body.motion.survivedImpactMS = closingMS;
         leaveStaticsBeforeEntering(body, contacts.statics[i]);
         // Its particles take the impact: the solver must not stop it as a rigid body first.
@@ -290,7 +295,11 @@ void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
             kept.push_back(std::move(m));
             continue;
         }
-        for (const int i : {m.a, m.b}) striking[size_t(i)] = struck[size_t(i)] = 1;
+        const double closingMS = fastestClosingSpeedMS(mState.bodies, m);
+        for (const int i : {m.a, m.b}) {
+            striking[size_t(i)] = struck[size_t(i)] = 1;
+            closingAtEntryMS[size_t(i)] = std::max(closingAtEntryMS[size_t(i)], closingMS);
+        }
         separateBeforeEntering(m);
         contacts.solverContacts -= int64_t(m.points.size());
     }
@@ -298,13 +307,22 @@ void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
     // The bodies are where the step's end puts them.
     mState.deformable.enter(mState.bodies, striking, mScene.materials, mScene.lattice, mStaticWorld, mScene.seed, mState.timeS + dtS);
     // The impact loads it for as long as a bar striking a rigid wall stays in contact, 2 L / c
-    // (Kolsky 1963, ch. 4), L its largest extent: no hand-off before the impact has played out.
+    // (Kolsky 1963, ch. 4), L its largest extent: no hand-off before the impact has played out,
+    // counted from when its particles meet what it struck (DeformablePhase::awaitImpacts). They
+    // may lag its rigid voxels' contact by up to (√3 − 1 + 0.1) voxels: turned cubes whose
+    // corners touch, found a tenth of a voxel early, have their centres up to √3 voxels apart,
+    // where the lattices' particles touch at one. At the entry's closing speed that gap closes
+    // in the time it waits at most.
+    constexpr double kParticleContactLagVoxels = 0.832;
     for (size_t k = 0; k < mState.deformable.lattices.size(); ++k) {
         const size_t i = mState.deformable.bodyIndex(k, mState.bodies);
         const Body& body = mState.bodies[i];
         if (!struck[i]) continue;
-        double& lastLoadedS = mState.deformable.lattices[k].lastLoadedS;
-        lastLoadedS = std::max(lastLoadedS, mState.timeS + dtS + 4.0 * body.boundingRadiusM / pWaveSpeedMS(mScene.materials[body.materialIndex]));
+        DeformableBody& d = mState.deformable.lattices[k];
+        const double enteredS = mState.timeS + dtS, closingMS = std::max(closingAtEntryMS[i], impactSpeedMS(mScene.world, dtS));
+        d.awaitedImpactS = 4.0 * body.boundingRadiusM / pWaveSpeedMS(mScene.materials[body.materialIndex]);
+        d.awaitImpactUntilS = enteredS + kParticleContactLagVoxels * body.voxelSizeM / closingMS;
+        d.lastLoadedS = std::max(d.lastLoadedS, enteredS + d.awaitedImpactS);
     }
 }
 

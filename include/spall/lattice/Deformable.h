@@ -22,6 +22,11 @@ struct DeformableBody {
     Lattice lattice;
     double enteredS = 0.0;     ///< (unit: s)
     double lastLoadedS = 0.0;  ///< the end of the last step it spent inside an open blast window (unit: s)
+    /// An impact it entered for (lattice.impact_fracture) and has not yet taken: how long the
+    /// impact loads it once its particles meet what it struck (0: none awaited), and until when
+    /// it waits for that (DeformablePhase::awaitImpacts) (unit: s).
+    double awaitedImpactS = 0.0;
+    double awaitImpactUntilS = 0.0;
     /// Per exposed face of the body (body.exposedFaces order), the particle behind it: found once,
     /// as the body keeps its faces while it is a lattice.
     std::vector<uint32_t> particleOfFace;

@@ -127,6 +127,10 @@ public:
     /// Whether a support bears on its voxel: while they touch, its bond broken or not (a floor
     /// rests on a cracked head), the voxel within a quarter voxel of where the support held it.
     bool bears(const LatticeModel::BearingLoad& load) const;
+    /// Whether the ground or a collider has pushed any of its particles since it was built
+    /// (addSurfaceForces; a bearing support does not count): a lattice that entered for an
+    /// impact has then met what it struck.
+    bool pressedOnASurface() const { return mPressedOnASurface; }
 
 private:
     LatticeModel mModel;
@@ -190,6 +194,7 @@ private:
     size_t mBondsElasticInLastPass = 0;
     /// What happened to bonds in the step under way (kSnapped, kBroke): moveAndMeasure's, for finishStep.
     uint8_t mStepEvents = 0;
+    bool mPressedOnASurface = false;  ///< pressedOnASurface
     /// Velocity Verlet's half-kick of a step: dt/2 over a particle's mass and inertia.
     struct HalfKick {
         double perMass, perInertia;
@@ -388,8 +393,8 @@ private:
     /// (LatticeStaticContacts.cpp), added to its bond force; `dtS` the step they act over.
     void addSurfaceForces(double dtS);
     /// A particle's push from the colliders it sinks into beyond the allowed depth (keepOutOf)
-    /// and its slack.
-    void pressOnColliders(size_t p, double dtS);
+    /// and its slack. Returns whether any pushed it.
+    bool pressOnColliders(size_t p, double dtS);
     /// How far a particle's cube sinks into a collider beyond the allowed depth, and the
     /// outward normal of the face it is nearest (none if outside the grown box).
     struct ColliderDepth {
@@ -402,8 +407,8 @@ private:
     /// The friction of a support bearing on a voxel whose bond to it has broken (a floor on a
     /// cracked head holds it from sliding, as the ground holds its base).
     void holdByBearing(const LatticeModel::BearingLoad& load, double dtS);
-    /// A particle's push from the ground its cube sinks into (GroundPlane).
-    void pressOnGround(size_t p, const LatticeModel::SurfaceContact& ground, double dtS);
+    /// A particle's push from the ground its cube sinks into (GroundPlane). Returns whether it pushed.
+    bool pressOnGround(size_t p, const LatticeModel::SurfaceContact& ground, double dtS);
     /// The ground's contact with each particle that presses on it through a step `dtS`: rigid,
     /// or compliant (GroundCompliance), its footing the patch of particles that press on it,
     /// shared.
@@ -414,7 +419,8 @@ private:
     /// the spring and the dashpot, never pulling; and Coulomb's friction against its sliding, up
     /// to μ times that, or what stops the sliding within the step `dtS` (applied at its centre:
     /// a cube's contact would also turn it; its bonds hold it from turning in a lattice).
-    void pressOn(size_t p, const Eigen::Vector3d& outward, double depthM, const LatticeModel::SurfaceContact& surface, double dtS);
+    /// Returns whether it pushed.
+    bool pressOn(size_t p, const Eigen::Vector3d& outward, double depthM, const LatticeModel::SurfaceContact& surface, double dtS);
     /// Whether a particle is still bonded to its ground point: it then bears on the ground
     /// through that bond, and the plane would hold the compression side of a bent base rigid,
     /// stiffening and strengthening it.

@@ -59,10 +59,13 @@ public:
     double stiffnessNPerM() const { return mStiffnessNPerM; }
     /// How much closer than touching the particles are before they push (unit: m).
     double overlapExcuseM() const { return mOverlapExcuseM; }
+    /// Whether its particles have pushed each other since it was made.
+    bool pushed() const { return mPushed; }
 
 private:
     double mTouchM, mSkinM, mStiffnessNPerM;
     double mOverlapExcuseM = 0.0;
+    bool mPushed = false;
     /// Pairs (a's particle, b's) whose centres were within touching plus the skin when last
     /// listed, sorted: a Verlet list, listed again once a particle of either has moved half the
     /// skin since.

@@ -152,9 +152,9 @@ private:
     /// Two bodies about to meet as lattices start touching, not overlapping: a rigid step may
     /// carry a body through a thin one's particles (a block through a pane one particle thick),
     /// which the lattices' contact would then push out the far side. The rigid ones move back
-    /// along the contact's normal by its depth, shared by inverse mass as the position
-    /// correction shares it; the lattices' contact excuses what overlap is left
-    /// (LatticePairContact).
+    /// along the contact's normal by its depth beyond the overlap the rigid solver excuses them,
+    /// shared by inverse mass as the position correction shares it; the lattices' contact
+    /// excuses what overlap is left (LatticePairContact).
     void separateBeforeEntering(const ContactManifold& m);
     /// Pieces of deformable bodies the blast has passed leave the phase once their vibration has
     /// died down (all of them after lattice.max_vibration_s) and become rigid bodies again;
