@@ -138,7 +138,7 @@ int64_t DeformablePhase::deform(std::vector<Body>& bodies, const std::vector<std
     for (size_t k = 0; k < lattices.size(); ++k) {
         Body& body = bodies[bodyIndex(k, bodies)];
         followLattice(body, lattices[k].lattice);
-        if (reached(body)) lattices[k].lastLoadedS = timeS + dtS;
+        if (reached(body)) lattices[k].lastLoadedS = std::max(lattices[k].lastLoadedS, timeS + dtS);
     }
     return particleSteps;
 }

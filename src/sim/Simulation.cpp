@@ -258,7 +258,8 @@ void Simulation::separateBeforeEntering(const ContactManifold& m)
     Body& b = mState.bodies[size_t(m.b)];
     const auto inverseMass = [](const Body& body) { return body.anchored || body.motion.deformable ? 0.0 : 1.0 / body.mass.massKg; };
     // Pieces that left the phase overlapping each other keep that overlap excused (the rigid
-    // solver's slack, BodyMotion::overlapSlackM): their particles were that far apart.
+    // solver's slack, BodyMotion::overlapSlackM, the smaller body's): their voxels overlapped so
+    // far where their particles only touched.
     const double excusedM = std::min(std::max(a.motion.overlapSlackM, 0.0), std::max(b.motion.overlapSlackM, 0.0));
     const double wa = inverseMass(a), wb = inverseMass(b), depthM = std::max(0.0, m.maxDepthM - excusedM);
     if (wa + wb == 0.0 || depthM == 0.0) return;
@@ -270,8 +271,9 @@ void Simulation::separateBeforeEntering(const ContactManifold& m)
 void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
 {
     if (mScene.fracture.algorithm != FractureAlgorithm::Lattice || !mScene.lattice.impactFracture) return;
-    std::vector<char> striking(mState.bodies.size(), 0), struck(mState.bodies.size(), 0);
+    std::vector<char> striking(mState.bodies.size(), 0), struck(mState.bodies.size(), 0), wasLattice(mState.bodies.size(), 0);
     std::vector<double> closingAtEntryMS(mState.bodies.size(), 0.0);
+    for (size_t i = 0; i < mState.bodies.size(); ++i) wasLattice[i] = mState.bodies[i].motion.deformable;
     for (size_t i = 0; i < mState.bodies.size(); ++i) {
         Body& body = mState.bodies[i];
         if (body.motion.deformable || body.linkCount == 0 || contacts.statics[i].empty()) continue;
@@ -307,22 +309,24 @@ void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
     // The bodies are where the step's end puts them.
     mState.deformable.enter(mState.bodies, striking, mScene.materials, mScene.lattice, mStaticWorld, mScene.seed, mState.timeS + dtS);
     // The impact loads it for as long as a bar striking a rigid wall stays in contact, 2 L / c
-    // (Kolsky 1963, ch. 4), L its largest extent: no hand-off before the impact has played out,
-    // counted from when its particles meet what it struck (DeformablePhase::awaitImpacts). They
-    // may lag its rigid voxels' contact by up to (√3 − 1 + 0.1) voxels: turned cubes whose
-    // corners touch, found a tenth of a voxel early, have their centres up to √3 voxels apart,
-    // where the lattices' particles touch at one. At the entry's closing speed that gap closes
-    // in the time it waits at most.
+    // (Kolsky 1963, ch. 4), L its largest extent, twice its bounding radius: no hand-off before
+    // the impact has played out, counted, for a body that enters for it, from when its particles
+    // meet what it struck (DeformablePhase::awaitImpacts). They may lag its rigid voxels' contact
+    // by up to (√3 − 1 + 0.1) voxels: turned cubes whose corners touch, found a tenth of a voxel
+    // early, have their centres up to √3 voxels apart, where the lattices' particles touch at
+    // one (against the ground (√3 − 1) / 2 + 0.1 = 0.47). At the entry's closing speed that gap
+    // closes in the time it waits at most.
     constexpr double kParticleContactLagVoxels = 0.832;
     for (size_t k = 0; k < mState.deformable.lattices.size(); ++k) {
         const size_t i = mState.deformable.bodyIndex(k, mState.bodies);
         const Body& body = mState.bodies[i];
         if (!struck[i]) continue;
         DeformableBody& d = mState.deformable.lattices[k];
-        const double enteredS = mState.timeS + dtS, closingMS = std::max(closingAtEntryMS[i], impactSpeedMS(mScene.world, dtS));
-        d.awaitedImpactS = 4.0 * body.boundingRadiusM / pWaveSpeedMS(mScene.materials[body.materialIndex]);
-        d.awaitImpactUntilS = enteredS + kParticleContactLagVoxels * body.voxelSizeM / closingMS;
-        d.lastLoadedS = std::max(d.lastLoadedS, enteredS + d.awaitedImpactS);
+        const double enteredS = mState.timeS + dtS, impactS = 4.0 * body.boundingRadiusM / pWaveSpeedMS(mScene.materials[body.materialIndex]);
+        d.lastLoadedS = std::max(d.lastLoadedS, enteredS + impactS);
+        if (wasLattice[i]) continue;  // its particles are where it is
+        d.awaitedImpactS = impactS;
+        d.awaitImpactUntilS = enteredS + kParticleContactLagVoxels * body.voxelSizeM / std::max(closingAtEntryMS[i], impactSpeedMS(mScene.world, dtS));
     }
 }
 

@@ -21,10 +21,13 @@ struct DeformableBody {
     VoxelBlocks blocks;
     Lattice lattice;
     double enteredS = 0.0;     ///< (unit: s)
-    double lastLoadedS = 0.0;  ///< the end of the last step it spent inside an open blast window (unit: s)
+    /// Until when a load holds it in the phase: the end of the last step it spent inside an open
+    /// blast window, or of an impact it entered for (unit: s).
+    double lastLoadedS = 0.0;
     /// An impact it entered for (lattice.impact_fracture) and has not yet taken: how long the
     /// impact loads it once its particles meet what it struck (0: none awaited), and until when
-    /// it waits for that (DeformablePhase::awaitImpacts) (unit: s).
+    /// it waits for that (DeformablePhase::awaitImpacts); only a lattice that entered for the
+    /// impact waits, not one already in the phase that a rigid body struck (unit: s).
     double awaitedImpactS = 0.0;
     double awaitImpactUntilS = 0.0;
     /// Per exposed face of the body (body.exposedFaces order), the particle behind it: found once,

@@ -114,11 +114,13 @@ private:
     std::vector<TouchingGroup> touchingGroups(double dtS) const;
     /// A lattice that entered for an impact stays in the phase, as if loaded, until its
     /// particles meet something (the ground, a collider, another lattice) or its wait is over;
-    /// the impact then loads it for its awaitedImpactS. Its rigid body met what it struck as
-    /// turned cubes, found a tenth of a voxel early; its particles touch as unturned cubes on
-    /// a surface and as spheres one edge across between lattices, so they may still be up to
-    /// 0.83 of a voxel away (Simulation::enterOnImpact), and a lattice that left before
-    /// touching would leave its body still falling onto what it struck, to enter again.
+    /// the impact then loads it for its awaitedImpactS (none when the wait is over). Its rigid
+    /// body met what it struck as turned cubes, found a tenth of a voxel early; its particles
+    /// touch as unturned cubes on a surface and as spheres one edge across between lattices, so
+    /// they may still be up to 0.47 of a voxel from the ground and 0.83 from another lattice
+    /// (Simulation::enterOnImpact), and a lattice that left before touching would leave its
+    /// body still falling onto what it struck, to enter again. Touching anything counts: a body
+    /// resting on the ground that another strikes is released at once.
     void awaitImpacts(double timeS, double dtS);
     /// Per lattice, its body's index (reindex).
     std::vector<size_t> mBodyIndex;

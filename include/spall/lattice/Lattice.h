@@ -127,9 +127,9 @@ public:
     /// Whether a support bears on its voxel: while they touch, its bond broken or not (a floor
     /// rests on a cracked head), the voxel within a quarter voxel of where the support held it.
     bool bears(const LatticeModel::BearingLoad& load) const;
-    /// Whether the ground or a collider has pushed any of its particles since it was built
-    /// (addSurfaceForces; a bearing support does not count): a lattice that entered for an
-    /// impact has then met what it struck.
+    /// Whether the ground or a collider has pushed any of its particles since it was built (its
+    /// forces at build count too; addSurfaceForces; a bearing support does not count): a lattice
+    /// that entered for an impact has then met what it struck.
     bool pressedOnASurface() const { return mPressedOnASurface; }
 
 private:
