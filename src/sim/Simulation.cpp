@@ -271,7 +271,7 @@ void Simulation::separateBeforeEntering(const ContactManifold& m)
 void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
 {
     if (mScene.fracture.algorithm != FractureAlgorithm::Lattice || !mScene.lattice.impactFracture) return;
-    std::vector<char> striking(mState.bodies.size(), 0), struck(mState.bodies.size(), 0), wasLattice(mState.bodies.size(), 0);
+    std::vector<char> striking(mState.bodies.size(), 0), wasLattice(mState.bodies.size(), 0);
     std::vector<double> closingAtEntryMS(mState.bodies.size(), 0.0);
     for (size_t i = 0; i < mState.bodies.size(); ++i) wasLattice[i] = mState.bodies[i].motion.deformable;
     for (size_t i = 0; i < mState.bodies.size(); ++i) {
@@ -279,7 +279,7 @@ void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
         if (body.motion.deformable || body.linkCount == 0 || contacts.statics[i].empty()) continue;
         const double closingMS =
             fastestClosingSpeedMS(body, contacts.statics[i], groundShareOfImpact(mScene.materials[body.materialIndex], mScene.world.ground));
-        struck[i] = striking[i] = strikesHardEnoughToCrack(closingMS, body, 1.0, dtS);
+        striking[i] = strikesHardEnoughToCrack(closingMS, body, 1.0, dtS);
         if (!striking[i]) continue;
         closingAtEntryMS[i] = closingMS;
         body.motion.survivedImpactMS = closingMS;
@@ -299,7 +299,7 @@ void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
         }
         const double closingMS = fastestClosingSpeedMS(mState.bodies, m);
         for (const int i : {m.a, m.b}) {
-            striking[size_t(i)] = struck[size_t(i)] = 1;
+            striking[size_t(i)] = 1;
             closingAtEntryMS[size_t(i)] = std::max(closingAtEntryMS[size_t(i)], closingMS);
         }
         separateBeforeEntering(m);
@@ -308,6 +308,12 @@ void Simulation::enterOnImpact(ContactSet& contacts, double dtS)
     contacts.manifolds = std::move(kept);
     // The bodies are where the step's end puts them.
     mState.deformable.enter(mState.bodies, striking, mScene.materials, mScene.lattice, mStaticWorld, mScene.seed, mState.timeS + dtS);
+    holdForImpacts(striking, wasLattice, closingAtEntryMS, dtS);
+}
+
+void Simulation::holdForImpacts(const std::vector<char>& struck, const std::vector<char>& wasLattice, const std::vector<double>& closingAtEntryMS,
+                                double dtS)
+{
     // The impact loads it for as long as a bar striking a rigid wall stays in contact, 2 L / c
     // (Kolsky 1963, ch. 4), L its largest extent, twice its bounding radius: no hand-off before
     // the impact has played out, counted, for a body that enters for it, from when its particles

@@ -149,6 +149,10 @@ private:
     /// Whether two bodies' contact may crack either (strikesHardEnoughToCrack), both able to be
     /// lattices and not both lattices already; if so, each one's survived impact is raised to its share.
     bool crackingImpactBetween(const ContactManifold& m, double dtS);
+    /// Each lattice of a `struck` body is held in the phase until its impact has played out;
+    /// one that was not a lattice before (`wasLattice`) first waits for its particles to meet
+    /// what it struck, at most as long as they take to close their lag at `closingAtEntryMS`.
+    void holdForImpacts(const std::vector<char>& struck, const std::vector<char>& wasLattice, const std::vector<double>& closingAtEntryMS, double dtS);
     /// Two bodies about to meet as lattices start touching, not overlapping: a rigid step may
     /// carry a body through a thin one's particles (a block through a pane one particle thick),
     /// which the lattices' contact would then push out the far side. The rigid ones move back
