@@ -133,6 +133,75 @@ TEST(Deformable, ALatticeThrownAtABoxBouncesOffIt)
     EXPECT_LT(farthestY, 0.25) << "a particle went into the box";
 }
 
+namespace {
+
+/// Where a rigid body's point that started at `startM` is after `timeS` of free flight under
+/// gravity `gMS2`, turning at a constant spin about its centre (a cube's inertia is the same about
+/// every axis, so its spin stays constant: Euler's equations with no torque).
+Eigen::Vector3d inFreeFlightM(const Eigen::Vector3d& startM, const Eigen::Vector3d& centreM, const BodyMotion& motion,
+                              const Eigen::Vector3d& gMS2, double timeS)
+{
+    const Eigen::Vector3d spin = motion.angularVelocityRadS;
+    const Eigen::AngleAxisd turned(spin.norm() * timeS, spin.normalized());
+    return centreM + motion.linearVelocityMS * timeS + 0.5 * gMS2 * timeS * timeS + turned * (startM - centreM);
+}
+
+}  // namespace
+
+TEST(Deformable, ALatticeAwaitingItsImpactCoastsAsItsRigidBodyUntilItsParticlesMeetTheGround)
+{
+    // A 4-voxel cube of brick masonry, turned, falling and spinning, 30 cm over the ground: a
+    // lattice that entered for an impact its particles have not met yet (DeformableBody::coasting).
+    // Every particle must follow the closed-form free flight until the first lattice step at
+    // whose end one sits within half a voxel of the ground (an unturned cube's reach), and the
+    // same lattice stepped with its bonds must come to the same places.
+    const double h = 0.025;
+    const Eigen::Quaterniond turned(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, -1, 2).normalized()));
+    Body body = test::boxBody(4, 4, 4, h, 1900.0, Eigen::Vector3d(0.1, -0.2, 0.3), turned);
+    body.motion.linearVelocityMS = Eigen::Vector3d(1, 0, -2);
+    body.motion.angularVelocityRadS = Eigen::Vector3d(3, 1, -4);
+    const Eigen::Vector3d gMS2(0, 0, -9.81);
+    DeformableBody coasting = enterDeformablePhase(body, findMaterialPreset("brick-masonry"), LatticeSettings(), test::groundAtZero(), 1, 0.0);
+    DeformableBody stepped = coasting;
+    coasting.coasting = true;
+    const std::vector<Eigen::Vector3d> startM = coasting.lattice.state.positionM;
+    Eigen::Vector3d centreM = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector3d& x : startM) centreM += x / double(startM.size());
+    const double stableS = coasting.lattice.stableTimeStepS(), rigidStepS = 1e-4;
+    // The first lattice step's end at which a particle's centre is within h/2 of the ground.
+    int64_t meetsAtStep = 1;
+    const auto lowestAt = [&](double t) {
+        double lowest = 1e9;
+        for (const Eigen::Vector3d& x : startM) lowest = std::min(lowest, inFreeFlightM(x, centreM, body.motion, gMS2, t).z());
+        return lowest;
+    };
+    while (lowestAt(double(meetsAtStep) * stableS) > 0.5 * h) ++meetsAtStep;
+    double farthestOffM = 0.0, stoppedAtS = -1.0;
+    for (int k = 1; stoppedAtS < 0.0 && k < 10000; ++k) {
+        for (DeformableBody* d : {&coasting, &stepped}) {
+            setExternalForces(*d, body, {}, gMS2);
+            advanceDeformable(*d, rigidStepS);
+        }
+        const double latticeS = k * rigidStepS - coasting.pendingS;
+        if (!coasting.coasting) {
+            stoppedAtS = latticeS;
+            break;
+        }
+        for (size_t p = 0; p < startM.size(); ++p)
+            farthestOffM = std::max(farthestOffM, (coasting.lattice.state.positionM[p] - inFreeFlightM(startM[p], centreM, body.motion, gMS2, latticeS)).norm());
+    }
+    EXPECT_LT(farthestOffM, 1e-9) << "the coasting lattice left the rigid motion";
+    // It stops coasting in the step it meets the ground, or the rigid step that gathers it.
+    EXPECT_GE(stoppedAtS, double(meetsAtStep) * stableS - 1e-12);
+    EXPECT_LT(stoppedAtS, double(meetsAtStep) * stableS + rigidStepS);
+    double farthestApartM = 0.0;
+    for (size_t p = 0; p < startM.size(); ++p)
+        farthestApartM = std::max(farthestApartM, (coasting.lattice.state.positionM[p] - stepped.lattice.state.positionM[p]).norm());
+    EXPECT_LT(farthestApartM, 0.01 * h) << "coasting and stepping with the bonds part";
+    std::printf("meets the ground after %.2f ms; coasting stopped at %.2f ms; %.1e m off the closed form; %.1e m from the stepped lattice\n",
+                1e3 * double(meetsAtStep) * stableS, 1e3 * stoppedAtS, farthestOffM, farthestApartM);
+}
+
 TEST(Deformable, ALatticeOfBlocksWeighsWhatItsBodyDoesMovesAsItAndGivesItsMotionBack)
 {
     // 2 x 2 x 2 blocks: 4 x 3 x 2 particles over 105 voxels (the blocks on the far faces are

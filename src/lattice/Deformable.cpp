@@ -67,7 +67,7 @@ double rigidKineticEnergyJ(const Lattice& lattice, const std::vector<uint32_t>& 
 DeformableBody latticeInBlocks(const Body& body, const VoxelBlocks& blocks, const Material& material, const LatticeSettings& settings,
                                const StaticWorld& supports, uint64_t seed, double timeS)
 {
-    DeformableBody d{body.id, blocks, Lattice::fromBody(body, material, supports, settings, blocks, seed), timeS, timeS, 0.0, 0.0, {}, 0.0, {},
+    DeformableBody d{body.id, blocks, Lattice::fromBody(body, material, supports, settings, blocks, seed), timeS, timeS, 0.0, 0.0, false, {}, 0.0, {},
                      body.motion.positionM, body.motion.orientation, {}};
     // Faces come in leaf order, a voxel's together: a particle is looked up once per voxel.
     d.particleOfFace.reserve(body.exposedFaces.size());
@@ -121,6 +121,7 @@ void restoreDeformable(DeformableBody& saved, const Body& body, const Material& 
     fresh.lastLoadedS = saved.lastLoadedS;
     fresh.awaitedImpactS = saved.awaitedImpactS;
     fresh.awaitImpactUntilS = saved.awaitImpactUntilS;
+    fresh.coasting = saved.coasting;
     Lattice& to = fresh.lattice;
     Lattice& from = saved.lattice;
     const size_t n = to.particleCount(), bonds = to.bondCount();
@@ -163,12 +164,23 @@ void setExternalForces(DeformableBody& deformable, const Body& body, const std::
     }
 }
 
+void stepLattice(DeformableBody& deformable, double dtS)
+{
+    if (!deformable.coasting) {
+        deformable.lattice.step(dtS);
+        return;
+    }
+    deformable.lattice.coast(dtS);
+    deformable.lattice.finishStep(dtS);
+    if (deformable.lattice.pressedOnASurface()) deformable.coasting = false;
+}
+
 int64_t catchUpDeformable(DeformableBody& deformable)
 {
     if (deformable.pendingS <= 0.0) return 0;
     Lattice& lattice = deformable.lattice;
     applyGatheredForces(deformable);
-    lattice.step(deformable.pendingS);  // shorter than a stable step
+    stepLattice(deformable, deformable.pendingS);  // shorter than a stable step
     deformable.pendingS = 0.0;
     deformable.pendingImpulseNs.clear();
     return static_cast<int64_t>(lattice.particleCount());
@@ -191,7 +203,7 @@ int64_t advanceDeformable(DeformableBody& deformable, double dtS, const std::fun
     for (int64_t i = 0; i < steps; ++i) {
         if (abandon && abandon()) throw StepAbandoned("a step of the deformable phase was given up after " + std::to_string(i) + " of its " +
                                                       std::to_string(steps) + " lattice steps");
-        lattice.step(stableS);
+        stepLattice(deformable, stableS);
     }
     const double leftS = deformable.pendingS - double(steps) * stableS;
     if (leftS <= 1e-12 * stableS) {
@@ -351,6 +363,7 @@ DeformableBody continueDeformable(const Body& part, const DeformableBody& whole,
     d.lastLoadedS = whole.lastLoadedS;
     d.awaitedImpactS = whole.awaitedImpactS;
     d.awaitImpactUntilS = whole.awaitImpactUntilS;
+    d.coasting = whole.coasting;
     const Lattice& from = whole.lattice;
     Lattice& to = d.lattice;
     // The part's own lattice may hold a voxel by another face than the whole's did (a lone

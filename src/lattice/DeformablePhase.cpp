@@ -113,6 +113,8 @@ int64_t DeformablePhase::deform(std::vector<Body>& bodies, const std::vector<std
     for (size_t k = 0; k < lattices.size(); ++k) {
         const size_t i = bodyIndex(k, bodies);
         setExternalForces(lattices[k], bodies[i], faceForcesN[i], gravityMS2);
+        // Loaded unevenly (by the blast), it strains: it steps as a lattice from now on.
+        if (lattices[k].coasting && !lattices[k].lattice.movesAsARigidBody()) lattices[k].coasting = false;
     }
     int64_t particleSteps = 0;
     std::vector<std::pair<int64_t, int64_t>> used;
@@ -155,8 +157,10 @@ void DeformablePhase::awaitImpacts(double timeS, double dtS)
         if (d.lattice.pressedOnASurface() || std::binary_search(pushedIds.begin(), pushedIds.end(), d.bodyId)) {
             d.lastLoadedS = std::max(d.lastLoadedS, nowS + d.awaitedImpactS);
             d.awaitedImpactS = 0.0;
+            d.coasting = false;
         } else if (nowS >= d.awaitImpactUntilS) {
             d.awaitedImpactS = 0.0;  // it missed: what it struck as a rigid body its particles never reached
+            d.coasting = false;
         } else {
             d.lastLoadedS = std::max(d.lastLoadedS, nowS);
         }

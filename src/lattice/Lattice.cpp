@@ -7,6 +7,7 @@
 
 #include <spall/core/Error.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 
@@ -96,6 +97,44 @@ void Lattice::moveAndMeasure(double dtS)
     forEach(particleCount(), [&](size_t p) { gatherBondForces(p); });
     updateContactCandidates();
     addContactForces();
+    addSurfaceForces(dtS);
+}
+
+bool Lattice::movesAsARigidBody() const
+{
+    if (std::any_of(mModel.held.begin(), mModel.held.end(), [](uint8_t held) { return held != 0; })) return false;
+    const Eigen::Vector3d& first = externalForceN.front();
+    return std::all_of(externalForceN.begin(), externalForceN.end(), [&](const Eigen::Vector3d& f) { return f == first; });
+}
+
+void Lattice::coast(double dtS)
+{
+    SPALL_CHECK(movesAsARigidBody());
+    // Velocity Verlet's first half-kick and drift for the body as a whole: its centre kicked by
+    // the common force and carried on, its particles turned about it by ω dt (all share the
+    // body's spin while it coasts), each at the rigid velocity field there. Summed in order, so
+    // the result does not depend on the thread count.
+    const size_t n = particleCount();
+    Eigen::Vector3d centreM = Eigen::Vector3d::Zero(), velocityMS = Eigen::Vector3d::Zero();
+    for (size_t p = 0; p < n; ++p) {
+        centreM += state.positionM[p];
+        velocityMS += state.velocityMS[p];
+    }
+    centreM /= double(n);
+    velocityMS = velocityMS / double(n) + halfKick(dtS).perMass * externalForceN.front();
+    const Eigen::Vector3d spinRadS = state.angularVelocityRadS.front(), newCentreM = centreM + dtS * velocityMS;
+    const Eigen::Quaterniond turn = rotationOf(dtS * spinRadS);
+    const Eigen::Matrix3d turnMatrix = turn.toRotationMatrix();
+    forEach(n, [&](size_t p) {
+        const Eigen::Vector3d armM = turnMatrix * (state.positionM[p] - centreM);
+        state.positionM[p] = newCentreM + armM;
+        state.velocityMS[p] = velocityMS + spinRadS.cross(armM);
+        state.angularVelocityRadS[p] = spinRadS;
+        state.orientation[p] = (turn * state.orientation[p]).normalized();
+        state.bondForceN[p].setZero();
+        state.bondMomentNm[p].setZero();
+    });
+    mStepEvents = 0;
     addSurfaceForces(dtS);
 }
 

@@ -140,6 +140,21 @@ void LatticePairContact::addForces(Lattice& a, Lattice& b, double travelAM, doub
     mOverlapExcuseM = std::min(mOverlapExcuseM, deepestM);
 }
 
+namespace {
+
+/// A coasting lattice (DeformableBody::coasting) steps as a lattice from the step its
+/// particles first meet the ground, a collider or another lattice's.
+void stopCoastingOnceTouched(const std::vector<DeformableBody*>& group, const std::vector<std::pair<size_t, size_t>>& touching,
+                             const std::vector<LatticePairContact*>& contacts)
+{
+    for (DeformableBody* d : group)
+        if (d->lattice.pressedOnASurface()) d->coasting = false;
+    for (size_t c = 0; c < touching.size(); ++c)
+        if (contacts[c]->pushed()) group[touching[c].first]->coasting = group[touching[c].second]->coasting = false;
+}
+
+}  // namespace
+
 int64_t advanceTogether(const std::vector<DeformableBody*>& group, const std::vector<std::pair<size_t, size_t>>& touching,
                         const std::vector<LatticePairContact*>& contacts, double dtS, const std::function<bool()>& abandon)
 {
@@ -160,7 +175,7 @@ int64_t advanceTogether(const std::vector<DeformableBody*>& group, const std::ve
         if (abandon && abandon())
             throw StepAbandoned("a step of the deformable phase was given up after " + std::to_string(s) + " of its " + std::to_string(steps) +
                                 " steps of lattices in contact");
-        for (DeformableBody* d : group) d->lattice.moveAndMeasure(stepS);
+        for (DeformableBody* d : group) d->coasting ? d->lattice.coast(stepS) : d->lattice.moveAndMeasure(stepS);
         // Each lattice's travel once, for all its pairs; the first step's is not known (the
         // lattices may have moved since their pairs last met: catching up, stepped alone).
         for (size_t g = 0; g < group.size(); ++g)
@@ -169,6 +184,7 @@ int64_t advanceTogether(const std::vector<DeformableBody*>& group, const std::ve
             contacts[c]->addForces(group[touching[c].first]->lattice, group[touching[c].second]->lattice, travelM[touching[c].first],
                                    travelM[touching[c].second]);
         for (DeformableBody* d : group) d->lattice.finishStep(stepS);
+        stopCoastingOnceTouched(group, touching, contacts);
     }
     for (const DeformableBody* d : group) particleSteps += steps * static_cast<int64_t>(d->lattice.particleCount());
     return particleSteps;

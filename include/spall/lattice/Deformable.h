@@ -30,6 +30,10 @@ struct DeformableBody {
     /// impact waits, not one already in the phase that a rigid body struck (unit: s).
     double awaitedImpactS = 0.0;
     double awaitImpactUntilS = 0.0;
+    /// While it waits, until anything touches or loads it, its lattice is the rigid body it was
+    /// built from and coasts (Lattice::coast): its wait costs a pass over its particles a step,
+    /// not the bonds' (stepLattice).
+    bool coasting = false;
     /// Per exposed face of the body (body.exposedFaces order), the particle behind it: found once,
     /// as the body keeps its faces while it is a lattice.
     std::vector<uint32_t> particleOfFace;
@@ -89,6 +93,10 @@ void setExternalForces(DeformableBody& deformable, const Body& body, const std::
 /// lagging the simulation by less than a stable step. Returns the particle-steps taken. Before
 /// each lattice step it asks `abandon`, and throws StepAbandoned when it says so.
 int64_t advanceDeformable(DeformableBody& deformable, double dtS, const std::function<bool()>& abandon = {});
+
+/// One step of a body's lattice: a coast while it coasts (DeformableBody::coasting), which ends
+/// once its particles have met the ground or a collider; else Lattice::step.
+void stepLattice(DeformableBody& deformable, double dtS);
 
 /// Steps what a lattice has gathered (advanceDeformable), so that its state is that of the
 /// simulation's time. Returns the particle-steps taken.

@@ -11,7 +11,7 @@
 namespace spall {
 
 inline constexpr const char* kCheckpointFileName = "checkpoint.spall";
-inline constexpr uint32_t kCheckpointFormatVersion = 21;
+inline constexpr uint32_t kCheckpointFormatVersion = 22;
 
 /// What the frames written so far hold of the state's records (history.h5's rows of fracture
 /// events and dust). A state saved within a frame holds more: the records of the frame under way.
