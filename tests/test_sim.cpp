@@ -180,6 +180,49 @@ TEST(Checkpoint, ResumedInTheDeformablePhaseEndsBitForBitAsTheUninterruptedOne)
     expectSameBodies(straight.bodies(), readCheckpoint(path).state.bodies);
 }
 
+TEST(Checkpoint, ResumedWhileALatticeCoastsToItsImpactEndsBitForBitAsTheUninterruptedOne)
+{
+    // A piece thrown at the ground corner first with impact fracture: its lattice coasts from
+    // its entry until its particles meet the ground (DeformableBody::coasting). A checkpoint in
+    // that wait must resume it coasting, as the run went on.
+    const nlohmann::json j = {
+        {"voxel_size_m", 0.025},
+        {"frame_rate_hz", 50},
+        {"objects",
+         {{{"primitive", {{"shape", "box"}, {"size_m", {0.15, 0.1, 0.075}}}},
+           {"position_m", {0, 0, 0.12}},
+           {"rotation_deg", {45, 35, 10}},
+           {"linear_velocity_m_s", {0, 4, -0.5}},
+           {"angular_velocity_rad_s", {0, 0, 3}},
+           {"material", "brick-masonry"}}}},
+        {"fracture", {{"algorithm", "lattice"}}},
+        {"lattice", {{"impact_fracture", true}}},
+    };
+    const Scene scene = parseScene(j.dump(), "coast", ".");
+    const std::string path = testing::TempDir() + "/spall-test-coast.checkpoint";
+    Simulation straight(scene), interrupted(scene);
+    const auto coasts = [](const Simulation& sim) {
+        const auto& lattices = sim.state().deformable.lattices;
+        return std::any_of(lattices.begin(), lattices.end(), [](const DeformableBody& d) { return d.coasting; });
+    };
+    double t = 0.0;
+    while (!coasts(interrupted) && t < 0.1) {
+        t += 2e-4;
+        straight.advanceTo(t);
+        interrupted.advanceTo(t);
+    }
+    ASSERT_TRUE(coasts(interrupted)) << "the checkpoint is meant to fall while a lattice coasts";
+    writeCheckpoint(path, {1, 12, 10, sceneToJson(interrupted.scene()).dump(), interrupted.state(), {}});
+    Checkpoint back = readCheckpoint(path);
+    Simulation resumed(parseScene(back.sceneJson, "checkpoint", "."), std::move(back.state));
+    EXPECT_TRUE(coasts(resumed));
+    straight.advanceTo(0.2);
+    resumed.advanceTo(0.2);
+    expectSameBodies(straight.bodies(), resumed.bodies());
+    ASSERT_EQ(straight.state().handOffs.size(), resumed.state().handOffs.size());
+    EXPECT_GT(straight.state().handOffs.size(), 0u);
+}
+
 TEST(Simulation, ASceneWithoutAFractureKeyBreaksByStressAndThePapersRuleIsOneKeyAway)
 {
     // Issue 47's case: 1 g of TNT 0.3 m from the face of a 0.2 m brick wall. Its peak reflected
