@@ -73,4 +73,17 @@ inline constexpr const char* kSmallScene = R"({
   "colliders": [{"position_m": [0, 3, 0.5], "size_m": [4, 0.5, 1], "rotation_deg": [0, 0, 10]}]
 })";
 
+/// A piece of brick masonry 6 × 4 × 3 voxels of 2.5 cm, turned so that a corner leads, its centre
+/// 12 cm up (its lowest corner 2.6 cm), thrown along the ground at 4 m/s and down at 0.5 m/s,
+/// spinning, with impact fracture: its lattice enters for the ground's impact and coasts until
+/// its particles meet the ground (DeformableBody::coasting).
+inline constexpr const char* kPieceThrownCornerFirstAlongTheGround = R"({
+  "voxel_size_m": 0.025, "frame_rate_hz": 50,
+  "objects": [{"primitive": {"shape": "box", "size_m": [0.15, 0.1, 0.075]}, "position_m": [0, 0, 0.12],
+               "rotation_deg": [45, 35, 10], "linear_velocity_m_s": [0, 4, -0.5], "angular_velocity_rad_s": [0, 0, 3],
+               "material": "brick-masonry"}],
+  "fracture": {"algorithm": "lattice"},
+  "lattice": {"impact_fracture": true}
+})";
+
 }  // namespace spall::test

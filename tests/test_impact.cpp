@@ -571,30 +571,16 @@ TEST(Impact, ARigidBodyTouchingALatticeEntersOnlyIfTheLatticeHasNotTakenAHarderI
 
 TEST(Impact, APieceSlidingOntoTheGroundTakesItsImpactAsALatticeAndFallsNoFurther)
 {
-    // A piece of brick masonry 6 × 4 × 3 voxels, turned so that a corner leads, its centre 12 cm
-    // up (its lowest corner 2.6 cm), thrown along the ground at 4 m/s and down at 0.5 m/s,
-    // spinning. Its rigid voxels meet the ground as turned cubes, found a tenth of a voxel early;
-    // its particles press the ground as unturned cubes, up to 0.47 of a voxel higher. A lattice
+    // test::kPieceThrownCornerFirstAlongTheGround: its rigid voxels meet the ground as turned
+    // cubes, found a tenth of a voxel early; its particles press the ground as unturned cubes, up
+    // to 0.47 of a voxel higher. A lattice
     // that entered for the impact and left, quiet, before its particles reached the ground left
     // its body falling onto the ground with the solver's contact taken away, to enter again at
     // a little more speed every few milliseconds: the piece slid on along the ground "falling"
     // faster and faster, then broke on the impact it had gathered. No part of it can move down
     // faster than a fall from the highest any of its points started, 12 + 9.75 cm (its half
     // diagonal), at 0.5 m/s: 2.13 m/s.
-    const nlohmann::json scene = {
-        {"voxel_size_m", 0.025},
-        {"frame_rate_hz", 50},
-        {"objects",
-         {{{"primitive", {{"shape", "box"}, {"size_m", {0.15, 0.1, 0.075}}}},
-           {"position_m", {0, 0, 0.12}},
-           {"rotation_deg", {45, 35, 10}},
-           {"linear_velocity_m_s", {0, 4, -0.5}},
-           {"angular_velocity_rad_s", {0, 0, 3}},
-           {"material", "brick-masonry"}}}},
-        {"fracture", {{"algorithm", "lattice"}}},
-        {"lattice", {{"impact_fracture", true}}},
-    };
-    Simulation sim(parseScene(scene.dump(), "slide", "."));
+    Simulation sim(parseScene(test::kPieceThrownCornerFirstAlongTheGround, "slide", "."));
     const double halfDiagonalM = 0.5 * std::sqrt(0.15 * 0.15 + 0.1 * 0.1 + 0.075 * 0.075);
     const double fastestFallMS = std::sqrt(0.5 * 0.5 + 2 * kG * (0.12 + halfDiagonalM));
     for (const double t : {0.1, 0.2, 0.3, 0.4, 0.5}) {

@@ -182,23 +182,8 @@ TEST(Checkpoint, ResumedInTheDeformablePhaseEndsBitForBitAsTheUninterruptedOne)
 
 TEST(Checkpoint, ResumedWhileALatticeCoastsToItsImpactEndsBitForBitAsTheUninterruptedOne)
 {
-    // A piece thrown at the ground corner first with impact fracture: its lattice coasts from
-    // its entry until its particles meet the ground (DeformableBody::coasting). A checkpoint in
-    // that wait must resume it coasting, as the run went on.
-    const nlohmann::json j = {
-        {"voxel_size_m", 0.025},
-        {"frame_rate_hz", 50},
-        {"objects",
-         {{{"primitive", {{"shape", "box"}, {"size_m", {0.15, 0.1, 0.075}}}},
-           {"position_m", {0, 0, 0.12}},
-           {"rotation_deg", {45, 35, 10}},
-           {"linear_velocity_m_s", {0, 4, -0.5}},
-           {"angular_velocity_rad_s", {0, 0, 3}},
-           {"material", "brick-masonry"}}}},
-        {"fracture", {{"algorithm", "lattice"}}},
-        {"lattice", {{"impact_fracture", true}}},
-    };
-    const Scene scene = parseScene(j.dump(), "coast", ".");
+    // A checkpoint while a lattice coasts to its impact must resume it coasting, as the run went on.
+    const Scene scene = parseScene(test::kPieceThrownCornerFirstAlongTheGround, "coast", ".");
     const std::string path = testing::TempDir() + "/spall-test-coast.checkpoint";
     Simulation straight(scene), interrupted(scene);
     const auto coasts = [](const Simulation& sim) {
