@@ -109,22 +109,33 @@ bool Lattice::movesAsARigidBody() const
 
 void Lattice::coast(double dtS)
 {
-    SPALL_CHECK(movesAsARigidBody());
     // Velocity Verlet's first half-kick and drift for the body as a whole: its centre kicked by
-    // the common force and carried on, its particles turned about it by ω dt (all share the
-    // body's spin while it coasts), each at the rigid velocity field there. Summed in order, so
-    // the result does not depend on the thread count.
+    // the common force (which turns nothing about the centre) and carried on; its particles
+    // turned about the centre by ω dt and given the rigid velocity field there, ω = I⁻¹ L from
+    // the angular momentum they carry and their inertia turned with them, so L is kept and a
+    // body whose inertia differs about its axes changes its spin as it turns (Euler's equations).
+    // Summed in order, so the result does not depend on the thread count.
     const size_t n = particleCount();
+    const double massKg = mModel.particleMassKg, ownInertiaKgM2 = mModel.particleInertiaKgM2;
     Eigen::Vector3d centreM = Eigen::Vector3d::Zero(), velocityMS = Eigen::Vector3d::Zero();
     for (size_t p = 0; p < n; ++p) {
         centreM += state.positionM[p];
         velocityMS += state.velocityMS[p];
     }
     centreM /= double(n);
-    velocityMS = velocityMS / double(n) + halfKick(dtS).perMass * externalForceN.front();
-    const Eigen::Vector3d spinRadS = state.angularVelocityRadS.front(), newCentreM = centreM + dtS * velocityMS;
-    const Eigen::Quaterniond turn = rotationOf(dtS * spinRadS);
+    velocityMS /= double(n);
+    Eigen::Vector3d angularMomentumKgM2S = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d inertiaKgM2 = double(n) * ownInertiaKgM2 * Eigen::Matrix3d::Identity();
+    for (size_t p = 0; p < n; ++p) {
+        const Eigen::Vector3d armM = state.positionM[p] - centreM;
+        angularMomentumKgM2S += massKg * armM.cross(state.velocityMS[p] - velocityMS) + ownInertiaKgM2 * state.angularVelocityRadS[p];
+        inertiaKgM2 += massKg * (armM.squaredNorm() * Eigen::Matrix3d::Identity() - armM * armM.transpose());
+    }
+    const Eigen::Quaterniond turn = rotationOf(dtS * inertiaKgM2.ldlt().solve(angularMomentumKgM2S));
     const Eigen::Matrix3d turnMatrix = turn.toRotationMatrix();
+    const Eigen::Vector3d spinRadS = (turnMatrix * inertiaKgM2 * turnMatrix.transpose()).ldlt().solve(angularMomentumKgM2S);
+    velocityMS += halfKick(dtS).perMass * externalForceN.front();
+    const Eigen::Vector3d newCentreM = centreM + dtS * velocityMS;
     forEach(n, [&](size_t p) {
         const Eigen::Vector3d armM = turnMatrix * (state.positionM[p] - centreM);
         state.positionM[p] = newCentreM + armM;

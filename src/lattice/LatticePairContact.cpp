@@ -177,9 +177,10 @@ int64_t advanceTogether(const std::vector<DeformableBody*>& group, const std::ve
                                 " steps of lattices in contact");
         for (DeformableBody* d : group) d->coasting ? d->lattice.coast(stepS) : d->lattice.moveAndMeasure(stepS);
         // Each lattice's travel once, for all its pairs; the first step's is not known (the
-        // lattices may have moved since their pairs last met: catching up, stepped alone).
+        // lattices may have moved since their pairs last met: catching up, stepped alone), nor a
+        // coasting lattice's (it turned along an arc, not along its velocities).
         for (size_t g = 0; g < group.size(); ++g)
-            travelM[g] = s == 0 ? std::numeric_limits<double>::infinity() : stepTravelBoundM(group[g]->lattice, stepS);
+            travelM[g] = s == 0 || group[g]->coasting ? std::numeric_limits<double>::infinity() : stepTravelBoundM(group[g]->lattice, stepS);
         for (size_t c = 0; c < touching.size(); ++c)
             contacts[c]->addForces(group[touching[c].first]->lattice, group[touching[c].second]->lattice, travelM[touching[c].first],
                                    travelM[touching[c].second]);

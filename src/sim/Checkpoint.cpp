@@ -122,7 +122,7 @@ void transferDeformable(Archive& a, D& d)
     a.pod(d.lastLoadedS, "deformable last loaded");
     a.pod(d.awaitedImpactS, "deformable awaited impact");
     a.pod(d.awaitImpactUntilS, "deformable awaits impact until");
-    a.pod(d.coasting, "deformable coasting");
+    a.flag(d.coasting, "deformable coasting");
     a.pod(d.blocks.voxels, "particle voxels");
     a.vec(d.entryPositionM, "deformable entry position");
     a.doubles(d.entryOrientation.coeffs().data(), 4, "deformable entry orientation");

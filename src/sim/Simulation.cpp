@@ -332,7 +332,7 @@ void Simulation::holdForImpacts(const std::vector<char>& struck, const std::vect
         d.lastLoadedS = std::max(d.lastLoadedS, enteredS + impactS);
         if (wasLattice[i]) continue;  // its particles are where it is
         d.awaitedImpactS = impactS;
-        d.coasting = true;
+        d.coasting = !d.lattice.pressedOnASurface();  // built pressing something: no wait to coast through
         d.awaitImpactUntilS = enteredS + kParticleContactLagVoxels * body.voxelSizeM / std::max(closingAtEntryMS[i], impactSpeedMS(mScene.world, dtS));
     }
 }

@@ -31,8 +31,8 @@ struct DeformableBody {
     double awaitedImpactS = 0.0;
     double awaitImpactUntilS = 0.0;
     /// While it waits, until anything touches or loads it, its lattice is the rigid body it was
-    /// built from and coasts (Lattice::coast): its wait costs a pass over its particles a step,
-    /// not the bonds' (stepLattice).
+    /// built from and coasts (Lattice::coast): its wait costs a few passes over its particles a
+    /// step, not the bonds' (stepLattice).
     bool coasting = false;
     /// Per exposed face of the body (body.exposedFaces order), the particle behind it: found once,
     /// as the body keeps its faces while it is a lattice.

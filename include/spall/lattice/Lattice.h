@@ -69,12 +69,11 @@ public:
     /// (its weight, no blast). A lattice built from a rigid body and not stepped since is then
     /// unstrained, and stays so while nothing touches it.
     bool movesAsARigidBody() const;
-    /// moveAndMeasure for a lattice that moves as the rigid body it was built from: its
-    /// particles carried and turned with its rigid motion exactly, no bond measured (each would
-    /// find no strain), then the ground's and colliders' forces, so it learns when it meets
-    /// them (pressedOnASurface). finishStep completes the step as after moveAndMeasure. Its
-    /// spin stays constant through the step (torque-free: a body's spin changes only through
-    /// its inertia's asymmetry, over the few milliseconds a lattice coasts negligibly).
+    /// moveAndMeasure for a lattice that moves as the rigid body it was built from (only while
+    /// movesAsARigidBody): its particles carried and turned with its rigid motion, keeping its
+    /// momentum and angular momentum, no bond measured (each would find no strain), then the
+    /// ground's and colliders' forces, so it learns when it meets them (pressedOnASurface).
+    /// finishStep completes the step as after moveAndMeasure.
     void coast(double dtS);
     /// The bonds' forces from the state, leaving their damage as it is (after the state arrays
     /// were written from outside, as a checkpoint does).
