@@ -24,9 +24,46 @@ xsimd::batch<double, Arch> gatherDoubles(const double* base, const int64_t* offs
     if constexpr (std::is_same_v<Arch, xsimd::avx512f>)
         return _mm512_i64gather_pd(_mm512_load_si512(offsets), base, sizeof(double));
     else if constexpr (std::is_same_v<Arch, xsimd::avx2>)
-        return _mm256_i64gather_pd(base, _mm256_load_si256(reinterpret_cast<const __m256i*>(offsets)), sizeof(double));
+        return _mm256_set_pd(base[offsets[3]], base[offsets[2]], base[offsets[1]], base[offsets[0]]);
     else
         return _mm_set_pd(base[offsets[1]], base[offsets[0]]);
+}
+
+/// The 3-vectors starting at base[offsets[i]], one batch per component. By the instruction set's
+/// gathers on AVX-512; on AVX2 by plain loads turned into lanes (two pairs of (x, y) unpacked, z
+/// lane by lane), since AMD's Zen runs a four-lane gather as about nine operations, several times
+/// the loads' cost (the bond pass spent most of its strain batches in them, issue 49).
+template <class Arch>
+void gatherTriples(const double* base, const int64_t* offsets, xsimd::batch<double, Arch> (&out)[3])
+{
+    if constexpr (std::is_same_v<Arch, xsimd::avx2>) {
+        const __m256d xy02 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(base + offsets[0])), _mm_loadu_pd(base + offsets[2]), 1);
+        const __m256d xy13 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(base + offsets[1])), _mm_loadu_pd(base + offsets[3]), 1);
+        out[0] = _mm256_unpacklo_pd(xy02, xy13);
+        out[1] = _mm256_unpackhi_pd(xy02, xy13);
+        out[2] = _mm256_set_pd(base[offsets[3] + 2], base[offsets[2] + 2], base[offsets[1] + 2], base[offsets[0] + 2]);
+    } else {
+        for (int k = 0; k < 3; ++k) out[k] = gatherDoubles<Arch>(base + k, offsets);
+    }
+}
+
+/// The four doubles starting at base[offsets[i]] (a quaternion, four fields of a record), one
+/// batch per word: on AVX2 four loads and a 4 × 4 transpose (gatherTriples says why).
+template <class Arch>
+void gatherQuads(const double* base, const int64_t* offsets, xsimd::batch<double, Arch>* out)
+{
+    if constexpr (std::is_same_v<Arch, xsimd::avx2>) {
+        const __m256d q0 = _mm256_loadu_pd(base + offsets[0]), q1 = _mm256_loadu_pd(base + offsets[1]);
+        const __m256d q2 = _mm256_loadu_pd(base + offsets[2]), q3 = _mm256_loadu_pd(base + offsets[3]);
+        const __m256d xz01 = _mm256_unpacklo_pd(q0, q1), yw01 = _mm256_unpackhi_pd(q0, q1);
+        const __m256d xz23 = _mm256_unpacklo_pd(q2, q3), yw23 = _mm256_unpackhi_pd(q2, q3);
+        out[0] = _mm256_permute2f128_pd(xz01, xz23, 0x20);
+        out[1] = _mm256_permute2f128_pd(yw01, yw23, 0x20);
+        out[2] = _mm256_permute2f128_pd(xz01, xz23, 0x31);
+        out[3] = _mm256_permute2f128_pd(yw01, yw23, 0x31);
+    } else {
+        for (int k = 0; k < 4; ++k) out[k] = gatherDoubles<Arch>(base + k, offsets);
+    }
 }
 
 struct MeasureBondStrains {
@@ -62,12 +99,23 @@ struct LaneOffsets {
     }
 };
 
-/// The field at `offsetInRow` of each lane's row.
-template <class Arch, size_t width>
-xsimd::batch<double, Arch> rowField(const BondLawInputs& laws, const LaneOffsets<width>& at, size_t offsetInRow)
-{
-    return gatherDoubles<Arch>(reinterpret_cast<const double*>(laws.rows) + offsetInRow / sizeof(double), at.row);
-}
+/// Each lane's row of its laws (BondLawRow), a batch per field, read four fields at a time.
+template <class Arch>
+struct LaneRows {
+    static constexpr size_t kWords = sizeof(BondLawRow) / sizeof(double);
+    static_assert(kWords % 4 == 0, "a row is whole quads");
+    xsimd::batch<double, Arch> word[kWords];
+
+    template <size_t width>
+    LaneRows(const BondLawInputs& laws, const LaneOffsets<width>& at)
+    {
+        const double* rows = reinterpret_cast<const double*>(laws.rows);
+        for (size_t quad = 0; quad < kWords / 4; ++quad)
+            gatherQuads<Arch>(rows + 4 * quad, at.row, word + 4 * quad);
+    }
+    /// The field at `offsetInRow` (offsetof(BondLawRow, field)).
+    const xsimd::batch<double, Arch>& operator()(size_t offsetInRow) const { return word[offsetInRow / sizeof(double)]; }
+};
 
 /// c where the axis is 0, d where it is 1, e where it is 2.
 template <class Batch>
@@ -81,12 +129,15 @@ Batch byAxis(const Batch& axis, const Batch& c, const Batch& d, const Batch& e)
 /// nor their crushing (crushingShorteningM, where even unconfined it passes the largest so far)
 /// growing.
 template <class Arch, size_t width>
-auto staysElastic(const BondLawInputs& laws, const LaneOffsets<width>& at, const bond_strain::Strain<xsimd::batch<double, Arch>>& s, double spacingM)
+auto staysElastic(const BondLawInputs& laws, const LaneOffsets<width>& at, const LaneRows<Arch>& field,
+                  const bond_strain::Strain<xsimd::batch<double, Arch>>& s, double spacingM)
 {
     using Batch = xsimd::batch<double, Arch>;
     const Batch axis = Batch::load_aligned(at.axis);
-    const auto field = [&](size_t offsetInRow) { return rowField<Arch>(laws, at, offsetInRow); };
-    const auto history = [&](size_t word) { return gatherDoubles<Arch>(laws.history + word, at.history); };
+    static_assert(kStrengthScaleWord < 4 && kMaxEquivalentStretchWord < 4 && kStrengthFactorWord < 4 && kMaxCrushingWord >= 4);
+    Batch firstHistoryWords[4];
+    gatherQuads<Arch>(laws.history, at.history, firstHistoryWords);
+    const auto history = [&](size_t word) { return word < 4 ? firstHistoryWords[word] : gatherDoubles<Arch>(laws.history + word, at.history); };
     const Batch normalM = byAxis(axis, s.displacementM[0], s.displacementM[1], s.displacementM[2]);
     const Batch one(1.0);
     const Batch stretchM = (s.lengthM - Batch(spacingM)) +
@@ -118,15 +169,15 @@ auto staysElastic(const BondLawInputs& laws, const LaneOffsets<width>& at, const
 
 /// The terms of a batch's bonds as undamaged bonds (Lattice::measureBond's with D = 0), lanes
 /// lane0 … of `out`.
-template <class Arch, size_t width>
-void storeElasticTerms(const BondLawInputs& laws, const LaneOffsets<width>& at, const bond_strain::Strain<xsimd::batch<double, Arch>>& s,
+template <class Arch>
+void storeElasticTerms(const BondLawInputs& laws, const LaneRows<Arch>& field, const bond_strain::Strain<xsimd::batch<double, Arch>>& s,
                        double spacingM, size_t lane0, BondStrainRun& out)
 {
     using Batch = xsimd::batch<double, Arch>;
     Batch springNPerM[3], turnNmPerRad[3], forceOnHighN[3], momentNm[3];
     for (size_t k = 0; k < 3; ++k) {
-        springNPerM[k] = rowField<Arch>(laws, at, offsetof(BondLawRow, springNPerM) + k * sizeof(double));
-        turnNmPerRad[k] = rowField<Arch>(laws, at, offsetof(BondLawRow, turnNmPerRad) + k * sizeof(double));
+        springNPerM[k] = field(offsetof(BondLawRow, springNPerM) + k * sizeof(double));
+        turnNmPerRad[k] = field(offsetof(BondLawRow, turnNmPerRad) + k * sizeof(double));
     }
     const Batch one(1.0);
     bond_law::elasticTerms(s.frame, s.displacementM, s.rotationRad, springNPerM, turnNmPerRad, one, forceOnHighN, momentNm);
@@ -152,12 +203,9 @@ void MeasureBondStrains::operator()(Arch, const BondStrainInputs& in, size_t fir
     for (size_t lane0 = 0; lane0 < count; lane0 += width) {
         const LaneOffsets<width> at(in, first, count, lane0);
         bond_strain::EndState<Batch> a, b;
-        for (int k = 0; k < 3; ++k) {
-            a.position[k] = gatherDoubles<Arch>(in.positionM + k, at.low3), b.position[k] = gatherDoubles<Arch>(in.positionM + k, at.high3);
-            a.velocity[k] = gatherDoubles<Arch>(in.velocityMS + k, at.low3), b.velocity[k] = gatherDoubles<Arch>(in.velocityMS + k, at.high3);
-        }
-        for (int k = 0; k < 4; ++k)
-            a.quaternion[k] = gatherDoubles<Arch>(in.quaternion + k, at.low4), b.quaternion[k] = gatherDoubles<Arch>(in.quaternion + k, at.high4);
+        gatherTriples<Arch>(in.positionM, at.low3, a.position), gatherTriples<Arch>(in.positionM, at.high3, b.position);
+        gatherTriples<Arch>(in.velocityMS, at.low3, a.velocity), gatherTriples<Arch>(in.velocityMS, at.high3, b.velocity);
+        gatherQuads<Arch>(in.quaternion, at.low4, a.quaternion), gatherQuads<Arch>(in.quaternion, at.high4, b.quaternion);
         bond_strain::Strain<Batch> s;
         typename Batch::batch_bool_type small;
         bond_strain::halfwayStrain(a, b, Batch::load_aligned(at.axis), in.spacingM, s, small);
@@ -172,9 +220,10 @@ void MeasureBondStrains::operator()(Arch, const BondStrainInputs& in, size_t fir
         s.openingRateMS.store_aligned(&out.openingRateMS[lane0]);
         xsimd::select(small, Batch(1.0), Batch(0.0)).store_aligned(&out.smallTurn[lane0]);
         if (!in.laws) continue;
-        const auto elastic = small && staysElastic<Arch>(*in.laws, at, s, in.spacingM);
+        const LaneRows<Arch> rows(*in.laws, at);
+        const auto elastic = small && staysElastic<Arch>(*in.laws, at, rows, s, in.spacingM);
         xsimd::select(elastic, Batch(1.0), Batch(0.0)).store_aligned(&out.elastic[lane0]);
-        if (xsimd::any(elastic)) storeElasticTerms<Arch>(*in.laws, at, s, in.spacingM, lane0, out);
+        if (xsimd::any(elastic)) storeElasticTerms<Arch>(*in.laws, rows, s, in.spacingM, lane0, out);
     }
 }
 
