@@ -330,12 +330,12 @@ void BM_Lattice_Build(benchmark::State& state)
 }
 BENCHMARK(BM_Lattice_Build)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-/// The same with every bond measured one at a time (Lattice::batchElasticBonds off): what
+/// The same with every bond measured one at a time (Lattice::batchSteadyBonds off): what
 /// measuring the elastic bonds' laws side by side saves.
 void BM_Lattice_StepOneBondAtATime(benchmark::State& state)
 {
     Lattice lattice = vibratingBlock(int(state.range(0)));
-    lattice.batchElasticBonds(false);
+    lattice.batchSteadyBonds(false);
     const double dt = lattice.stableTimeStepS();
     for (auto _ : state) lattice.step(dt);
     state.counters["particle_steps_per_s"] = benchmark::Counter(double(lattice.particleCount()), benchmark::Counter::kIsIterationInvariantRate);

@@ -22,12 +22,14 @@ struct BondLawRow {
     double peakStretchM, tensionIndexPerM, shearIndexPerM, normalIndexPerM, indexPerPa, frictionCoefficient;
     /// Crushing (Strength): fc (0: never), its peak shortening, d (LatticeStiffness::normalModulusPa).
     double compressiveStrengthPa, crushingPeakShorteningM, normalModulusPa;
+    /// The softening line's end, where it carries nothing (Strength::zeroTractionStretchM).
+    double zeroTractionStretchM;
     /// 1 where a batch may measure the class's bonds along the axis (shear isotropic across
     /// the axis), else 0: they are measured one at a time.
     double batches;
 };
 
-static_assert(sizeof(BondLawRow) == 16 * sizeof(double), "a row is doubles alone");
+static_assert(sizeof(BondLawRow) == 17 * sizeof(double), "a row is doubles alone");
 
 /// Where BondHistory's fields lie among its doubles (LatticeBonds.cpp checks them).
 enum BondHistoryWord : size_t { kStrengthScaleWord = 0, kMaxEquivalentStretchWord = 1, kStrengthFactorWord = 2, kMaxCrushingWord = 5, kHistoryWords = 6 };
@@ -52,7 +54,7 @@ struct BondStrainInputs {
     const double* quaternion = nullptr;
     const uint32_t* bondWords = nullptr;
     double spacingM = 0.0;
-    /// Given, the batches also find the bonds that stay on their elastic line (BondStrainRun::elastic).
+    /// Given, the batches also find the bonds whose damage stays as it is (BondStrainRun::steady).
     const BondLawInputs* laws = nullptr;
 };
 
@@ -68,15 +70,16 @@ struct BondStrainRun {
     alignas(64) double openingRateMS[kCapacity];
     /// 1 where the rotation's series held; 0 where the bond must be measured alone.
     alignas(64) double smallTurn[kCapacity];
-    /// With BondStrainInputs::laws: 1 where a bond stays on its elastic line this step, so its
-    /// terms below are all its laws give (Lattice::measureBond's for an undamaged bond): its turn
-    /// small, not a pin, its class batched, its cracking and crushing damage 0, and neither its
-    /// failure index nor its crushing past the largest so far; else 0.
-    alignas(64) double elastic[kCapacity];
-    alignas(64) double forceOnHighN[3][kCapacity];     ///< its spring and dashpot (unit: N)
+    /// With BondStrainInputs::laws: 1 where a bond's damage stays as it is this step, so it
+    /// answers on its elastic line or, cracked, on its secant, and its terms below are all its
+    /// laws give (Lattice::measureBond's): its turn small, not a pin, its class batched, its
+    /// crushing damage 0, and neither its failure index nor its crushing past the largest so
+    /// far; else 0.
+    alignas(64) double steady[kCapacity];
+    alignas(64) double forceOnHighN[3][kCapacity];     ///< its spring, closed crack and dashpot (unit: N)
     alignas(64) double bendingMomentNm[3][kCapacity];  ///< on high (unit: N m)
-    alignas(64) double stretchM[kCapacity];            ///< its length less h (unit: m)
-    alignas(64) double volumetricAreaPerArmM[kCapacity];  ///< h² / length (unit: m)
+    alignas(64) double stretchM[kCapacity];            ///< BondStretch's, both alike uncrushed (unit: m)
+    alignas(64) double volumetricAreaPerArmM[kCapacity];  ///< BondForceTerms's (unit: m)
 };
 
 /// Measures bonds first … first + count − 1 (count ≤ kCapacity) into `out`, lane i for bond

@@ -102,16 +102,15 @@ struct LaneOffsets {
 /// Each lane's row of its laws (BondLawRow), a batch per field, read four fields at a time.
 template <class Arch>
 struct LaneRows {
-    static constexpr size_t kWords = sizeof(BondLawRow) / sizeof(double);
-    static_assert(kWords % 4 == 0, "a row is whole quads");
+    static constexpr size_t kWords = sizeof(BondLawRow) / sizeof(double), kQuads = kWords / 4;
     xsimd::batch<double, Arch> word[kWords];
 
     template <size_t width>
     LaneRows(const BondLawInputs& laws, const LaneOffsets<width>& at)
     {
         const double* rows = reinterpret_cast<const double*>(laws.rows);
-        for (size_t quad = 0; quad < kWords / 4; ++quad)
-            gatherQuads<Arch>(rows + 4 * quad, at.row, word + 4 * quad);
+        for (size_t quad = 0; quad < kQuads; ++quad) gatherQuads<Arch>(rows + 4 * quad, at.row, word + 4 * quad);
+        for (size_t w = 4 * kQuads; w < kWords; ++w) word[w] = gatherDoubles<Arch>(rows + w, at.row);
     }
     /// The field at `offsetInRow` (offsetof(BondLawRow, field)).
     const xsimd::batch<double, Arch>& operator()(size_t offsetInRow) const { return word[offsetInRow / sizeof(double)]; }
@@ -124,38 +123,57 @@ Batch byAxis(const Batch& axis, const Batch& c, const Batch& d, const Batch& e)
     return xsimd::select(axis == Batch(0.0), c, xsimd::select(axis == Batch(1.0), d, e));
 }
 
-/// Which of a batch's bonds stay on their elastic line this step (BondStrainRun::elastic): as
-/// Lattice::measureBond finds them undamaged, with neither their failure index (equivalentStretchM)
-/// nor their crushing (crushingShorteningM, where even unconfined it passes the largest so far)
-/// growing.
+/// A batch's bonds whose damage stays as it is this step (BondStrainRun::steady), and their
+/// 1 − D.
+template <class Batch>
+struct SteadyBonds {
+    typename Batch::batch_bool_type steady;
+    Batch intact;
+};
+
+/// Cracking's damage from the largest driver so far, as bond_laws::softeningDamage finds it:
+/// 0 up to the line's peak u0; past it 1 where the class snaps at its peak, else the linear
+/// softening line's secant damage up to its end uf (Bažant & Oh 1983's crack band).
+template <class Batch>
+Batch crackingDamage(const Batch& maxEquivalentM, const Batch& strengthScale, const Batch& peakStretchM, const Batch& zeroTractionStretchM)
+{
+    const Batch u0 = strengthScale * peakStretchM, uf = zeroTractionStretchM / strengthScale, kappa = maxEquivalentM;
+    const Batch onLine = Batch(1.0) - (u0 / kappa) * (uf - kappa) / (uf - u0);
+    const auto broken = kappa >= uf || zeroTractionStretchM <= peakStretchM;
+    return xsimd::select(kappa <= u0, Batch(0.0), xsimd::select(broken, Batch(1.0), onLine));
+}
+
+/// Which of a batch's bonds keep their damage this step, as Lattice::measureBond finds them: not
+/// crushed, with neither their failure index (equivalentStretchM, bending's share softened with
+/// the bond) nor their crushing (crushingShorteningM, where even unconfined it passes the largest
+/// so far) growing.
 template <class Arch, size_t width>
-auto staysElastic(const BondLawInputs& laws, const LaneOffsets<width>& at, const LaneRows<Arch>& field,
-                  const bond_strain::Strain<xsimd::batch<double, Arch>>& s, double spacingM)
+SteadyBonds<xsimd::batch<double, Arch>> steadyBonds(const BondLawInputs& laws, const LaneOffsets<width>& at, const LaneRows<Arch>& field,
+                                                    const bond_strain::Strain<xsimd::batch<double, Arch>>& s, double spacingM)
 {
     using Batch = xsimd::batch<double, Arch>;
     const Batch axis = Batch::load_aligned(at.axis);
     static_assert(kStrengthScaleWord < 4 && kMaxEquivalentStretchWord < 4 && kStrengthFactorWord < 4 && kMaxCrushingWord >= 4);
-    Batch firstHistoryWords[4];
-    gatherQuads<Arch>(laws.history, at.history, firstHistoryWords);
-    const auto history = [&](size_t word) { return word < 4 ? firstHistoryWords[word] : gatherDoubles<Arch>(laws.history + word, at.history); };
+    Batch history[4];
+    gatherQuads<Arch>(laws.history, at.history, history);
+    const Batch scale = history[kStrengthScaleWord], maxEquivalentM = history[kMaxEquivalentStretchWord];
+    const Batch maxCrushingM = gatherDoubles<Arch>(laws.history + kMaxCrushingWord, at.history);
+    const Batch peakStretchM = field(offsetof(BondLawRow, peakStretchM)), crushingPeakM = field(offsetof(BondLawRow, crushingPeakShorteningM));
+    const Batch intact = Batch(1.0) - crackingDamage(maxEquivalentM, scale * history[kStrengthFactorWord], peakStretchM,
+                                                     field(offsetof(BondLawRow, zeroTractionStretchM)));
     const Batch normalM = byAxis(axis, s.displacementM[0], s.displacementM[1], s.displacementM[2]);
-    const Batch one(1.0);
     const Batch stretchM = (s.lengthM - Batch(spacingM)) +
-                           bond_law::bendingStretchM(spacingM, one, byAxis(axis, s.rotationRad[1], s.rotationRad[2], s.rotationRad[0]),
+                           bond_law::bendingStretchM(spacingM, intact, byAxis(axis, s.rotationRad[1], s.rotationRad[2], s.rotationRad[0]),
                                                      byAxis(axis, s.rotationRad[2], s.rotationRad[0], s.rotationRad[1]));
     const Batch shearIndex = bond_law::isotropicShearIndex(field(offsetof(BondLawRow, shearIndexPerM)), s.displacementM, normalM);
     const Batch sharesPa = gatherDoubles<Arch>(laws.volumetricStressSharePa, at.lowShare) + gatherDoubles<Arch>(laws.volumetricStressSharePa, at.highShare);
-    const Batch peakStretchM = field(offsetof(BondLawRow, peakStretchM));
     const bond_law::FailureTerms<Batch> terms{field(offsetof(BondLawRow, tensionIndexPerM)), field(offsetof(BondLawRow, normalIndexPerM)),
                                               field(offsetof(BondLawRow, indexPerPa)), field(offsetof(BondLawRow, frictionCoefficient))};
     const Batch equivalentM = xsimd::select(stretchM >= Batch(0.0), bond_law::failureIndexInTension(stretchM, shearIndex, terms),
                                             bond_law::failureIndexInCompression(normalM, shearIndex, sharesPa, terms)) *
                               peakStretchM;
-    const Batch scale = history(kStrengthScaleWord), maxEquivalentM = history(kMaxEquivalentStretchWord);
-    const Batch maxCrushingM = history(kMaxCrushingWord), crushingPeakM = field(offsetof(BondLawRow, crushingPeakShorteningM));
-    // Cracking's and crushing's damage 0: the largest driver so far not past its line's peak.
-    const auto undamaged = maxEquivalentM <= (scale * history(kStrengthFactorWord)) * peakStretchM &&
-                           (maxCrushingM <= Batch(0.0) || maxCrushingM <= scale * crushingPeakM);
+    // Crushing's damage 0: the largest shortening so far not past its line's peak.
+    const auto uncrushed = maxCrushingM <= Batch(0.0) || maxCrushingM <= scale * crushingPeakM;
     typename Batch::batch_bool_type crushingGrows(false);
     if (laws.uncrushedLambdaTracePa) {
         const Batch fcPa = field(offsetof(BondLawRow, compressiveStrengthPa));
@@ -163,15 +181,19 @@ auto staysElastic(const BondLawInputs& laws, const LaneOffsets<width>& at, const
         const Batch compressionPa = (field(offsetof(BondLawRow, normalModulusPa)) * normalM / Batch(spacingM) + Batch(0.5) * lambdaTracesPa) * Batch(-1.0);
         crushingGrows = fcPa > Batch(0.0) && normalM < Batch(0.0) && compressionPa > Batch(0.0) && compressionPa / fcPa * crushingPeakM > maxCrushingM;
     }
-    return field(offsetof(BondLawRow, batches)) != Batch(0.0) && Batch::load_aligned(at.pinned) == Batch(0.0) && undamaged &&
-           equivalentM <= maxEquivalentM && !crushingGrows;
+    return {field(offsetof(BondLawRow, batches)) != Batch(0.0) && Batch::load_aligned(at.pinned) == Batch(0.0) && uncrushed &&
+                equivalentM <= maxEquivalentM && !crushingGrows,
+            intact};
 }
 
-/// The terms of a batch's bonds as undamaged bonds (Lattice::measureBond's with D = 0), lanes
-/// lane0 … of `out`.
+/// The terms of a batch's bonds whose damage stays (Lattice::measureBond's, uncrushed, 1 − D
+/// `intact`), lanes lane0 … of `out`: the springs softened by 1 − D; where a crack has closed,
+/// the contact across it, (D k_n) times the overlap along the arm; the dashpot softened with the
+/// spring while the bond opens; the stretch and volumetric area times √(1 − D) while it opens.
 template <class Arch>
-void storeElasticTerms(const BondLawInputs& laws, const LaneRows<Arch>& field, const bond_strain::Strain<xsimd::batch<double, Arch>>& s,
-                       double spacingM, size_t lane0, BondStrainRun& out)
+void storeSteadyTerms(const BondLawInputs& laws, const LaneRows<Arch>& field, const xsimd::batch<double, Arch>& axis,
+                      const xsimd::batch<double, Arch>& intact, const bond_strain::Strain<xsimd::batch<double, Arch>>& s, double spacingM,
+                      size_t lane0, BondStrainRun& out)
 {
     using Batch = xsimd::batch<double, Arch>;
     Batch springNPerM[3], turnNmPerRad[3], forceOnHighN[3], momentNm[3];
@@ -179,19 +201,27 @@ void storeElasticTerms(const BondLawInputs& laws, const LaneRows<Arch>& field, c
         springNPerM[k] = field(offsetof(BondLawRow, springNPerM) + k * sizeof(double));
         turnNmPerRad[k] = field(offsetof(BondLawRow, turnNmPerRad) + k * sizeof(double));
     }
-    const Batch one(1.0);
-    bond_law::elasticTerms(s.frame, s.displacementM, s.rotationRad, springNPerM, turnNmPerRad, one, forceOnHighN, momentNm);
-    if (laws.bulkViscosity > 0.0) {
-        const Batch inverseLength = one / s.lengthM;
-        const Batch along[3] = {s.armM[0] * inverseLength, s.armM[1] * inverseLength, s.armM[2] * inverseLength};
-        bond_law::subtractDashpot(one, laws.bulkViscosity, laws.dashpotPerViscosityNSPerM, s.openingRateMS, along, forceOnHighN);
+    const Batch one(1.0), h(spacingM);
+    bond_law::elasticTerms(s.frame, s.displacementM, s.rotationRad, springNPerM, turnNmPerRad, intact, forceOnHighN, momentNm);
+    const Batch inverseLength = one / s.lengthM;
+    const Batch along[3] = {s.armM[0] * inverseLength, s.armM[1] * inverseLength, s.armM[2] * inverseLength};
+    const Batch overlapM = h - s.lengthM;
+    const auto closed = intact < one && overlapM > Batch(0.0);
+    if (xsimd::any(closed)) {
+        const Batch normalNPerM = byAxis(axis, springNPerM[0], springNPerM[1], springNPerM[2]);
+        const Batch contactN = ((one - intact) * normalNPerM) * overlapM;
+        for (int i = 0; i < 3; ++i) forceOnHighN[i] = xsimd::select(closed, forceOnHighN[i] + contactN * along[i], forceOnHighN[i]);
     }
+    const auto opening = s.lengthM > h;
+    if (laws.bulkViscosity > 0.0)
+        bond_law::subtractDashpot(xsimd::select(opening, intact, one), laws.bulkViscosity, laws.dashpotPerViscosityNSPerM, s.openingRateMS, along, forceOnHighN);
     for (int k = 0; k < 3; ++k) {
         forceOnHighN[k].store_aligned(&out.forceOnHighN[k][lane0]);
         momentNm[k].store_aligned(&out.bendingMomentNm[k][lane0]);
     }
-    (s.lengthM - Batch(spacingM)).store_aligned(&out.stretchM[lane0]);
-    (Batch(spacingM * spacingM) / s.lengthM).store_aligned(&out.volumetricAreaPerArmM[lane0]);
+    const Batch softening = xsimd::select(opening, xsimd::sqrt(intact), one);
+    xsimd::select(opening, softening * (s.lengthM - h), s.lengthM - h).store_aligned(&out.stretchM[lane0]);
+    (softening * h * h / s.lengthM).store_aligned(&out.volumetricAreaPerArmM[lane0]);
 }
 
 template <class Arch>
@@ -221,9 +251,10 @@ void MeasureBondStrains::operator()(Arch, const BondStrainInputs& in, size_t fir
         xsimd::select(small, Batch(1.0), Batch(0.0)).store_aligned(&out.smallTurn[lane0]);
         if (!in.laws) continue;
         const LaneRows<Arch> rows(*in.laws, at);
-        const auto elastic = small && staysElastic<Arch>(*in.laws, at, rows, s, in.spacingM);
-        xsimd::select(elastic, Batch(1.0), Batch(0.0)).store_aligned(&out.elastic[lane0]);
-        if (xsimd::any(elastic)) storeElasticTerms<Arch>(*in.laws, rows, s, in.spacingM, lane0, out);
+        const SteadyBonds<Batch> bonds = steadyBonds<Arch>(*in.laws, at, rows, s, in.spacingM);
+        const auto steady = small && bonds.steady;
+        xsimd::select(steady, Batch(1.0), Batch(0.0)).store_aligned(&out.steady[lane0]);
+        if (xsimd::any(steady)) storeSteadyTerms<Arch>(*in.laws, rows, Batch::load_aligned(at.axis), bonds.intact, s, in.spacingM, lane0, out);
     }
 }
 

@@ -1,5 +1,5 @@
 // The bonds' pass of a lattice step: each bond's strain in its half-way frame, its damage and its
-// force terms (in batches for the bonds that stay on their elastic line, BondStrainBatch.h; else
+// force terms (in batches for the bonds whose damage stays as it is, BondStrainBatch.h; else
 // measureBond, each bond writing only its own entry); each
 // particle's volumetric strain; and each particle gathering its six bonds' forces in face order,
 // each completed with the volumetric force, so the sums do not depend on the thread count.
@@ -132,7 +132,7 @@ std::array<BondLawRow, 6> bondLawRows(const LatticeModel& model)
             row.peakStretchM = terms.peakStretchM, row.tensionIndexPerM = terms.tensionIndexPerM, row.shearIndexPerM = shearB;
             row.normalIndexPerM = terms.normalIndexPerM, row.indexPerPa = terms.indexPerPa, row.frictionCoefficient = terms.frictionCoefficient;
             row.compressiveStrengthPa = strength.compressiveStrengthPa, row.crushingPeakShorteningM = strength.crushingPeakShorteningM;
-            row.normalModulusPa = k.normalModulusPa[a];
+            row.normalModulusPa = k.normalModulusPa[a], row.zeroTractionStretchM = strength.zeroTractionStretchM;
             // One peak for the index and the softening line, and one shear index across the axis.
             row.batches = shearB == shearC && terms.peakStretchM == strength.peakStretchM ? 1.0 : 0.0;
         }
@@ -156,12 +156,12 @@ uint8_t Lattice::measureBonds(double dtS, bool growDamage)
     if (bondCount() == 0) return 0;
     BondStrainInputs inputs{state.positionM.front().data(), state.velocityMS.front().data(), state.orientation.front().coeffs().data(),
                             reinterpret_cast<const uint32_t*>(mModel.bonds.data()), mModel.spacingM};
-    // The batches find the bonds that stay elastic where that is all a step can do to them:
+    // The batches find the bonds whose damage stays where that is all a step can do to them:
     // damage grows on the softening line (Davison–Stevens grows it every step).
     // (The volumetric shares are sized by the first force pass, after its bonds are measured.)
     std::array<BondLawRow, 6> rows;
     BondLawInputs laws;
-    if (mBatchesElasticBonds && growDamage && mModel.damageLaw == LatticeDamageLaw::Softening && mVolumetricStressShare.size() == particleCount()) {
+    if (mBatchesSteadyBonds && growDamage && mModel.damageLaw == LatticeDamageLaw::Softening && mVolumetricStressShare.size() == particleCount()) {
         rows = bondLawRows(mModel);
         laws = {rows.data(), &state.bondHistory.front().strengthScale, mVolumetricStressShare.front().data(),
                 mUncrushedLambdaTracePa.empty() ? nullptr : mUncrushedLambdaTracePa.data(), mModel.bulkViscosity, mModel.dashpotPerViscosityNSPerM};
@@ -169,7 +169,7 @@ uint8_t Lattice::measureBonds(double dtS, bool growDamage)
     }
     constexpr size_t capacity = BondStrainRun::kCapacity;
     std::atomic<uint8_t> events{0};
-    std::atomic<size_t> elastic{0};
+    std::atomic<size_t> batched{0};
     forEach((bondCount() + capacity - 1) / capacity, [&](size_t r) {
         BondStrainRun run;
         const size_t first = r * capacity, count = std::min(capacity, bondCount() - first);
@@ -183,23 +183,23 @@ uint8_t Lattice::measureBonds(double dtS, bool growDamage)
                 storeLargeTurn(state.orientation[bond.low], state.orientation[bond.high], lane, run);
         }
         uint8_t runEvents = 0;
-        size_t runElastic = 0;
+        size_t runBatched = 0;
         for (size_t lane = 0; lane < count; ++lane) {
-            if (inputs.laws && run.elastic[lane] != 0.0) {
-                takeElasticTerms(first + lane, run, lane);
-                ++runElastic;
+            if (inputs.laws && run.steady[lane] != 0.0) {
+                takeSteadyTerms(first + lane, run, lane);
+                ++runBatched;
             } else {
                 runEvents |= measureBond(first + lane, run, lane, dtS, growDamage);
             }
         }
         if (runEvents) events.fetch_or(runEvents, std::memory_order_relaxed);
-        elastic.fetch_add(runElastic, std::memory_order_relaxed);
+        batched.fetch_add(runBatched, std::memory_order_relaxed);
     }, std::max<size_t>(1, kCheapGrain / capacity));  // as many bonds a task as one bond at a time had
-    mBondsElasticInLastPass = elastic.load();
+    mBondsBatchedInLastPass = batched.load();
     return events.load();
 }
 
-void Lattice::takeElasticTerms(size_t b, const BondStrainRun& run, size_t lane)
+void Lattice::takeSteadyTerms(size_t b, const BondStrainRun& run, size_t lane)
 {
     BondForceTerms& terms = mBondTerms[b];
     for (int k = 0; k < 3; ++k) terms.forceOnHighN[k] = run.forceOnHighN[k][lane], terms.bendingMomentNm[k] = run.bendingMomentNm[k][lane];

@@ -128,12 +128,20 @@ public:
     double surfaceStiffnessNPerM() const;
     /// What it was built with (fromBody), unchanged since.
     const LatticeModel& model() const { return mModel; }
-    /// Whether the bond pass measures the bonds that stay on their elastic line side by side
-    /// (BondStrainRun::elastic; on unless turned off). Off, every bond takes the one-bond path
-    /// (measureBond), which gives the same results bit for bit: a test compares them.
-    void batchElasticBonds(bool on) { mBatchesElasticBonds = on; }
-    /// How many bonds the last bond pass measured in its batches as elastic.
-    size_t bondsElasticInLastPass() const { return mBondsElasticInLastPass; }
+    /// Whether the bond pass measures the bonds whose damage stays as it is this step side by
+    /// side (BondStrainRun::steady; on unless turned off). Off, every bond takes the one-bond
+    /// path (measureBond), which gives the same results bit for bit: a test compares them.
+    void batchSteadyBonds(bool on) { mBatchesSteadyBonds = on; }
+    /// How many bonds the last bond pass measured in its batches.
+    size_t bondsBatchedInLastPass() const { return mBondsBatchedInLastPass; }
+    /// The free (not held) particles' mass, their centre, and their inertia about it (their
+    /// places' and each cube's own); the mass 0 where every particle is held.
+    struct FreeMass {
+        double massKg = 0.0;
+        Eigen::Vector3d centreM = Eigen::Vector3d::Zero();
+        Eigen::Matrix3d inertiaKgM2 = Eigen::Matrix3d::Zero();
+    };
+    FreeMass freeMass() const;
     /// Whether a support bears on its voxel: while they touch, its bond broken or not (a floor
     /// rests on a cracked head), the voxel within a quarter voxel of where the support held it.
     bool bears(const LatticeModel::BearingLoad& load) const;
@@ -200,8 +208,8 @@ private:
     };
     static constexpr size_t kDampingChunk = 4096;
     bool mPiecesStale = true;
-    bool mBatchesElasticBonds = true;  ///< batchElasticBonds
-    size_t mBondsElasticInLastPass = 0;
+    bool mBatchesSteadyBonds = true;  ///< batchSteadyBonds
+    size_t mBondsBatchedInLastPass = 0;
     /// What happened to bonds in the step under way (kSnapped, kBroke): moveAndMeasure's, for finishStep.
     uint8_t mStepEvents = 0;
     bool mPressedOnASurface = false;  ///< pressedOnASurface
@@ -254,7 +262,7 @@ private:
     /// own entries, so bonds measure in parallel. Returns what happened to it.
     uint8_t measureBond(size_t b, const BondStrainRun& run, size_t lane, double dtS, bool growDamage);
     /// A bond's terms as the batch measured them, for a bond that stays on its elastic line.
-    void takeElasticTerms(size_t b, const BondStrainRun& run, size_t lane);
+    void takeSteadyTerms(size_t b, const BondStrainRun& run, size_t lane);
     /// What measureBond reports: the bond snapped at its peak (releaseSnapEnergies), or broke
     /// by any law (the pieces may have changed).
     static constexpr uint8_t kSnapped = 1, kBroke = 2;
