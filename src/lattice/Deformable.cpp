@@ -266,29 +266,14 @@ void followLattice(Body& body, const Lattice& lattice)
 
 void addRigidMomentum(Lattice& lattice, const Eigen::Vector3d& linearKgMS, const Eigen::Vector3d& angularAboutOriginKgM2S)
 {
-    const double m = lattice.model().particleMassKg;
-    double massKg = 0.0;
-    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-    for (size_t p = 0; p < lattice.particleCount(); ++p) {
-        if (lattice.model().held[p]) continue;
-        massKg += m;
-        centre += m * lattice.state.positionM[p];
-    }
-    if (massKg == 0.0) return;
-    centre /= massKg;
-    // The free particles' inertia about their centre: their places' and each cube's own.
-    Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
-    for (size_t p = 0; p < lattice.particleCount(); ++p) {
-        if (lattice.model().held[p]) continue;
-        const Eigen::Vector3d r = lattice.state.positionM[p] - centre;
-        inertia += m * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose()) + lattice.model().particleInertiaKgM2 * Eigen::Matrix3d::Identity();
-    }
+    const Lattice::FreeMass free = lattice.freeMass();
+    if (free.massKg == 0.0) return;
     // L about the origin = c × P + I ω about the centre, for the rigid field's increment.
-    const Eigen::Vector3d dv = linearKgMS / massKg;
-    const Eigen::Vector3d dw = inertia.ldlt().solve(angularAboutOriginKgM2S - centre.cross(linearKgMS));
+    const Eigen::Vector3d dv = linearKgMS / free.massKg;
+    const Eigen::Vector3d dw = free.inertiaKgM2.ldlt().solve(angularAboutOriginKgM2S - free.centreM.cross(linearKgMS));
     for (size_t p = 0; p < lattice.particleCount(); ++p) {
         if (lattice.model().held[p]) continue;
-        lattice.state.velocityMS[p] += dv + dw.cross(lattice.state.positionM[p] - centre);
+        lattice.state.velocityMS[p] += dv + dw.cross(lattice.state.positionM[p] - free.centreM);
         lattice.state.angularVelocityRadS[p] += dw;
     }
 }

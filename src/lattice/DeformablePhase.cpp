@@ -157,13 +157,12 @@ void DeformablePhase::awaitImpacts(double timeS, double dtS)
         if (d.lattice.pressedOnASurface() || std::binary_search(pushedIds.begin(), pushedIds.end(), d.bodyId)) {
             d.lastLoadedS = std::max(d.lastLoadedS, nowS + d.awaitedImpactS);
             d.awaitedImpactS = 0.0;
-            d.coasting = false;
         } else if (nowS >= d.awaitImpactUntilS) {
             d.awaitedImpactS = 0.0;  // it missed: what it struck as a rigid body its particles never reached
-            d.coasting = false;
         } else {
             d.lastLoadedS = std::max(d.lastLoadedS, nowS);
         }
+        if (d.awaitedImpactS == 0.0) d.coasting = false;  // a lattice coasts only while it waits
     }
 }
 

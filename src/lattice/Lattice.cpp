@@ -107,6 +107,26 @@ bool Lattice::movesAsARigidBody() const
     return std::all_of(externalForceN.begin(), externalForceN.end(), [&](const Eigen::Vector3d& f) { return f == first; });
 }
 
+Lattice::FreeMass Lattice::freeMass() const
+{
+    // Summed in order, so the result does not depend on the thread count.
+    const double m = mModel.particleMassKg;
+    FreeMass free;
+    for (size_t p = 0; p < particleCount(); ++p) {
+        if (mModel.held[p]) continue;
+        free.massKg += m;
+        free.centreM += m * state.positionM[p];
+    }
+    if (free.massKg == 0.0) return free;
+    free.centreM /= free.massKg;
+    for (size_t p = 0; p < particleCount(); ++p) {
+        if (mModel.held[p]) continue;
+        const Eigen::Vector3d r = state.positionM[p] - free.centreM;
+        free.inertiaKgM2 += m * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose()) + mModel.particleInertiaKgM2 * Eigen::Matrix3d::Identity();
+    }
+    return free;
+}
+
 void Lattice::coast(double dtS)
 {
     // Velocity Verlet's first half-kick and drift for the body as a whole: its centre kicked by
@@ -114,30 +134,25 @@ void Lattice::coast(double dtS)
     // turned about the centre by ω dt and given the rigid velocity field there, ω = I⁻¹ L from
     // the angular momentum they carry and their inertia turned with them, so L is kept and a
     // body whose inertia differs about its axes changes its spin as it turns (Euler's equations).
-    // Summed in order, so the result does not depend on the thread count.
+    // No particle is held (movesAsARigidBody), so all are free. Summed in order, so the result
+    // does not depend on the thread count.
     const size_t n = particleCount();
-    const double massKg = mModel.particleMassKg, ownInertiaKgM2 = mModel.particleInertiaKgM2;
-    Eigen::Vector3d centreM = Eigen::Vector3d::Zero(), velocityMS = Eigen::Vector3d::Zero();
-    for (size_t p = 0; p < n; ++p) {
-        centreM += state.positionM[p];
-        velocityMS += state.velocityMS[p];
-    }
-    centreM /= double(n);
+    const FreeMass body = freeMass();
+    Eigen::Vector3d velocityMS = Eigen::Vector3d::Zero();
+    for (size_t p = 0; p < n; ++p) velocityMS += state.velocityMS[p];
     velocityMS /= double(n);
     Eigen::Vector3d angularMomentumKgM2S = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d inertiaKgM2 = double(n) * ownInertiaKgM2 * Eigen::Matrix3d::Identity();
     for (size_t p = 0; p < n; ++p) {
-        const Eigen::Vector3d armM = state.positionM[p] - centreM;
-        angularMomentumKgM2S += massKg * armM.cross(state.velocityMS[p] - velocityMS) + ownInertiaKgM2 * state.angularVelocityRadS[p];
-        inertiaKgM2 += massKg * (armM.squaredNorm() * Eigen::Matrix3d::Identity() - armM * armM.transpose());
+        const Eigen::Vector3d armM = state.positionM[p] - body.centreM;
+        angularMomentumKgM2S += mModel.particleMassKg * armM.cross(state.velocityMS[p] - velocityMS) + mModel.particleInertiaKgM2 * state.angularVelocityRadS[p];
     }
-    const Eigen::Quaterniond turn = rotationOf(dtS * inertiaKgM2.ldlt().solve(angularMomentumKgM2S));
+    const Eigen::Quaterniond turn = rotationOf(dtS * body.inertiaKgM2.ldlt().solve(angularMomentumKgM2S));
     const Eigen::Matrix3d turnMatrix = turn.toRotationMatrix();
-    const Eigen::Vector3d spinRadS = (turnMatrix * inertiaKgM2 * turnMatrix.transpose()).ldlt().solve(angularMomentumKgM2S);
+    const Eigen::Vector3d spinRadS = (turnMatrix * body.inertiaKgM2 * turnMatrix.transpose()).ldlt().solve(angularMomentumKgM2S);
     velocityMS += halfKick(dtS).perMass * externalForceN.front();
-    const Eigen::Vector3d newCentreM = centreM + dtS * velocityMS;
+    const Eigen::Vector3d newCentreM = body.centreM + dtS * velocityMS;
     forEach(n, [&](size_t p) {
-        const Eigen::Vector3d armM = turnMatrix * (state.positionM[p] - centreM);
+        const Eigen::Vector3d armM = turnMatrix * (state.positionM[p] - body.centreM);
         state.positionM[p] = newCentreM + armM;
         state.velocityMS[p] = velocityMS + spinRadS.cross(armM);
         state.angularVelocityRadS[p] = spinRadS;
