@@ -7,6 +7,7 @@
 #include <spall/dynamics/Integrate.h>
 #include <spall/scene/Scene.h>
 #include <spall/lattice/Deformable.h>
+#include <spall/lattice/DeformablePhase.h>
 #include <spall/sim/Simulation.h>
 
 #include <gtest/gtest.h>
@@ -202,6 +203,46 @@ TEST(Deformable, ALatticeAwaitingItsImpactCoastsAsItsRigidBodyUntilItsParticlesM
     EXPECT_LT(farthestApartM, 0.01 * h) << "coasting and stepping with the bonds part";
     std::printf("meets the ground after %.2f ms; coasting stopped at %.2f ms; %.1e m off the closed form; %.1e m from the stepped lattice\n",
                 1e3 * double(meetsAtStep) * stableS, 1e3 * stoppedAtS, farthestOffM, farthestApartM);
+}
+
+TEST(Deformable, ACoastingLatticeStepsAsALatticeOnceTheBlastLoadsItUnevenlyOrItsWaitRunsOut)
+{
+    // Two brick cubes falling through the air, each entered for an impact it awaits, coasting.
+    // Their weight moves every particle alike: they coast, unstrained. A force on one face of the
+    // first (a blast's) strains it: from that step on it must step as a lattice, and its bonds
+    // take strain energy. The second meets nothing: it coasts until its wait runs out, and no
+    // further (DeformablePhase::awaitImpacts).
+    const Material& material = findMaterialPreset("brick-masonry");
+    const double h = 0.025, dtS = 2e-5;
+    std::vector<Body> bodies{test::boxBody(4, 4, 4, h, material.densityKgM3, Eigen::Vector3d(0, 0, 1)),
+                             test::boxBody(4, 4, 4, h, material.densityKgM3, Eigen::Vector3d(1, 0, 1))};
+    bodies[0].id = 1;
+    bodies[1].id = 2;
+    DeformablePhase phase;
+    phase.enter(bodies, {1, 1}, {material}, LatticeSettings(), StaticWorld(), 1, 0.0);
+    const double waitEndsS = 3.5 * dtS;
+    for (DeformableBody& d : phase.lattices) d.coasting = true, d.awaitedImpactS = 1e-3;
+    phase.lattices[0].awaitImpactUntilS = 1.0;
+    phase.lattices[1].awaitImpactUntilS = waitEndsS;
+    const Eigen::Vector3d gMS2(0, 0, -9.81);
+    std::vector<std::vector<Eigen::Vector3d>> faceForcesN(bodies.size());
+    const auto deform = [&](int step) {
+        phase.deform(bodies, faceForcesN, gMS2, [](const Body&) { return false; }, step * dtS, dtS);
+    };
+    for (int step = 0; step < 2; ++step) deform(step);
+    EXPECT_TRUE(phase.lattices[0].coasting && phase.lattices[1].coasting) << "their weight alone must not end the coasts";
+    const double coastedJ = phase.lattices[0].lattice.strainEnergyJ();
+    EXPECT_LT(coastedJ, 1e-15) << "a coast carries the particles rigidly: no strain but round-off";
+    faceForcesN[0].assign(bodies[0].exposedFaces.size(), Eigen::Vector3d::Zero());
+    faceForcesN[0][0] = Eigen::Vector3d(0, 200, 0);
+    deform(2);
+    EXPECT_FALSE(phase.lattices[0].coasting) << "loaded unevenly, it must step as a lattice";
+    EXPECT_GT(phase.lattices[0].lattice.strainEnergyJ(), 1e-6) << "its bonds must take the load";
+    EXPECT_TRUE(phase.lattices[1].coasting) << "its wait has not run out (" << 3 * dtS << " s of " << waitEndsS << ")";
+    deform(3);
+    EXPECT_FALSE(phase.lattices[1].coasting) << "its wait ran out at " << waitEndsS << " s";
+    EXPECT_EQ(phase.lattices[1].awaitedImpactS, 0.0);
+    std::printf("the loaded cube took %.2e J of strain energy in its first step as a lattice\n", phase.lattices[0].lattice.strainEnergyJ());
 }
 
 TEST(Deformable, ABrickCoastingWhileItSpinsAboutNoPrincipalAxisTurnsAsItsLatticeDoes)

@@ -314,6 +314,42 @@ TEST(Impact, TwoEqualBarsMeetingEndOnExchangeTheirVelocitiesAfterTwoTransitTimes
     EXPECT_NEAR(energyJ(), energy0, 0.01 * energy0);
 }
 
+TEST(Impact, TwoCoastingBarsStepAsLatticesFromTheStepTheirParticlesMeet)
+{
+    // Two bars that entered for their impact coast (DeformableBody::coasting) while a gap lies
+    // between them: no bond is measured and neither pushes the other. The contact must end both
+    // coasts in the rigid step in which the striker, carried on at its speed, closes the gap (its
+    // end particles then overlap), and the impact must then run as it runs for the same bars
+    // stepped as lattices all along (Saint-Venant's: the struck bar leaves at the striker's speed).
+    const Material material = test::damped(test::withoutStrengthScatter(test::kConcrete), 0.0);
+    const double speedMS = 1.0, gapM = 1e-4, dtS = 2e-6;
+    BarCollision coasting = barsAboutToMeet(material, speedMS, gapM);
+    BarCollision stepped = coasting;
+    coasting.striker.coasting = coasting.struck.coasting = true;
+    LatticePairContact coastingContact(coasting.striker.lattice, coasting.struck.lattice);
+    LatticePairContact steppedContact(stepped.striker.lattice, stepped.struck.lattice);
+    int64_t stoppedAtStep = -1;
+    double struckMomentumWhileCoasting = 0.0;
+    for (int64_t k = 1; k <= 300; ++k) {
+        advanceTogether({&coasting.striker, &coasting.struck}, {{0, 1}}, {&coastingContact}, dtS);
+        advanceTogether({&stepped.striker, &stepped.struck}, {{0, 1}}, {&steppedContact}, dtS);
+        EXPECT_EQ(coasting.striker.coasting, coasting.struck.coasting) << "the push ends both coasts, in the same step";
+        if (stoppedAtStep < 0 && !coasting.striker.coasting) stoppedAtStep = k;
+        if (stoppedAtStep < 0) struckMomentumWhileCoasting = std::max(struckMomentumWhileCoasting, coasting.struck.lattice.linearMomentum().norm());
+    }
+    // The rigid steps it takes the striker to close the gap (50: the last of them ends as the
+    // ends meet, to round-off).
+    const double gapClosesInSteps = gapM / speedMS / dtS;
+    EXPECT_EQ(struckMomentumWhileCoasting, 0.0) << "nothing pushed the struck bar while both coasted";
+    EXPECT_LE(std::abs(double(stoppedAtStep) - gapClosesInSteps), 1.0) << "the coasts must end as the gap closes";
+    const double barMassKg = material.densityKgM3 * 24 * 9 * std::pow(test::kH, 3);
+    const double coastingStruckMS = coasting.struck.lattice.linearMomentum().x() / barMassKg, steppedStruckMS = stepped.struck.lattice.linearMomentum().x() / barMassKg;
+    std::printf("gap closes in %.1f steps, coasts ended in step %lld; struck bar after 0.6 ms: %.9f m/s coasted first, %.9f m/s stepped all along\n",
+                gapClosesInSteps, static_cast<long long>(stoppedAtStep), coastingStruckMS, steppedStruckMS);
+    EXPECT_NEAR(coastingStruckMS, steppedStruckMS, 1e-6 * speedMS);
+    EXPECT_NEAR(steppedStruckMS, speedMS, 0.1 * speedMS) << "the impact itself";
+}
+
 namespace {
 
 /// A 0.3 × 0.3 m pane of the glass preset, 5 mm thick, pinned in a frame as in
