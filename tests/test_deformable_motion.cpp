@@ -245,6 +245,24 @@ TEST(Deformable, ACoastingLatticeStepsAsALatticeOnceTheBlastLoadsItUnevenlyOrIts
     std::printf("the loaded cube took %.2e J of strain energy in its first step as a lattice\n", phase.lattices[0].lattice.strainEnergyJ());
 }
 
+TEST(Deformable, TheBoundOnParticleStepsToComeCountsAnImpactsWait)
+{
+    // The progress bar's time to come (DeformablePhase::particleStepsLeftAtMost): a lattice
+    // that awaits an impact may coast until its wait ends, then take the impact and vibrate for
+    // up to max_vibration_s after it; the bound must cover all of that.
+    const Material& material = findMaterialPreset("brick-masonry");
+    std::vector<Body> bodies{test::boxBody(4, 4, 4, 0.025, material.densityKgM3, Eigen::Vector3d(0, 0, 1))};
+    DeformablePhase phase;
+    phase.enter(bodies, {1}, {material}, LatticeSettings(), StaticWorld(), 1, 0.0);
+    DeformableBody& d = phase.lattices.front();
+    const double maxVibrationS = 0.01, waitS = 0.3, impactS = 2e-4;
+    d.lastLoadedS = 0.0, d.coasting = true, d.awaitedImpactS = impactS, d.awaitImpactUntilS = waitS;
+    const double stepsAtMost = (waitS + impactS + maxVibrationS) / d.lattice.stableTimeStepS() * double(d.lattice.particleCount());
+    EXPECT_GE(double(phase.particleStepsLeftAtMost(0.0, maxVibrationS)), stepsAtMost);
+    d.awaitedImpactS = 0.0;
+    EXPECT_LT(double(phase.particleStepsLeftAtMost(0.0, maxVibrationS)), 0.1 * stepsAtMost) << "without a wait, the vibration alone";
+}
+
 TEST(Deformable, ABrickCoastingWhileItSpinsAboutNoPrincipalAxisTurnsAsItsLatticeDoes)
 {
     // A 6 × 3 × 2 brick spinning at 10 rad/s about no axis of its inertia: a free body's spin

@@ -35,7 +35,9 @@ int64_t DeformablePhase::particleStepsLeftAtMost(double timeS, double maxVibrati
 {
     int64_t steps = 0;
     for (const DeformableBody& d : lattices) {
-        const double leftS = std::max(0.0, d.lastLoadedS + maxVibrationS - timeS) + d.pendingS;
+        // A lattice awaiting its impact may wait until its wait ends and then take the impact.
+        const double loadedUntilS = d.awaitedImpactS > 0.0 ? std::max(d.lastLoadedS, d.awaitImpactUntilS + d.awaitedImpactS) : d.lastLoadedS;
+        const double leftS = std::max(0.0, loadedUntilS + maxVibrationS - timeS) + d.pendingS;
         steps += static_cast<int64_t>(std::ceil(leftS / d.lattice.stableTimeStepS())) * static_cast<int64_t>(d.lattice.particleCount());
     }
     return steps;
