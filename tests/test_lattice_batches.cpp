@@ -252,7 +252,8 @@ TEST(LatticeBatches, BondsBatchedEndEachStepAsTheOneBondPathLeavesThem)
             // damaged, and the batches take those whose damage stays: more than the undamaged.
             if (speedMS < 1.0) {
                 EXPECT_GT(batched.batchedInLastPass, 0u) << name << ": the batches were meant to take bonds";
-            } else if (batched.damaged > batched.bonds / 2) {
+            } else if (std::strcmp(name, "concrete") == 0) {
+                ASSERT_GT(batched.damaged, batched.bonds / 2) << "fast, concrete's bonds were meant to crack";
                 EXPECT_GT(batched.batchedInLastPass, batched.bonds - batched.damaged) << name << ": the batches were meant to take damaged bonds";
             }
             EXPECT_EQ(oneByOne.batchedInLastPass, 0u);
