@@ -322,6 +322,37 @@ void BM_Lattice_Step(benchmark::State& state)
 }
 BENCHMARK(BM_Lattice_Step)->Arg(24)->Arg(60)->Arg(100)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+/// The block with every bond halfway along its softening line: a cracked body vibrating on its
+/// bonds' secant stiffness, as a piece is after the blast. The batches take these bonds too
+/// (BondStrainRun::steady); one at a time, each takes the one-bond path.
+Lattice crackedBlock(int edge)
+{
+    Lattice lattice = vibratingBlock(edge);
+    for (size_t b = 0; b < lattice.bondCount(); ++b) {
+        BondHistory& history = lattice.state.bondHistory[b];
+        const LatticeStiffness::Strength& strength = lattice.model().stiffness.strength[lattice.model().bonds[b].strengthClass];
+        const double scale = history.strengthScale * history.strengthFactor;
+        const double peakM = scale * strength.peakStretchM, endM = strength.zeroTractionStretchM / scale;
+        history.maxEquivalentStretchM = peakM + 0.5 * (endM - peakM);
+    }
+    lattice.refreshForces();
+    return lattice;
+}
+
+void stepCrackedBlock(benchmark::State& state, bool batched)
+{
+    Lattice lattice = crackedBlock(int(state.range(0)));
+    lattice.batchSteadyBonds(batched);
+    const double dt = lattice.stableTimeStepS();
+    for (auto _ : state) lattice.step(dt);
+    state.counters["particle_steps_per_s"] = benchmark::Counter(double(lattice.particleCount()), benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["bonds_batched"] = double(lattice.bondsBatchedInLastPass());
+}
+void BM_Lattice_StepCracked(benchmark::State& state) { stepCrackedBlock(state, true); }
+void BM_Lattice_StepCrackedOneBondAtATime(benchmark::State& state) { stepCrackedBlock(state, false); }
+BENCHMARK(BM_Lattice_StepCracked)->Arg(60)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Lattice_StepCrackedOneBondAtATime)->Arg(60)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 /// Building the block's lattice (its strength scatter included), which a body pays once when it
 /// enters the phase: its ratio to a step says how many steps it costs.
 void BM_Lattice_Build(benchmark::State& state)
@@ -502,6 +533,7 @@ public:
             {"BM_Lattice_Step/60", "BM_Lattice_StepWithoutCrushing"},
             {"BM_Lattice_Step/24", "BM_Lattice_StepOneBondAtATime/24"},
             {"BM_Lattice_Step/60", "BM_Lattice_StepOneBondAtATime/60"},
+            {"BM_Lattice_StepCracked/60", "BM_Lattice_StepCrackedOneBondAtATime/60"},
             {"BM_Lattice_Build", "BM_Lattice_Step/60"},
             {"BM_Integrate_FlightWithAirDrag", "BM_Integrate_Flight"},
             {"BM_Contacts_SlabOnGround", "BM_Contacts_BoundaryPass"},
