@@ -137,7 +137,9 @@ struct SteadyBonds {
 template <class Batch>
 Batch crackingDamage(const Batch& maxEquivalentM, const Batch& strengthScale, const Batch& peakStretchM, const Batch& zeroTractionStretchM)
 {
-    const Batch u0 = strengthScale * peakStretchM, uf = zeroTractionStretchM / strengthScale, kappa = maxEquivalentM;
+    const Batch u0 = strengthScale * peakStretchM, kappa = maxEquivalentM;
+    if (xsimd::all(kappa <= u0)) return Batch(0.0);  // most batches: no bond past its peak, no division
+    const Batch uf = zeroTractionStretchM / strengthScale;
     const Batch onLine = Batch(1.0) - (u0 / kappa) * (uf - kappa) / (uf - u0);
     const auto broken = kappa >= uf || zeroTractionStretchM <= peakStretchM;
     return xsimd::select(kappa <= u0, Batch(0.0), xsimd::select(broken, Batch(1.0), onLine));

@@ -69,9 +69,9 @@ public:
 
     /// The most particle-steps its lattices can still take: each steps at most until
     /// `maxVibrationS` after the blast last loaded it, or after the impact it awaits, taken at
-    /// the end of its wait (to within the rigid step that ends it) (0 when the phase is empty). While the blast
-    /// still acts it moves that time on: the bound leaves out what remains of the loading, a few
-    /// milliseconds against the tenth of a second of `maxVibrationS`.
+    /// the end of its wait (to within the rigid step that ends it); 0 when the phase is empty.
+    /// While the blast still acts it moves that time on: the bound leaves out what remains of the
+    /// loading, a few milliseconds against the tenth of a second of `maxVibrationS`.
     int64_t particleStepsLeftAtMost(double timeS, double maxVibrationS) const;
     /// Bodies marked `entering` (per body: the blast reaches them, or they strike something hard
     /// enough to crack) that have links or anchors become lattices.
