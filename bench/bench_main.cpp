@@ -452,38 +452,52 @@ BENCHMARK(BM_Contacts_SlabOnSlab)->Unit(benchmark::kMicrosecond)->UseRealTime();
 /// 45° staircase (576 000 voxels, 36 600 of them under the staircase), written as one
 /// fragment's grid. The baseline writes its voxels as a fog volume; the others its level set,
 /// unsmoothed and with the fracture surface smoothed (output.fracture_smoothing_steps 4, the
-/// default), which the frames of a cracking wall pay for its largest piece every frame.
-Body crackedWall()
+/// default), which the frames of a cracking wall pay for its largest piece every frame unless
+/// the piece's last surface is updated (BM_Frame_CrackingWallUpdated*).
+constexpr int kWallLength = 240, kWallThickness = 20, kWallHeight = 120, kWallCorner = 60;
+
+/// The wall's largest piece once its lower corner x + z < kWallCorner broke off and, with
+/// `upperCornerToo`, also its upper corner x + z > 329 (8 700 voxels).
+Body crackedWall(bool upperCornerToo = false)
 {
     initialiseOpenVdb();
-    constexpr int kLength = 240, kThickness = 20, kHeight = 120, kCorner = 60;
     LinkGrid::Ptr g = LinkGrid::create(0);
-    g->tree().denseFill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(kLength - 1, kThickness - 1, kHeight - 1)), 0, true);
+    g->tree().denseFill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(kWallLength - 1, kWallThickness - 1, kWallHeight - 1)), 0, true);
     linkAllNeighbours(*g);
     auto acc = g->getAccessor();
-    // The corner x + z < kCorner breaks off: every link across that staircase.
-    for (int x = 0; x < kCorner; ++x)
-        for (int y = 0; y < kThickness; ++y) {
-            breakLink(acc, openvdb::Coord(x, y, kCorner - 1 - x), kPosX);
-            breakLink(acc, openvdb::Coord(x, y, kCorner - 1 - x), kPosZ);
+    for (int y = 0; y < kWallThickness; ++y) {
+        for (int x = 0; x < kWallCorner; ++x) {  // every link across the lower staircase
+            breakLink(acc, openvdb::Coord(x, y, kWallCorner - 1 - x), kPosX);
+            breakLink(acc, openvdb::Coord(x, y, kWallCorner - 1 - x), kPosZ);
         }
+        for (int s = 0; upperCornerToo && s < kWallCorner / 2; ++s) {  // the upper one, stepping down to +x
+            const openvdb::Coord step(kWallLength - kWallCorner / 2 + s, y, kWallHeight - 1 - s);
+            breakLink(acc, step, kPosX);
+            breakLink(acc, step, kPosZ);
+        }
+    }
     std::vector<Body> parts = splitBody(makeBody(g, 0.01, 1900.0));
     std::sort(parts.begin(), parts.end(), [](const Body& a, const Body& b) { return a.mass.voxelCount > b.mass.voxelCount; });
     parts.front().id = 1;
     return parts.front();
 }
 
-void writeWallFrames(benchmark::State& state, FragmentGrids grids, int smoothingSteps)
+OutputSettings frameSettings(FragmentGrids grids, int smoothingSteps)
 {
-    const std::vector<Body> wall = {crackedWall()};
     OutputSettings settings;
     settings.fragmentGrids = grids;
     settings.fractureSmoothingSteps = smoothingSteps;
+    return settings;
+}
+
+void writeWallFrames(benchmark::State& state, FragmentGrids grids, int smoothingSteps)
+{
+    const std::vector<Body> wall = {crackedWall()};
     const std::string dir = (std::filesystem::temp_directory_path() / "spall-bench-frames").string();
     std::filesystem::create_directories(dir);
     int frame = 0;
     for (auto _ : state) {
-        FrameWriter writer(dir, settings);  // a new writer: nothing kept from the last frame
+        FrameWriter writer(dir, frameSettings(grids, smoothingSteps));  // a new writer: nothing kept from the last frame
         benchmark::DoNotOptimize(writer.write({frame++, 0.0}, wall));
     }
     std::filesystem::remove_all(dir);
@@ -495,6 +509,27 @@ void BM_Frame_CrackedWallSmoothed(benchmark::State& state) { writeWallFrames(sta
 BENCHMARK(BM_Frame_CrackedWallFog)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Frame_CrackedWallLevelSet)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Frame_CrackedWallSmoothed)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+/// The same wall's frames as it cracks further, by one writer: each frame the piece loses its
+/// upper corner or has it back, and the writer updates the last frame's surface
+/// near that corner's crack instead of making it whole.
+void writeCrackingWallFrames(benchmark::State& state, int smoothingSteps)
+{
+    const Body shapes[2] = {crackedWall(), crackedWall(true)};
+    const std::string dir = (std::filesystem::temp_directory_path() / "spall-bench-frames-cracking").string();
+    std::filesystem::create_directories(dir);
+    FrameWriter writer(dir, frameSettings(FragmentGrids::LevelSet, smoothingSteps));
+    int frame = 0;
+    writer.write({frame++, 0.0}, {shapes[0]});
+    for (auto _ : state) benchmark::DoNotOptimize(writer.write({frame, 0.0}, {shapes[frame % 2]})), ++frame;
+    if (writer.surfacesUpdated() != frame - 1) state.SkipWithError("a frame made its surface whole");
+    std::filesystem::remove_all(dir);
+    state.counters["voxels"] = double(shapes[1].mass.voxelCount);
+}
+void BM_Frame_CrackingWallUpdated(benchmark::State& state) { writeCrackingWallFrames(state, 0); }
+void BM_Frame_CrackingWallUpdatedSmoothed(benchmark::State& state) { writeCrackingWallFrames(state, 4); }
+BENCHMARK(BM_Frame_CrackingWallUpdated)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Frame_CrackingWallUpdatedSmoothed)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 /// Console output plus, at the end, each benchmark's time relative to its baseline.
 class RatioReporter : public benchmark::ConsoleReporter {
@@ -540,6 +575,8 @@ public:
             {"BM_Contacts_SlabOnSlab", "BM_Contacts_BoundaryPass"},
             {"BM_Frame_CrackedWallLevelSet", "BM_Frame_CrackedWallFog"},
             {"BM_Frame_CrackedWallSmoothed", "BM_Frame_CrackedWallFog"},
+            {"BM_Frame_CrackingWallUpdated", "BM_Frame_CrackedWallLevelSet"},
+            {"BM_Frame_CrackingWallUpdatedSmoothed", "BM_Frame_CrackedWallSmoothed"},
         };
         std::printf("\nRatios to the baseline in this run (time / baseline time):\n");
         for (auto [name, base] : pairs) {

@@ -341,6 +341,117 @@ openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces
     return levelSet->treePtr();
 }
 
+openvdb::Coord voxelBlockOf(const openvdb::Coord& voxel)
+{
+    return openvdb::Coord(voxel.x() >> kVoxelBlockLog2, voxel.y() >> kVoxelBlockLog2, voxel.z() >> kVoxelBlockLog2);
+}
+
+namespace {
+
+static_assert(FloatLeaf::LOG2DIM == kVoxelBlockLog2, "a block of voxels is a leaf of a voxel tree");
+
+bool sameLeaf(const FloatLeaf& a, const FloatLeaf& b)
+{
+    if (a.getValueMask() != b.getValueMask()) return false;
+    for (auto it = a.cbeginValueOn(); it; ++it)
+        if (b.getValue(it.pos()) != *it) return false;
+    return true;
+}
+
+/// The samples a block's edge spans (a multiple of the level set's leaf edge).
+int blockEdgeSamples(const SurfaceStyle& style) { return style.subdivisions << kVoxelBlockLog2; }
+
+int blocksSpanning(int samples, const SurfaceStyle& style) { return (samples + blockEdgeSamples(style) - 1) / blockEdgeSamples(style); }
+
+/// The faces where `voxels` in the `worked` blocks meet voxels outside them, as the object's own
+/// (they close the worked region's solid and neither flow nor roughen).
+void appendCutFaces(const openvdb::FloatTree& voxels, const openvdb::MaskTree& worked, std::vector<VoxelFace>& faces)
+{
+    openvdb::tree::ValueAccessor<const openvdb::FloatTree> solid(voxels);
+    for (auto block = worked.cbeginValueOn(); block; ++block) {
+        const FloatLeaf* leaf = voxels.probeConstLeaf(leafOrigin(block.getCoord()));
+        if (!leaf) continue;
+        for (auto v = leaf->cbeginValueOn(); v; ++v)
+            for (int f = 0; f < kFaceCount; ++f) {
+                const openvdb::Coord across = v.getCoord() + faceOffset(f);
+                if (!worked.isValueOn(voxelBlockOf(across)) && solid.isValueOn(across)) faces.push_back({v.getCoord(), f, false});
+            }
+    }
+}
+
+/// Replaces the level-set leaves of the `blocks` in `to` by those (or the tiles) of `from`.
+void copyBlocks(const openvdb::FloatTree& from, openvdb::FloatTree& to, const openvdb::MaskTree& blocks, const SurfaceStyle& style)
+{
+    const int edge = blockEdgeSamples(style), leafEdge = int(FloatLeaf::DIM);
+    for (auto block = blocks.cbeginValueOn(); block; ++block) {
+        // Voxel face v - 1/2 is sample k v + kSampleIndexOffset (levelSetTransform).
+        const openvdb::Coord b = block.getCoord();
+        const openvdb::Coord first(b.x() * edge + kSampleIndexOffset, b.y() * edge + kSampleIndexOffset, b.z() * edge + kSampleIndexOffset);
+        for (int i = 0; i < edge; i += leafEdge)
+            for (int j = 0; j < edge; j += leafEdge)
+                for (int k = 0; k < edge; k += leafEdge) {
+                    const openvdb::Coord origin = first.offsetBy(i, j, k);
+                    if (const FloatLeaf* leaf = from.probeConstLeaf(origin))
+                        to.addLeaf(new FloatLeaf(*leaf));
+                    else
+                        to.addTile(1, origin, from.getValue(origin), false);
+                }
+    }
+}
+
+}  // namespace
+
+openvdb::MaskTree blocksThatDiffer(const openvdb::FloatTree& before, const openvdb::FloatTree& after)
+{
+    openvdb::MaskTree differ(false);
+    for (auto leaf = before.cbeginLeaf(); leaf; ++leaf) {
+        const FloatLeaf* other = after.probeConstLeaf(leaf->origin());
+        if (!other || !sameLeaf(*leaf, *other)) differ.setValueOn(voxelBlockOf(leaf->origin()));
+    }
+    for (auto leaf = after.cbeginLeaf(); leaf; ++leaf)
+        if (!before.probeConstLeaf(leaf->origin())) differ.setValueOn(voxelBlockOf(leaf->origin()));
+    return differ;
+}
+
+UpdateReach updateReachOf(const SurfaceStyle& style)
+{
+    const int band = int(std::ceil(style.halfWidthSamples)), leaf = int(FloatLeaf::DIM);
+    const int grownLeaves = style.smoothingSteps / kStepsPerLeaf;
+    const int roughening = style.fractureRoughness > 0.0 ? leaf : 0;  // the renormalisation's stencil
+    const int smoothed = style.smoothingSteps > 0 ? leaf * (kChangedLeaves + grownLeaves) : 0;
+    const int smoothingHalo = style.smoothingSteps > 0 ? leaf * (kHaloLeaves + 2 * grownLeaves) : 0;
+    UpdateReach reach;
+    reach.rewrittenBlocks = blocksSpanning(band + smoothed + roughening, style);
+    reach.workedBlocks = reach.rewrittenBlocks + blocksSpanning(band + smoothingHalo + roughening, style);
+    return reach;
+}
+
+openvdb::FloatTree::Ptr updatedVoxelSurfaceLevelSet(const openvdb::FloatTree& previous, const openvdb::FloatTree& voxels,
+                                                    const std::vector<VoxelFace>& faces, const openvdb::MaskTree& changedBlocks,
+                                                    double voxelSizeM, const SurfaceStyle& style)
+{
+    const UpdateReach reach = updateReachOf(style);
+    openvdb::MaskTree rewritten(changedBlocks), worked(changedBlocks);
+    openvdb::tools::dilateActiveValues(rewritten, reach.rewrittenBlocks, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    openvdb::tools::dilateActiveValues(worked, reach.workedBlocks, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    // The worked blocks cost about what they would in a whole surface: past half the shape's,
+    // the whole is as cheap (and exact).
+    openvdb::Index64 workedWithVoxels = 0;
+    for (auto block = worked.cbeginValueOn(); block; ++block) workedWithVoxels += voxels.probeConstLeaf(leafOrigin(block.getCoord())) != nullptr;
+    if (2 * workedWithVoxels > voxels.leafCount()) return nullptr;
+    std::vector<VoxelFace> region;
+    for (const VoxelFace& f : faces)
+        if (worked.isValueOn(voxelBlockOf(f.voxel))) region.push_back(f);
+    appendCutFaces(voxels, worked, region);
+    auto updated = std::make_shared<openvdb::FloatTree>(previous);
+    if (region.empty()) {  // the worked blocks lost every voxel: nothing of the shape lies there
+        copyBlocks(openvdb::FloatTree(previous.background()), *updated, rewritten, style);
+        return updated;
+    }
+    copyBlocks(*voxelSurfaceLevelSet(region, voxelSizeM, style), *updated, rewritten, style);
+    return updated;
+}
+
 openvdb::FloatGrid::Ptr voxelsOfLevelSet(const openvdb::FloatGrid& levelSet, int subdivisions)
 {
     const int k = subdivisions;

@@ -7,6 +7,8 @@
 #include <spall/core/Hash.h>
 #include <spall/core/Parallel.h>
 
+#include <openvdb/tools/Morphology.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -84,19 +86,44 @@ const Material* FrameWriter::materialOf(const Body& body) const
     return body.materialIndex >= 0 && size_t(body.materialIndex) < mMaterials.size() ? &mMaterials[body.materialIndex] : nullptr;
 }
 
+SurfaceStyle FrameWriter::surfaceStyle() const
+{
+    return {mSettings.levelSetSubdivisions, mSettings.fractureSmoothingSteps, mSettings.fractureRoughnessVoxels, kLevelSetHalfWidthSamples};
+}
+
+namespace {
+
+/// Whether every voxel of `bounds` lies at or above `origin` on each axis.
+/// A shape of fewer blocks is made whole: the blocks around a single change are as many.
+constexpr openvdb::Index64 kLeastBlocksToUpdate = 64;
+
+bool startsAtOrAbove(const openvdb::CoordBBox& bounds, const openvdb::Coord& origin)
+{
+    return bounds.min().x() >= origin.x() && bounds.min().y() >= origin.y() && bounds.min().z() >= origin.z();
+}
+
+}  // namespace
+
 const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
 {
     auto found = mByBody.find(body.id);
     if (found != mByBody.end() && found->second.madeFrom.lock() == body.grid) return found->second;
+    const bool levelSet = mSettings.fragmentGrids == FragmentGrids::LevelSet;
+    // A piece that cracks further keeps its trees' origin while its voxels stay above it, so its
+    // surface can be updated where it changed rather than made whole.
+    const FragmentTrees* previous = levelSet && found != mByBody.end() && found->second.voxels &&
+                                            startsAtOrAbove(body.indexBounds, found->second.originIjk)
+                                        ? &found->second
+                                        : nullptr;
     FragmentTrees trees;
     trees.madeFrom = body.grid;
-    trees.originIjk = body.indexBounds.min();
-    auto voxels = std::make_shared<openvdb::FloatTree>(0.0f);
-    auto fractureFaces = std::make_shared<openvdb::FloatTree>(0.0f);
+    trees.originIjk = previous ? previous->originIjk : body.indexBounds.min();
+    trees.voxels = std::make_shared<openvdb::FloatTree>(0.0f);
+    trees.brokenFaceBits = std::make_shared<openvdb::FloatTree>(0.0f);
     std::vector<VoxelFace> faces;
     faces.reserve(body.exposedFaces.size());
     {
-        openvdb::tree::ValueAccessor<openvdb::FloatTree> out(*voxels), fractured(*fractureFaces);
+        openvdb::tree::ValueAccessor<openvdb::FloatTree> out(*trees.voxels), fractured(*trees.brokenFaceBits);
         for (auto it = body.grid->constTree().cbeginValueOn(); it; ++it) out.setValueOn(it.getCoord() - trees.originIjk, 1.0f);
         auto links = body.grid->getConstAccessor();
         const Material* material = materialOf(body);
@@ -109,10 +136,10 @@ const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
             fractured.setValueOn(shifted, float(int(fractured.getValue(shifted)) | bits));
         }
     }
+    const openvdb::FloatTree::Ptr& voxels = trees.voxels;
+    const openvdb::FloatTree::Ptr& fractureFaces = trees.brokenFaceBits;
     const uint64_t shapeHash = contentHash(*voxels), fractureHash = contentHash(*fractureFaces);
-    const OutputSettings& s = mSettings;
-    const bool levelSet = s.fragmentGrids == FragmentGrids::LevelSet;
-    const SurfaceStyle style{s.levelSetSubdivisions, s.fractureSmoothingSteps, s.fractureRoughnessVoxels, kLevelSetHalfWidthSamples};
+    const SurfaceStyle style = surfaceStyle();
     // A rough surface depends on which faces broke too: its key is the voxels with their masks.
     const bool rough = levelSet && style.fractureRoughness > 0.0 && !fractureFaces->empty();
     openvdb::FloatTree::Ptr surfaceKey = voxels;
@@ -121,11 +148,27 @@ const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
         openvdb::tree::ValueAccessor<openvdb::FloatTree> key(*surfaceKey);
         for (auto it = fractureFaces->cbeginValueOn(); it; ++it) key.setValueOn(it.getCoord(), 1.0f + *it);
     }
-    trees.surface = intern(mShapes, surfaceKey, rough ? contentHash(*surfaceKey) : shapeHash,
-                           [&] { return levelSet ? voxelSurfaceLevelSet(faces, body.voxelSizeM, style) : voxels; });
+    trees.surface = intern(mShapes, surfaceKey, rough ? contentHash(*surfaceKey) : shapeHash, [&] {
+        if (!levelSet) return voxels;
+        if (previous)
+            if (openvdb::FloatTree::Ptr updated = updatedSurface(*previous, trees, faces, body.voxelSizeM)) return updated;
+        return voxelSurfaceLevelSet(faces, body.voxelSizeM, style);
+    });
     if (!fractureFaces->empty()) trees.fractureFaces = intern(mFractureFaces, fractureFaces, fractureHash, [&] { return fractureFaces; });
     trees.meshKey = splitmix64(shapeHash ^ splitmix64(fractureHash));
+    // Kept for an update only where one can pay: debris of a few voxels would hold a leaf each.
+    if (!levelSet || voxels->leafCount() < kLeastBlocksToUpdate) trees.voxels = trees.brokenFaceBits = nullptr;
     return mByBody.insert_or_assign(body.id, std::move(trees)).first->second;
+}
+
+openvdb::FloatTree::Ptr FrameWriter::updatedSurface(const FragmentTrees& previous, const FragmentTrees& now, const std::vector<VoxelFace>& faces,
+                                                    double voxelSizeM)
+{
+    openvdb::MaskTree changed = blocksThatDiffer(*previous.voxels, *now.voxels);
+    changed.topologyUnion(blocksThatDiffer(*previous.brokenFaceBits, *now.brokenFaceBits));
+    openvdb::FloatTree::Ptr updated = updatedVoxelSurfaceLevelSet(*previous.surface, *now.voxels, faces, changed, voxelSizeM, surfaceStyle());
+    if (updated) ++mSurfacesUpdated;
+    return updated;
 }
 
 openvdb::GridBase::Ptr FrameWriter::fragmentGrid(const FrameInfo& info, const Body& body, const FragmentTrees& trees,

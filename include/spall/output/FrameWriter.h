@@ -1,6 +1,7 @@
 // OUTDIR/fragments.NNNN.vdb: one frame of a run, every fragment where it is (docs/file-formats.md).
 #pragma once
 
+#include <spall/output/FragmentSurface.h>
 #include <spall/scene/Scene.h>
 #include <spall/voxel/Body.h>
 
@@ -45,6 +46,9 @@ public:
     FrameWriter(std::string outputDirectory, const OutputSettings& settings, std::vector<Material> materials = {});
     /// Returns the path written.
     std::string write(const FrameInfo& info, const std::vector<Body>& bodies);
+    /// How many level sets were made by updating a piece's earlier one near its new cracks
+    /// (updatedVoxelSurfaceLevelSet) rather than whole, over the writer's frames.
+    int64_t surfacesUpdated() const { return mSurfacesUpdated; }
     /// OUTDIR/fragments.NNNN.vdb, NNNN the frame's number (its index plus output.first_frame).
     static std::string framePath(const std::string& directory, int frameNumber);
 
@@ -52,6 +56,9 @@ private:
     struct FragmentTrees {
         openvdb::FloatTree::Ptr surface;
         openvdb::FloatTree::Ptr fractureFaces;  ///< null when the body has no fracture surface
+        /// The shape's voxels and its broken faces' bits (never null): what the next shape of a
+        /// piece that cracks further is compared with.
+        openvdb::FloatTree::Ptr voxels, brokenFaceBits;
         openvdb::Coord originIjk;               ///< the trees' (0,0,0) in the body's index space
         uint64_t meshKey = 0;                   ///< hash of voxels and fracture faces
         /// The grid they were made from: a body shown in pieces during the deformable phase
@@ -64,7 +71,12 @@ private:
         openvdb::FloatTree::Ptr derived;  ///< what is written (the content itself, or its level set)
     };
     const FragmentTrees& treesOf(const Body& body);
+    /// The surface of a shape whose earlier one, `previous`, differs from it in few blocks: updated
+    /// there; null when a whole one is cheaper.
+    openvdb::FloatTree::Ptr updatedSurface(const FragmentTrees& previous, const FragmentTrees& now, const std::vector<VoxelFace>& faces,
+                                           double voxelSizeM);
     const Material* materialOf(const Body& body) const;
+    SurfaceStyle surfaceStyle() const;
     static openvdb::FloatTree::Ptr intern(std::unordered_multimap<uint64_t, Interned>& pool, const openvdb::FloatTree::Ptr& content,
                                           uint64_t hash, const std::function<openvdb::FloatTree::Ptr()>& derive);
     openvdb::GridBase::Ptr fragmentGrid(const FrameInfo& info, const Body& body, const FragmentTrees& trees,
@@ -74,6 +86,7 @@ private:
     std::vector<Material> mMaterials;
     std::unordered_map<int64_t, FragmentTrees> mByBody;
     std::unordered_multimap<uint64_t, Interned> mShapes, mFractureFaces;
+    int64_t mSurfacesUpdated = 0;
     /// Per body, its level set in the world frame as last resampled, with the surface and the
     /// pose it was made from: a body at rest is not resampled again (output.debris_level_set).
     struct WorldPiece {
