@@ -341,77 +341,132 @@ openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces
     return levelSet->treePtr();
 }
 
-openvdb::Coord voxelBlockOf(const openvdb::Coord& voxel)
-{
-    return openvdb::Coord(voxel.x() >> kVoxelBlockLog2, voxel.y() >> kVoxelBlockLog2, voxel.z() >> kVoxelBlockLog2);
-}
-
 namespace {
 
-static_assert(FloatLeaf::LOG2DIM == kVoxelBlockLog2, "a block of voxels is a leaf of a voxel tree");
+/// The level-set leaf (as leafCell) holding sample `sample` along one axis.
+int cellOf(int sample) { return sample >> FloatLeaf::LOG2DIM; }
 
-bool sameLeaf(const FloatLeaf& a, const FloatLeaf& b)
+/// Voxel v's cube spans samples k v + kSampleIndexOffset to k (v + 1) + kSampleIndexOffset
+/// (levelSetTransform): the leaves holding those, `reach` samples either side, marked in `cells`.
+void markLeavesNear(const openvdb::Coord& voxel, int k, int reach, openvdb::tree::ValueAccessor<openvdb::MaskTree>& cells)
 {
-    if (a.getValueMask() != b.getValueMask()) return false;
-    for (auto it = a.cbeginValueOn(); it; ++it)
-        if (b.getValue(it.pos()) != *it) return false;
+    openvdb::Coord lo, hi;
+    for (int axis = 0; axis < 3; ++axis) {
+        lo[axis] = cellOf(k * voxel[axis] + kSampleIndexOffset - reach);
+        hi[axis] = cellOf(k * (voxel[axis] + 1) + kSampleIndexOffset + reach);
+    }
+    for (int x = lo.x(); x <= hi.x(); ++x)
+        for (int y = lo.y(); y <= hi.y(); ++y)
+            for (int z = lo.z(); z <= hi.z(); ++z) cells.setValueOn(openvdb::Coord(x, y, z));
+}
+
+/// Whether two leaves (either may be null: none) hold the same voxels with the same values.
+bool sameLeaf(const FloatLeaf* a, const FloatLeaf* b)
+{
+    if (!a || !b) return a == b;
+    if (a->getValueMask() != b->getValueMask()) return false;
+    for (auto it = a->cbeginValueOn(); it; ++it)
+        if (b->getValue(it.pos()) != *it) return false;
     return true;
 }
 
-/// The samples a block's edge spans (a multiple of the level set's leaf edge).
-int blockEdgeSamples(const SurfaceStyle& style) { return style.subdivisions << kVoxelBlockLog2; }
-
-int blocksSpanning(int samples, const SurfaceStyle& style) { return (samples + blockEdgeSamples(style) - 1) / blockEdgeSamples(style); }
-
-/// The faces where `voxels` in the `worked` blocks meet voxels outside them, as the object's own
-/// (they close the worked region's solid and neither flow nor roughen).
-void appendCutFaces(const openvdb::FloatTree& voxels, const openvdb::MaskTree& worked, std::vector<VoxelFace>& faces)
+/// The voxels where two shapes differ (one holds it, the other not, or its broken faces
+/// differ), among the blocks of voxels (leaves of the voxel trees) next to those of `near`.
+std::vector<openvdb::Coord> voxelsThatDiffer(const VoxelShape& before, const VoxelShape& after, const openvdb::FloatTree& near)
 {
-    openvdb::tree::ValueAccessor<const openvdb::FloatTree> solid(voxels);
-    for (auto block = worked.cbeginValueOn(); block; ++block) {
-        const FloatLeaf* leaf = voxels.probeConstLeaf(leafOrigin(block.getCoord()));
-        if (!leaf) continue;
-        for (auto v = leaf->cbeginValueOn(); v; ++v)
-            for (int f = 0; f < kFaceCount; ++f) {
-                const openvdb::Coord across = v.getCoord() + faceOffset(f);
-                if (!worked.isValueOn(voxelBlockOf(across)) && solid.isValueOn(across)) faces.push_back({v.getCoord(), f, false});
+    openvdb::MaskTree blocks(false);
+    for (auto leaf = near.cbeginLeaf(); leaf; ++leaf) blocks.setValueOn(leafCell(leaf->origin()));
+    openvdb::tools::dilateActiveValues(blocks, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    std::vector<openvdb::Coord> differ;
+    const auto compare = [&](const VoxelShape& first, const VoxelShape& second, bool seenBoth) {
+        for (auto leaf = first.voxels->cbeginLeaf(); leaf; ++leaf) {
+            const openvdb::Coord origin = leaf->origin();
+            if (!blocks.isValueOn(leafCell(origin))) continue;
+            const FloatLeaf* other = second.voxels->probeConstLeaf(origin);
+            if (other && !seenBoth) continue;
+            const FloatLeaf *brokenFirst = first.brokenFaceBits->probeConstLeaf(origin), *brokenSecond = second.brokenFaceBits->probeConstLeaf(origin);
+            if (other && other->getValueMask() == leaf->getValueMask() && sameLeaf(brokenFirst, brokenSecond)) continue;
+            for (openvdb::Index i = 0; i < FloatLeaf::SIZE; ++i) {
+                const bool inFirst = leaf->isValueOn(i), inSecond = other && other->isValueOn(i);
+                const float bitsFirst = brokenFirst ? brokenFirst->getValue(i) : 0.0f, bitsSecond = brokenSecond ? brokenSecond->getValue(i) : 0.0f;
+                if ((inFirst || inSecond) && (inFirst != inSecond || bitsFirst != bitsSecond)) differ.push_back(leaf->offsetToGlobalCoord(i));
             }
-    }
+        }
+    };
+    compare(before, after, true);
+    compare(after, before, false);
+    return differ;
 }
 
-/// Replaces the level-set leaves of the `blocks` in `to` by those (or the tiles) of `from`.
-void copyBlocks(const openvdb::FloatTree& from, openvdb::FloatTree& to, const openvdb::MaskTree& blocks, const SurfaceStyle& style)
+/// floor(a / b) for b > 0.
+int floorDivide(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+/// The faces of `shape`'s voxels whose centres' samples lie in the `worked` leaves: their exposed
+/// faces (broken or not, as `shape` says), and where they meet voxels outside, cut faces taken as
+/// the object's own (they close the region's solid and neither flow nor roughen).
+std::vector<VoxelFace> facesOfRegion(const VoxelShape& shape, const openvdb::MaskTree& worked, int k)
 {
-    const int edge = blockEdgeSamples(style), leafEdge = int(FloatLeaf::DIM);
-    for (auto block = blocks.cbeginValueOn(); block; ++block) {
-        // Voxel face v - 1/2 is sample k v + kSampleIndexOffset (levelSetTransform).
-        const openvdb::Coord b = block.getCoord();
-        const openvdb::Coord first(b.x() * edge + kSampleIndexOffset, b.y() * edge + kSampleIndexOffset, b.z() * edge + kSampleIndexOffset);
-        for (int i = 0; i < edge; i += leafEdge)
-            for (int j = 0; j < edge; j += leafEdge)
-                for (int k = 0; k < edge; k += leafEdge) {
-                    const openvdb::Coord origin = first.offsetBy(i, j, k);
-                    if (const FloatLeaf* leaf = from.probeConstLeaf(origin))
-                        to.addLeaf(new FloatLeaf(*leaf));
-                    else
-                        to.addTile(1, origin, from.getValue(origin), false);
+    openvdb::tree::ValueAccessor<const openvdb::MaskTree> inWorked(worked);
+    openvdb::tree::ValueAccessor<const openvdb::FloatTree> solid(*shape.voxels), broken(*shape.brokenFaceBits);
+    const auto centreCell = [&](int v) { return cellOf(k * v + kSampleIndexOffset + k / 2); };
+    const auto inRegion = [&](const openvdb::Coord& v) { return inWorked.isValueOn(openvdb::Coord(centreCell(v.x()), centreCell(v.y()), centreCell(v.z()))); };
+    // The voxels whose centre's sample k v + offset + k/2 lies in leaf c: from ceil to floor.
+    const int leafEdge = int(FloatLeaf::DIM);
+    const auto firstVoxel = [&](int c) { return floorDivide(leafEdge * c - kSampleIndexOffset - k / 2 + k - 1, k); };
+    const auto lastVoxel = [&](int c) { return floorDivide(leafEdge * c + leafEdge - 1 - kSampleIndexOffset - k / 2, k); };
+    std::vector<VoxelFace> faces;
+    for (auto cell = worked.cbeginValueOn(); cell; ++cell) {
+        const openvdb::Coord c = cell.getCoord();
+        for (int x = firstVoxel(c.x()); x <= lastVoxel(c.x()); ++x)
+            for (int y = firstVoxel(c.y()); y <= lastVoxel(c.y()); ++y)
+                for (int z = firstVoxel(c.z()); z <= lastVoxel(c.z()); ++z) {
+                    const openvdb::Coord v(x, y, z);
+                    if (!solid.isValueOn(v)) continue;
+                    const int bits = int(broken.getValue(v));
+                    for (int f = 0; f < kFaceCount; ++f) {
+                        const openvdb::Coord across = v + faceOffset(f);
+                        if (!solid.isValueOn(across))
+                            faces.push_back({v, f, (bits & (1 << f)) != 0});
+                        else if (!inRegion(across))
+                            faces.push_back({v, f, false});
+                    }
                 }
+    }
+    return faces;
+}
+
+/// The level-set leaves a shape's level set can have samples in: those of its voxels' blocks
+/// and a leaf around them (the band reaches at most a leaf out).
+openvdb::MaskTree leavesOfShape(const openvdb::FloatTree& voxels, int k)
+{
+    openvdb::MaskTree cells(false);
+    openvdb::tree::ValueAccessor<openvdb::MaskTree> mark(cells);
+    for (auto leaf = voxels.cbeginLeaf(); leaf; ++leaf) {
+        const openvdb::Coord first = leaf->origin();
+        // A block's samples start at leaf k * (block) + 1 and span k leaves (kSampleIndexOffset is one leaf).
+        const openvdb::Coord cell(cellOf(k * first.x() + kSampleIndexOffset), cellOf(k * first.y() + kSampleIndexOffset),
+                                  cellOf(k * first.z() + kSampleIndexOffset));
+        for (int x = -1; x <= k; ++x)
+            for (int y = -1; y <= k; ++y)
+                for (int z = -1; z <= k; ++z) mark.setValueOn(cell.offsetBy(x, y, z));
+    }
+    return cells;
+}
+
+/// The leaves (or the tiles at a leaf's size) of `from` at `cells`, added to `to`.
+void copyCells(const openvdb::FloatTree& from, openvdb::FloatTree& to, const openvdb::MaskTree& cells)
+{
+    openvdb::tree::ValueAccessor<const openvdb::FloatTree> read(from);
+    for (auto cell = cells.cbeginValueOn(); cell; ++cell) {
+        const openvdb::Coord origin = leafOrigin(cell.getCoord());
+        if (const FloatLeaf* leaf = read.probeConstLeaf(origin))
+            to.addLeaf(new FloatLeaf(*leaf));
+        else
+            to.addTile(1, origin, read.getValue(origin), false);
     }
 }
 
 }  // namespace
-
-openvdb::MaskTree blocksThatDiffer(const openvdb::FloatTree& before, const openvdb::FloatTree& after)
-{
-    openvdb::MaskTree differ(false);
-    for (auto leaf = before.cbeginLeaf(); leaf; ++leaf) {
-        const FloatLeaf* other = after.probeConstLeaf(leaf->origin());
-        if (!other || !sameLeaf(*leaf, *other)) differ.setValueOn(voxelBlockOf(leaf->origin()));
-    }
-    for (auto leaf = after.cbeginLeaf(); leaf; ++leaf)
-        if (!before.probeConstLeaf(leaf->origin())) differ.setValueOn(voxelBlockOf(leaf->origin()));
-    return differ;
-}
 
 UpdateReach updateReachOf(const SurfaceStyle& style)
 {
@@ -421,34 +476,38 @@ UpdateReach updateReachOf(const SurfaceStyle& style)
     const int smoothed = style.smoothingSteps > 0 ? leaf * (kChangedLeaves + grownLeaves) : 0;
     const int smoothingHalo = style.smoothingSteps > 0 ? leaf * (kHaloLeaves + 2 * grownLeaves) : 0;
     UpdateReach reach;
-    reach.rewrittenBlocks = blocksSpanning(band + smoothed + roughening, style);
-    reach.workedBlocks = reach.rewrittenBlocks + blocksSpanning(band + smoothingHalo + roughening, style);
+    // The mesher's renormalisation reads a sample either side of the band (MeshToVolume.h).
+    reach.rewrittenSamples = band + 2 + smoothed + roughening;
+    // A region's voxel reaches its leaf from up to a voxel away: the halo adds k samples.
+    reach.haloLeaves = (band + smoothingHalo + roughening + style.subdivisions + leaf - 1) / leaf;
     return reach;
 }
 
-openvdb::FloatTree::Ptr updatedVoxelSurfaceLevelSet(const openvdb::FloatTree& previous, const openvdb::FloatTree& voxels,
-                                                    const std::vector<VoxelFace>& faces, const openvdb::MaskTree& changedBlocks,
+openvdb::FloatTree::Ptr updatedVoxelSurfaceLevelSet(const VoxelShapeSurface& previous, const VoxelShape& now, size_t exposedFaceCount,
                                                     double voxelSizeM, const SurfaceStyle& style)
 {
+    const int k = style.subdivisions;
     const UpdateReach reach = updateReachOf(style);
-    openvdb::MaskTree rewritten(changedBlocks), worked(changedBlocks);
-    openvdb::tools::dilateActiveValues(rewritten, reach.rewrittenBlocks, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
-    openvdb::tools::dilateActiveValues(worked, reach.workedBlocks, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
-    // The worked blocks cost about what they would in a whole surface: past half the shape's,
-    // the whole is as cheap (and exact).
-    openvdb::Index64 workedWithVoxels = 0;
-    for (auto block = worked.cbeginValueOn(); block; ++block) workedWithVoxels += voxels.probeConstLeaf(leafOrigin(block.getCoord())) != nullptr;
-    if (2 * workedWithVoxels > voxels.leafCount()) return nullptr;
-    std::vector<VoxelFace> region;
-    for (const VoxelFace& f : faces)
-        if (worked.isValueOn(voxelBlockOf(f.voxel))) region.push_back(f);
-    appendCutFaces(voxels, worked, region);
-    auto updated = std::make_shared<openvdb::FloatTree>(previous);
-    if (region.empty()) {  // the worked blocks lost every voxel: nothing of the shape lies there
-        copyBlocks(openvdb::FloatTree(previous.background()), *updated, rewritten, style);
-        return updated;
+    const openvdb::MaskTree shapeLeaves = leavesOfShape(*now.voxels, k);
+    openvdb::MaskTree rewritten(false);
+    {
+        openvdb::tree::ValueAccessor<openvdb::MaskTree> mark(rewritten);
+        for (const openvdb::Coord& v : voxelsThatDiffer(previous.shape, now, *now.voxels)) markLeavesNear(v, k, reach.rewrittenSamples, mark);
     }
-    copyBlocks(*voxelSurfaceLevelSet(region, voxelSizeM, style), *updated, rewritten, style);
+    rewritten.topologyIntersection(shapeLeaves);
+    openvdb::MaskTree worked(rewritten);
+    openvdb::tools::dilateActiveValues(worked, reach.haloLeaves, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    const std::vector<VoxelFace> region = facesOfRegion(now, worked, k);
+    // The region costs about what it would in a whole surface: past half the shape's faces, the
+    // whole is as cheap (and exact).
+    if (2 * region.size() > exposedFaceCount) return nullptr;
+    openvdb::MaskTree kept(shapeLeaves);
+    kept.topologyDifference(rewritten);
+    auto updated = std::make_shared<openvdb::FloatTree>(previous.surface->background());
+    copyCells(*previous.surface, *updated, kept);
+    if (!rewritten.empty())
+        copyCells(region.empty() ? openvdb::FloatTree(previous.surface->background()) : *voxelSurfaceLevelSet(region, voxelSizeM, style), *updated,
+                  rewritten);
     return updated;
 }
 

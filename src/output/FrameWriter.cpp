@@ -14,7 +14,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <optional>
-#include <unordered_set>
 
 namespace spall {
 
@@ -93,10 +92,10 @@ SurfaceStyle FrameWriter::surfaceStyle() const
 
 namespace {
 
-/// Whether every voxel of `bounds` lies at or above `origin` on each axis.
-/// A shape of fewer blocks is made whole: the blocks around a single change are as many.
-constexpr openvdb::Index64 kLeastBlocksToUpdate = 64;
+/// A shape of fewer voxel leaves is made whole: one change's region holds as many.
+constexpr openvdb::Index64 kLeastLeavesToUpdate = 64;
 
+/// Whether every voxel of `bounds` lies at or above `origin` on each axis.
 bool startsAtOrAbove(const openvdb::CoordBBox& bounds, const openvdb::Coord& origin)
 {
     return bounds.min().x() >= origin.x() && bounds.min().y() >= origin.y() && bounds.min().z() >= origin.z();
@@ -104,26 +103,37 @@ bool startsAtOrAbove(const openvdb::CoordBBox& bounds, const openvdb::Coord& ori
 
 }  // namespace
 
+const FrameWriter::FragmentTrees* FrameWriter::earlierShapeOf(const Body& body) const
+{
+    if (body.grid->constTree().empty()) return nullptr;
+    const openvdb::Coord first = body.grid->constTree().cbeginValueOn().getCoord();
+    for (const auto& [id, trees] : mByBody) {
+        if (!trees.shape.voxels) continue;
+        const bool sibling = body.parentId != kNoBodyId && trees.parentId == body.parentId;
+        if ((id == body.id || id == body.parentId || sibling) && startsAtOrAbove(body.indexBounds, trees.originIjk) &&
+            trees.shape.voxels->isValueOn(first - trees.originIjk))
+            return &trees;
+    }
+    return nullptr;
+}
+
 const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
 {
     auto found = mByBody.find(body.id);
-    if (found != mByBody.end() && found->second.madeFrom.lock() == body.grid) return found->second;
+    if (found != mByBody.end() && found->second.madeFrom.lock() == body.grid) return mShownNow.insert_or_assign(body.id, found->second).first->second;
     const bool levelSet = mSettings.fragmentGrids == FragmentGrids::LevelSet;
-    // A piece that cracks further keeps its trees' origin while its voxels stay above it, so its
-    // surface can be updated where it changed rather than made whole.
-    const FragmentTrees* previous = levelSet && found != mByBody.end() && found->second.voxels &&
-                                            startsAtOrAbove(body.indexBounds, found->second.originIjk)
-                                        ? &found->second
-                                        : nullptr;
+    // A piece that cracked further, or broke from one shown before, takes that one's origin, so
+    // its surface can be updated where it changed rather than made whole.
+    const FragmentTrees* previous = levelSet ? earlierShapeOf(body) : nullptr;
     FragmentTrees trees;
     trees.madeFrom = body.grid;
+    trees.parentId = body.parentId;
     trees.originIjk = previous ? previous->originIjk : body.indexBounds.min();
-    trees.voxels = std::make_shared<openvdb::FloatTree>(0.0f);
-    trees.brokenFaceBits = std::make_shared<openvdb::FloatTree>(0.0f);
+    const VoxelShape shape{std::make_shared<openvdb::FloatTree>(0.0f), std::make_shared<openvdb::FloatTree>(0.0f)};
     std::vector<VoxelFace> faces;
     faces.reserve(body.exposedFaces.size());
     {
-        openvdb::tree::ValueAccessor<openvdb::FloatTree> out(*trees.voxels), fractured(*trees.brokenFaceBits);
+        openvdb::tree::ValueAccessor<openvdb::FloatTree> out(*shape.voxels), fractured(*shape.brokenFaceBits);
         for (auto it = body.grid->constTree().cbeginValueOn(); it; ++it) out.setValueOn(it.getCoord() - trees.originIjk, 1.0f);
         auto links = body.grid->getConstAccessor();
         const Material* material = materialOf(body);
@@ -136,8 +146,8 @@ const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
             fractured.setValueOn(shifted, float(int(fractured.getValue(shifted)) | bits));
         }
     }
-    const openvdb::FloatTree::Ptr& voxels = trees.voxels;
-    const openvdb::FloatTree::Ptr& fractureFaces = trees.brokenFaceBits;
+    const openvdb::FloatTree::Ptr& voxels = shape.voxels;
+    const openvdb::FloatTree::Ptr& fractureFaces = shape.brokenFaceBits;
     const uint64_t shapeHash = contentHash(*voxels), fractureHash = contentHash(*fractureFaces);
     const SurfaceStyle style = surfaceStyle();
     // A rough surface depends on which faces broke too: its key is the voxels with their masks.
@@ -151,24 +161,17 @@ const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
     trees.surface = intern(mShapes, surfaceKey, rough ? contentHash(*surfaceKey) : shapeHash, [&] {
         if (!levelSet) return voxels;
         if (previous)
-            if (openvdb::FloatTree::Ptr updated = updatedSurface(*previous, trees, faces, body.voxelSizeM)) return updated;
+            if (auto updated = updatedVoxelSurfaceLevelSet({previous->shape, previous->surface}, shape, faces.size(), body.voxelSizeM, style)) {
+                ++mSurfacesUpdated;
+                return updated;
+            }
         return voxelSurfaceLevelSet(faces, body.voxelSizeM, style);
     });
     if (!fractureFaces->empty()) trees.fractureFaces = intern(mFractureFaces, fractureFaces, fractureHash, [&] { return fractureFaces; });
     trees.meshKey = splitmix64(shapeHash ^ splitmix64(fractureHash));
     // Kept for an update only where one can pay: debris of a few voxels would hold a leaf each.
-    if (!levelSet || voxels->leafCount() < kLeastBlocksToUpdate) trees.voxels = trees.brokenFaceBits = nullptr;
-    return mByBody.insert_or_assign(body.id, std::move(trees)).first->second;
-}
-
-openvdb::FloatTree::Ptr FrameWriter::updatedSurface(const FragmentTrees& previous, const FragmentTrees& now, const std::vector<VoxelFace>& faces,
-                                                    double voxelSizeM)
-{
-    openvdb::MaskTree changed = blocksThatDiffer(*previous.voxels, *now.voxels);
-    changed.topologyUnion(blocksThatDiffer(*previous.brokenFaceBits, *now.brokenFaceBits));
-    openvdb::FloatTree::Ptr updated = updatedVoxelSurfaceLevelSet(*previous.surface, *now.voxels, faces, changed, voxelSizeM, surfaceStyle());
-    if (updated) ++mSurfacesUpdated;
-    return updated;
+    if (levelSet && voxels->leafCount() >= kLeastLeavesToUpdate) trees.shape = shape;
+    return mShownNow.insert_or_assign(body.id, std::move(trees)).first->second;
 }
 
 openvdb::GridBase::Ptr FrameWriter::fragmentGrid(const FrameInfo& info, const Body& body, const FragmentTrees& trees,
@@ -208,9 +211,7 @@ std::string FrameWriter::write(const FrameInfo& info, const std::vector<Body>& b
     const int number = mSettings.firstFrame + info.frame;
     openvdb::GridPtrVec grids;
     std::vector<openvdb::FloatGrid::ConstPtr> levelSets;
-    std::unordered_set<int64_t> alive;
     for (const Body& body : bodies) {
-        alive.insert(body.id);
         const FragmentTrees& trees = treesOf(body);
         // The trees' voxel (0,0,0) is the body's voxel originIjk.
         auto voxelMap = body.indexToWorld();
@@ -224,7 +225,8 @@ std::string FrameWriter::write(const FrameInfo& info, const std::vector<Body>& b
         faces->insertMeta("body_id", openvdb::Int64Metadata(body.id));
         grids.push_back(faces);
     }
-    for (auto it = mByBody.begin(); it != mByBody.end();) it = alive.count(it->first) ? std::next(it) : mByBody.erase(it);
+    mByBody = std::move(mShownNow);  // the bodies of this frame, for the next
+    mShownNow.clear();
     for (auto* pool : {&mShapes, &mFractureFaces})
         for (auto it = pool->begin(); it != pool->end();) {
             const long heldByPool = it->second.derived == it->second.content ? 2 : 1;

@@ -42,32 +42,35 @@ struct SurfaceStyle {
 /// half a voxel of the object's own surface, which stays as it was (docs/file-formats.md).
 openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces, double voxelSizeM, const SurfaceStyle& style);
 
-/// A shape's voxels are grouped in blocks of kVoxelBlockEdge³ (as the cell `voxel >> 3`, one leaf
-/// of a voxel tree), each of whose level-set samples lie in whole leaves of the level set.
-constexpr int kVoxelBlockLog2 = 3;
-openvdb::Coord voxelBlockOf(const openvdb::Coord& voxel);
-/// The blocks in which two voxel trees (a shape's voxels, or its broken faces' bits) differ.
-openvdb::MaskTree blocksThatDiffer(const openvdb::FloatTree& before, const openvdb::FloatTree& after);
-/// How many blocks around a changed one an update (updatedVoxelSurfaceLevelSet) rewrites, and
-/// how many it works on to rewrite those: a level set's samples depend on the voxels within its
-/// band, and a smoothed or roughened one on those a few leaves further.
+/// A shape as the frames keep it: its voxels (1 in each) and, per voxel, the bits of its broken
+/// faces (FrameWriter's fracture_faces), in the shape's own voxel indices.
+struct VoxelShape {
+    openvdb::FloatTree::Ptr voxels, brokenFaceBits;
+};
+/// A shape with the level set voxelSurfaceLevelSet made of it.
+struct VoxelShapeSurface {
+    VoxelShape shape;
+    openvdb::FloatTree::Ptr surface;
+};
+/// How far a change of the voxels reaches in a level set (unit: samples), and how many leaves
+/// around those an update (updatedVoxelSurfaceLevelSet) works on to remake them: a level set's
+/// samples depend on the voxels within its band, a smoothed or roughened one's on those a few
+/// leaves further.
 struct UpdateReach {
-    int rewrittenBlocks = 1;
-    int workedBlocks = 2;
+    int rewrittenSamples = 3;
+    int haloLeaves = 1;
 };
 UpdateReach updateReachOf(const SurfaceStyle& style);
 
-/// The level set voxelSurfaceLevelSet makes of `faces`, made from `previous`, its level set of an
-/// earlier shape in the same voxel indices and style, by rebuilding only the blocks within reach
-/// of `changedBlocks` (those where the shapes or their broken faces differ): the shape's voxels
-/// (`voxels`) in the worked blocks, closed by faces where they meet voxels outside, are made a
-/// level set whose leaves in the rewritten blocks replace the earlier ones. Unsmoothed and
-/// unroughened it is the whole shape's level set to the bit; smoothed, its volume is restored
-/// over the worked blocks rather than the whole (docs/file-formats.md). A cracking wall's frame
-/// pays for its new cracks, not for its whole surface. Null when the worked blocks hold over half
-/// the shape's: then a whole level set costs no more.
-openvdb::FloatTree::Ptr updatedVoxelSurfaceLevelSet(const openvdb::FloatTree& previous, const openvdb::FloatTree& voxels,
-                                                    const std::vector<VoxelFace>& faces, const openvdb::MaskTree& changedBlocks,
+/// The level set voxelSurfaceLevelSet makes of `now` (`exposedFaceCount` faces), made from
+/// `previous`, an earlier shape in the same voxel indices and style with its level set: the leaves
+/// within reach of the voxels where the shapes or their broken faces differ are remade from the
+/// voxels around them (closed by faces where they meet voxels further out), and the others copied.
+/// Unsmoothed and unroughened it is the whole shape's level set to the bit; smoothed, its volume
+/// is restored over the remade region rather than the whole (docs/file-formats.md). A cracking
+/// wall's frame pays for its new cracks, not for its whole surface. Null when the remade region
+/// holds over half the shape's faces: then a whole level set costs no more.
+openvdb::FloatTree::Ptr updatedVoxelSurfaceLevelSet(const VoxelShapeSurface& previous, const VoxelShape& now, size_t exposedFaceCount,
                                                     double voxelSizeM, const SurfaceStyle& style);
 
 /// The level set's index-to-world map, from its voxels' index-to-world map.

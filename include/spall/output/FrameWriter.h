@@ -56,14 +56,15 @@ private:
     struct FragmentTrees {
         openvdb::FloatTree::Ptr surface;
         openvdb::FloatTree::Ptr fractureFaces;  ///< null when the body has no fracture surface
-        /// The shape's voxels and its broken faces' bits (never null): what the next shape of a
-        /// piece that cracks further is compared with.
-        openvdb::FloatTree::Ptr voxels, brokenFaceBits;
         openvdb::Coord originIjk;               ///< the trees' (0,0,0) in the body's index space
         uint64_t meshKey = 0;                   ///< hash of voxels and fracture faces
         /// The grid they were made from: a body shown in pieces during the deformable phase
         /// (Simulation::showPieces) keeps a piece's id while the piece loses voxels to cracks.
         std::weak_ptr<const LinkGrid> madeFrom;
+        int64_t parentId = kNoBodyId;
+        /// The shape, kept where a piece that cracks further or breaks may be updated from it
+        /// (null for small ones).
+        VoxelShape shape;
     };
     /// Trees by content: equal content, one tree.
     struct Interned {
@@ -71,10 +72,10 @@ private:
         openvdb::FloatTree::Ptr derived;  ///< what is written (the content itself, or its level set)
     };
     const FragmentTrees& treesOf(const Body& body);
-    /// The surface of a shape whose earlier one, `previous`, differs from it in few blocks: updated
-    /// there; null when a whole one is cheaper.
-    openvdb::FloatTree::Ptr updatedSurface(const FragmentTrees& previous, const FragmentTrees& now, const std::vector<VoxelFace>& faces,
-                                           double voxelSizeM);
+    /// The piece of the last frame that `body` is, or broke from, in the same voxel indices: the
+    /// body itself, the one it was shown as part of (its parent), or a part of the same parent,
+    /// one that holds the body's first voxel; null when none was kept.
+    const FragmentTrees* earlierShapeOf(const Body& body) const;
     const Material* materialOf(const Body& body) const;
     SurfaceStyle surfaceStyle() const;
     static openvdb::FloatTree::Ptr intern(std::unordered_multimap<uint64_t, Interned>& pool, const openvdb::FloatTree::Ptr& content,
@@ -84,7 +85,8 @@ private:
     std::string mDirectory;
     OutputSettings mSettings;
     std::vector<Material> mMaterials;
-    std::unordered_map<int64_t, FragmentTrees> mByBody;
+    /// The trees of the bodies of the last frame written, and of the one being written.
+    std::unordered_map<int64_t, FragmentTrees> mByBody, mShownNow;
     std::unordered_multimap<uint64_t, Interned> mShapes, mFractureFaces;
     int64_t mSurfacesUpdated = 0;
     /// Per body, its level set in the world frame as last resampled, with the surface and the
