@@ -492,7 +492,7 @@ TEST(Frames, APieceThatCracksFurtherHasItsSurfaceUpdatedNearTheNewCracksAsIfMade
         const auto whole = readFragment(fresh.write({2, 0.0}, {twoCorners}));
         EXPECT_EQ(fresh.surfacesUpdated(), 0);
         const LevelSetDifference difference = differenceOf(*updated, *whole, 0.05 * h);
-        std::printf("smoothing %d steps: a surface updated twice against one made whole: %.2e voxels at most, %.3f %% of samples by over 5 %% of one\n",
+        std::printf("smoothing %d steps: a surface updated twice against one made whole: %.2e voxels at most, %.4f %% of samples by over 5 %% of one\n",
                     steps, difference.largestM / h, 100.0 * difference.notableFraction);
         if (steps == 0) {
             EXPECT_LT(difference.largestM, 1e-5 * h) << "float rounding in the mesher's renormalisation";
@@ -500,7 +500,7 @@ TEST(Frames, APieceThatCracksFurtherHasItsSurfaceUpdatedNearTheNewCracksAsIfMade
         } else {
             // The volume is restored over the remade region, not the whole, and the flow's
             // renormalisation where a crack meets the object's own faces depends on the region it
-            // works on: a few samples there differ by up to a sixth of a voxel.
+            // works on: a few samples there differ by up to an eighth of a voxel.
             EXPECT_LT(difference.largestM, 0.2 * h);
             EXPECT_LT(difference.notableFraction, 0.001);
         }
