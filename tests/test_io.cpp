@@ -466,7 +466,7 @@ TEST(Frames, APieceThatCracksFurtherHasItsSurfaceUpdatedNearTheNewCracksAsIfMade
     // A slab 64 x 16 x 48 voxels shown in three frames as it loses a corner,
     // then a second corner at the far end, the piece keeping its id (as showPieces does). A
     // writer that saw the earlier frames updates the surface near the new cracks; it must be the
-    // level set a fresh writer makes whole: the same to float rounding unsmoothed; smoothed,
+    // level set a fresh writer makes whole: the same to the bit unsmoothed; smoothed,
     // within 5 % of a voxel but at a few samples where a crack meets the object's own faces (under
     // 0.1 % of samples, by under a fifth of a voxel); its volume its voxels'.
     const Body slab = [] {
@@ -495,12 +495,12 @@ TEST(Frames, APieceThatCracksFurtherHasItsSurfaceUpdatedNearTheNewCracksAsIfMade
         std::printf("smoothing %d steps: a surface updated twice against one made whole: %.2e voxels at most, %.4f %% of samples by over 5 %% of one\n",
                     steps, difference.largestM / h, 100.0 * difference.notableFraction);
         if (steps == 0) {
-            EXPECT_LT(difference.largestM, 1e-5 * h) << "float rounding in the mesher's renormalisation";
+            EXPECT_EQ(difference.largestM, 0.0);
             EXPECT_EQ(updated->activeVoxelCount(), whole->activeVoxelCount());
         } else {
             // The volume is restored over the remade region, not the whole, and the flow's
             // renormalisation where a crack meets the object's own faces depends on the region it
-            // works on: a few samples there differ by up to an eighth of a voxel.
+            // works on: a few samples there differ by up to a twentieth of a voxel.
             EXPECT_LT(difference.largestM, 0.2 * h);
             EXPECT_LT(difference.notableFraction, 0.001);
         }

@@ -4,6 +4,7 @@
 
 #include <spall/core/Error.h>
 #include <spall/core/Hash.h>
+#include <spall/core/Parallel.h>
 
 #include <openvdb/tools/LevelSetFilter.h>
 #include <openvdb/tools/LevelSetTracker.h>
@@ -11,11 +12,15 @@
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/Morphology.h>
+#include <openvdb/tools/SignedFloodFill.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
+#include <limits>
+#include <memory>
 #include <cmath>
 #include <functional>
 #include <optional>
@@ -327,17 +332,131 @@ openvdb::math::Transform::Ptr voxelTransformOf(const openvdb::math::Transform& l
     return voxelMap;
 }
 
-openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces, double voxelSizeM, const SurfaceStyle& style)
+namespace {
+
+/// The samples within `band` samples of face `f` (a box of sample indices, both ends in).
+openvdb::CoordBBox samplesNearFace(const VoxelFace& f, int k, int band)
 {
-    std::vector<openvdb::Vec3s> points;
-    std::vector<openvdb::Vec4I> quads;
-    points.reserve(4 * faces.size());
-    quads.reserve(faces.size());
-    faceQuads(faces, voxelSizeM, [](const VoxelFace&) { return true; }, points, quads);
-    const auto shapeSpace = levelSetTransform(*openvdb::math::Transform::createLinearTransform(voxelSizeM), style.subdivisions);
-    const std::vector<openvdb::Vec3I> noTriangles;
-    SPALL_CHECK(style.halfWidthSamples <= kSampleIndexOffset);  // the band fits the index offset
-    auto levelSet = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*shapeSpace, points, noTriangles, quads, style.halfWidthSamples);
+    openvdb::Coord lo, hi;
+    for (int axis = 0; axis < 3; ++axis) {
+        // Voxel v's cube spans samples k v + offset to k (v + 1) + offset (levelSetTransform).
+        const int low = k * f.voxel[axis] + kSampleIndexOffset;
+        const int plane = faceSign(f.face) > 0 ? low + k : low;
+        lo[axis] = (axis == faceAxis(f.face) ? plane : low) - band;
+        hi[axis] = (axis == faceAxis(f.face) ? plane : low + k) + band;
+    }
+    return {lo, hi};
+}
+
+/// Squared distance from sample `u` to face `f`'s square (unit: samples², exact in integers).
+int squaredSampleDistance(const openvdb::Coord& u, const VoxelFace& f, int k)
+{
+    int sum = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+        const int low = k * f.voxel[axis] + kSampleIndexOffset;
+        const int plane = faceSign(f.face) > 0 ? low + k : low;
+        const int from = axis == faceAxis(f.face) ? plane : low, to = axis == faceAxis(f.face) ? plane : low + k;
+        const int gap = u[axis] < from ? from - u[axis] : (u[axis] > to ? u[axis] - to : 0);
+        sum += gap * gap;
+    }
+    return sum;
+}
+
+/// floor(a / b) for b > 0.
+int floorDivide(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+/// Every distance less this (unit: m), as OpenVDB's meshToLevelSet leaves them: a sample on a face
+/// lies a hair inside, so volume-to-mesh (inside below 0) puts the surface on the face.
+constexpr float kOnFaceInsideM = 1e-7f;
+
+/// The level-set leaf at leafOrigin(cell) of a union of voxel cubes: the exact distance from each
+/// sample to the nearest of the `nearby` faces (the union's boundary is its exposed faces), active
+/// within the band, signed by whether the voxel holding the sample is solid (a sample between a
+/// solid and an empty voxel lies on an exposed face). Null when no sample is in the band.
+FloatLeaf* distanceLeaf(const openvdb::Coord& cell, const std::vector<const VoxelFace*>& nearby, const openvdb::FloatTree& voxels, int k,
+                        float halfWidthSamples, float sampleM)
+{
+    const openvdb::Coord origin = leafOrigin(cell);
+    std::array<int, FloatLeaf::SIZE> nearest;
+    nearest.fill(std::numeric_limits<int>::max());
+    const openvdb::CoordBBox leafBox(origin, origin.offsetBy(int(FloatLeaf::DIM) - 1));
+    const int band = int(std::ceil(halfWidthSamples));
+    for (const VoxelFace* f : nearby) {
+        openvdb::CoordBBox box = samplesNearFace(*f, k, band);
+        box.intersect(leafBox);
+        if (box.empty()) continue;
+        for (auto u = box.begin(); u; ++u) {
+            int& d2 = nearest[FloatLeaf::coordToOffset(*u)];
+            d2 = std::min(d2, squaredSampleDistance(*u, *f, k));
+        }
+    }
+    const float background = halfWidthSamples * sampleM;
+    auto leaf = std::make_unique<FloatLeaf>(origin, background);
+    openvdb::tree::ValueAccessor<const openvdb::FloatTree> solid(voxels);
+    bool any = false;
+    for (openvdb::Index i = 0; i < FloatLeaf::SIZE; ++i) {
+        const openvdb::Coord u = FloatLeaf::offsetToLocalCoord(i) + origin;
+        const openvdb::Coord voxel(floorDivide(u.x() - kSampleIndexOffset, k), floorDivide(u.y() - kSampleIndexOffset, k),
+                                   floorDivide(u.z() - kSampleIndexOffset, k));
+        const float sign = solid.isValueOn(voxel) ? -1.0f : 1.0f;
+        const float d = nearest[i] == std::numeric_limits<int>::max() ? halfWidthSamples : std::sqrt(float(nearest[i]));
+        if (d < halfWidthSamples) {
+            leaf->setValueOn(i, sign * d * sampleM - kOnFaceInsideM);
+            any = true;
+        } else {
+            leaf->setValueOff(i, sign * background);
+        }
+    }
+    return any ? leaf.release() : nullptr;
+}
+
+/// The narrow-band signed distance (unit: m) to the union of the voxel cubes `voxels` whose
+/// boundary is `faces`, on samples `subdivisions` per voxel edge (levelSetTransform). Exact: each
+/// sample takes the least distance to the faces whose band reaches it, in integers of samples
+/// (OpenVDB's meshToLevelSet does this for any polygons, and renormalises after).
+openvdb::FloatGrid::Ptr voxelUnionDistance(const std::vector<VoxelFace>& faces, const openvdb::FloatTree& voxels, double voxelSizeM,
+                                           const SurfaceStyle& style)
+{
+    const int k = style.subdivisions, band = int(std::ceil(style.halfWidthSamples));
+    SPALL_CHECK(band <= kSampleIndexOffset);  // the band fits the index offset: leaves stay at non-negative cells
+    // Each face under every leaf its band reaches, grouped by leaf.
+    std::vector<std::pair<uint64_t, uint32_t>> cellFaces;
+    cellFaces.reserve(8 * faces.size());
+    constexpr int kKeyBits = 21;
+    const auto key = [](const openvdb::Coord& c) { return uint64_t(c.x()) | uint64_t(c.y()) << kKeyBits | uint64_t(c.z()) << (2 * kKeyBits); };
+    for (size_t i = 0; i < faces.size(); ++i) {
+        const openvdb::CoordBBox box = samplesNearFace(faces[i], k, band);
+        for (auto c = openvdb::CoordBBox(leafCell(box.min()), leafCell(box.max())).begin(); c; ++c) cellFaces.emplace_back(key(*c), uint32_t(i));
+    }
+    std::sort(cellFaces.begin(), cellFaces.end());
+    std::vector<size_t> groupStart;
+    for (size_t i = 0; i < cellFaces.size(); ++i)
+        if (i == 0 || cellFaces[i].first != cellFaces[i - 1].first) groupStart.push_back(i);
+    groupStart.push_back(cellFaces.size());
+    const float sampleM = float(voxelSizeM / k);
+    std::vector<FloatLeaf*> leaves(groupStart.size() - 1, nullptr);
+    forEachIndex(leaves.size(), [&](size_t g) {
+        std::vector<const VoxelFace*> nearby;
+        for (size_t i = groupStart[g]; i < groupStart[g + 1]; ++i) nearby.push_back(&faces[cellFaces[i].second]);
+        const uint64_t cellKey = cellFaces[groupStart[g]].first, mask = (uint64_t(1) << kKeyBits) - 1;
+        const openvdb::Coord cell(int(cellKey & mask), int(cellKey >> kKeyBits & mask), int(cellKey >> (2 * kKeyBits)));
+        leaves[g] = distanceLeaf(cell, nearby, voxels, k, style.halfWidthSamples, sampleM);
+    });
+    auto levelSet = openvdb::FloatGrid::create(style.halfWidthSamples * sampleM);
+    levelSet->setTransform(levelSetTransform(*openvdb::math::Transform::createLinearTransform(voxelSizeM), k));
+    levelSet->setGridClass(openvdb::GRID_LEVEL_SET);
+    for (FloatLeaf* leaf : leaves)
+        if (leaf) levelSet->tree().addLeaf(leaf);
+    openvdb::tools::signedFloodFill(levelSet->tree());
+    return levelSet;
+}
+
+}  // namespace
+
+openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces, const openvdb::FloatTree& voxels, double voxelSizeM,
+                                             const SurfaceStyle& style)
+{
+    const openvdb::FloatGrid::Ptr levelSet = voxelUnionDistance(faces, voxels, voxelSizeM, style);
     const bool broken = std::any_of(faces.begin(), faces.end(), [](const VoxelFace& f) { return f.fracture; });
     if (style.smoothingSteps > 0 && broken) smoothFractureFaces(*levelSet, faces, voxelSizeM, style);
     if (style.fractureRoughness > 0.0 && broken)
@@ -402,13 +521,10 @@ std::vector<openvdb::Coord> voxelsThatDiffer(const VoxelShape& before, const Vox
     return differ;
 }
 
-/// floor(a / b) for b > 0.
-int floorDivide(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
-
 /// The faces of `shape`'s voxels whose centres' samples lie in the `worked` leaves: their exposed
 /// faces (broken or not, as `shape` says), and where they meet voxels outside, cut faces taken as
 /// the object's own (they close the region's solid and neither flow nor roughen).
-std::vector<VoxelFace> facesOfRegion(const VoxelShape& shape, const openvdb::MaskTree& worked, int k)
+std::vector<VoxelFace> facesOfRegion(const VoxelShape& shape, const openvdb::MaskTree& worked, int k, openvdb::FloatTree& regionVoxels)
 {
     openvdb::tree::ValueAccessor<const openvdb::MaskTree> inWorked(worked);
     openvdb::tree::ValueAccessor<const openvdb::FloatTree> solid(*shape.voxels), broken(*shape.brokenFaceBits);
@@ -419,6 +535,7 @@ std::vector<VoxelFace> facesOfRegion(const VoxelShape& shape, const openvdb::Mas
     const auto firstVoxel = [&](int c) { return floorDivide(leafEdge * c - kSampleIndexOffset - k / 2 + k - 1, k); };
     const auto lastVoxel = [&](int c) { return floorDivide(leafEdge * c + leafEdge - 1 - kSampleIndexOffset - k / 2, k); };
     std::vector<VoxelFace> faces;
+    openvdb::tree::ValueAccessor<openvdb::FloatTree> inRegionVoxels(regionVoxels);
     for (auto cell = worked.cbeginValueOn(); cell; ++cell) {
         const openvdb::Coord c = cell.getCoord();
         for (int x = firstVoxel(c.x()); x <= lastVoxel(c.x()); ++x)
@@ -426,6 +543,7 @@ std::vector<VoxelFace> facesOfRegion(const VoxelShape& shape, const openvdb::Mas
                 for (int z = firstVoxel(c.z()); z <= lastVoxel(c.z()); ++z) {
                     const openvdb::Coord v(x, y, z);
                     if (!solid.isValueOn(v)) continue;
+                    inRegionVoxels.setValueOn(v, 1.0f);
                     const int bits = int(broken.getValue(v));
                     for (int f = 0; f < kFaceCount; ++f) {
                         const openvdb::Coord across = v + faceOffset(f);
@@ -501,7 +619,8 @@ openvdb::FloatTree::Ptr updatedVoxelSurfaceLevelSet(const VoxelShapeSurface& pre
     rewritten.topologyIntersection(shapeLeaves);
     openvdb::MaskTree worked(rewritten);
     openvdb::tools::dilateActiveValues(worked, reach.haloLeaves, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
-    const std::vector<VoxelFace> region = facesOfRegion(now, worked, k);
+    openvdb::FloatTree regionVoxels(0.0f);
+    const std::vector<VoxelFace> region = facesOfRegion(now, worked, k, regionVoxels);
     // The region costs about what it would in a whole surface: past half the shape's faces, the
     // whole is as cheap (and exact).
     if (2 * region.size() > exposedFaceCount) return nullptr;
@@ -510,7 +629,7 @@ openvdb::FloatTree::Ptr updatedVoxelSurfaceLevelSet(const VoxelShapeSurface& pre
     auto updated = std::make_shared<openvdb::FloatTree>(previous.surface->background());
     copyCells(*previous.surface, *updated, kept);
     if (!rewritten.empty())
-        copyCells(region.empty() ? openvdb::FloatTree(previous.surface->background()) : *voxelSurfaceLevelSet(region, voxelSizeM, style), *updated,
+        copyCells(region.empty() ? openvdb::FloatTree(previous.surface->background()) : *voxelSurfaceLevelSet(region, regionVoxels, voxelSizeM, style), *updated,
                   rewritten);
     return updated;
 }

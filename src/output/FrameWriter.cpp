@@ -165,7 +165,7 @@ const FrameWriter::FragmentTrees& FrameWriter::treesOf(const Body& body)
                 ++mSurfacesUpdated;
                 return updated;
             }
-        return voxelSurfaceLevelSet(faces, body.voxelSizeM, style);
+        return voxelSurfaceLevelSet(faces, *voxels, body.voxelSizeM, style);
     });
     if (!fractureFaces->empty()) trees.fractureFaces = intern(mFractureFaces, fractureFaces, fractureHash, [&] { return fractureFaces; });
     trees.meshKey = splitmix64(shapeHash ^ splitmix64(fractureHash));

@@ -32,15 +32,18 @@ struct SurfaceStyle {
     float halfWidthSamples = 3.0f;
 };
 
-/// Signed distance (unit: m) to the boundary of a union of voxel cubes, given by its exposed faces,
-/// in a narrow band of `halfWidthSamples` samples each side. Samples lie `subdivisions` per voxel
+/// Signed distance (unit: m) to the boundary of a union of voxel cubes (`voxels`, 1 in each),
+/// given by its exposed faces, in a narrow band of `halfWidthSamples` samples each side: exact, the
+/// least distance to the faces whose band reaches each sample, signed by the voxel holding it.
+/// Samples lie `subdivisions` per voxel
 /// edge with one on every voxel face (sample u at voxel index u / subdivisions - 0.5), so the zero
 /// surface passes through the faces' corners and volume-to-mesh rebuilds the voxel surface exactly
 /// (no bevelled edges). Smoothing steps then round the fracture surface's staircase, keeping the
 /// volume and the object's own surface; fracture
 /// roughness then moves fracture faces in and out by value noise that fades to nothing within
 /// half a voxel of the object's own surface, which stays as it was (docs/file-formats.md).
-openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces, double voxelSizeM, const SurfaceStyle& style);
+openvdb::FloatTree::Ptr voxelSurfaceLevelSet(const std::vector<VoxelFace>& faces, const openvdb::FloatTree& voxels, double voxelSizeM,
+                                             const SurfaceStyle& style);
 
 /// A shape as the frames keep it: its voxels (1 in each) and, per voxel, the bits of its broken
 /// faces (FrameWriter's fracture_faces), in the shape's own voxel indices.
