@@ -1,14 +1,9 @@
 #include <spall/lattice/ParticleBlocks.h>
 
+#include <spall/core/IntegerMath.h>
 #include <spall/voxel/LinkBits.h>
 
 namespace spall {
-
-namespace {
-
-int floorDivide(int value, int divisor) { return value >= 0 ? value / divisor : -((-value + divisor - 1) / divisor); }
-
-}  // namespace
 
 VoxelBlocks blocksFor(const Body& body, int particleVoxels)
 {

@@ -4,6 +4,7 @@
 
 #include <spall/core/Error.h>
 #include <spall/core/Hash.h>
+#include <spall/core/IntegerMath.h>
 #include <spall/core/Parallel.h>
 
 #include <openvdb/tools/LevelSetFilter.h>
@@ -19,10 +20,10 @@
 
 #include <algorithm>
 #include <array>
-#include <limits>
-#include <memory>
 #include <cmath>
 #include <functional>
+#include <limits>
+#include <memory>
 #include <optional>
 
 namespace spall {
@@ -362,9 +363,6 @@ int squaredSampleDistance(const openvdb::Coord& u, const VoxelFace& f, int k)
     return sum;
 }
 
-/// floor(a / b) for b > 0.
-int floorDivide(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
-
 /// Every distance less this (unit: m), as OpenVDB's meshToLevelSet leaves them: a sample on a face
 /// lies a hair inside, so volume-to-mesh (inside below 0) puts the surface on the face.
 constexpr float kOnFaceInsideM = 1e-7f;
@@ -494,11 +492,12 @@ bool sameLeaf(const FloatLeaf* a, const FloatLeaf* b)
 }
 
 /// The voxels where two shapes differ (one holds it, the other not, or its broken faces
-/// differ), among the blocks of voxels (leaves of the voxel trees) next to those of `near`.
-std::vector<openvdb::Coord> voxelsThatDiffer(const VoxelShape& before, const VoxelShape& after, const openvdb::FloatTree& near)
+/// differ), among the blocks of voxels (leaves of the voxel trees) next to those of `after`:
+/// farther ones cannot reach its level set.
+std::vector<openvdb::Coord> voxelsThatDiffer(const VoxelShape& before, const VoxelShape& after)
 {
     openvdb::MaskTree blocks(false);
-    for (auto leaf = near.cbeginLeaf(); leaf; ++leaf) blocks.setValueOn(leafCell(leaf->origin()));
+    for (auto leaf = after.voxels->cbeginLeaf(); leaf; ++leaf) blocks.setValueOn(leafCell(leaf->origin()));
     openvdb::tools::dilateActiveValues(blocks, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
     std::vector<openvdb::Coord> differ;
     const auto compare = [&](const VoxelShape& first, const VoxelShape& second, bool seenBoth) {
@@ -575,6 +574,29 @@ openvdb::MaskTree leavesOfShape(const openvdb::FloatTree& voxels, int k)
     return cells;
 }
 
+/// How far a change of the voxels reaches in a level set (unit: samples), and how many leaves
+/// around those an update works on to remake them: a level set's samples depend on the voxels
+/// within its band, a smoothed or roughened one's on those a few leaves further.
+struct UpdateReach {
+    int rewrittenSamples = 3;
+    int haloLeaves = 1;
+};
+
+UpdateReach updateReachOf(const SurfaceStyle& style)
+{
+    const int band = int(std::ceil(style.halfWidthSamples)), leaf = int(FloatLeaf::DIM);
+    const int grownLeaves = style.smoothingSteps / kStepsPerLeaf;
+    const int roughening = style.fractureRoughness > 0.0 ? leaf : 0;  // the renormalisation's stencil
+    const int smoothed = style.smoothingSteps > 0 ? leaf * (kChangedLeaves + grownLeaves) : 0;
+    const int smoothingHalo = style.smoothingSteps > 0 ? leaf * (kHaloLeaves + 2 * grownLeaves) : 0;
+    UpdateReach reach;
+    // A sample depends on the faces within its band; two samples more as a margin.
+    reach.rewrittenSamples = band + 2 + smoothed + roughening;
+    // A region's voxel reaches its leaf from up to a voxel away: the halo adds k samples.
+    reach.haloLeaves = (band + smoothingHalo + roughening + style.subdivisions + leaf - 1) / leaf;
+    return reach;
+}
+
 /// The leaves (or the tiles at a leaf's size) of `from` at `cells`, added to `to`.
 void copyCells(const openvdb::FloatTree& from, openvdb::FloatTree& to, const openvdb::MaskTree& cells)
 {
@@ -590,21 +612,6 @@ void copyCells(const openvdb::FloatTree& from, openvdb::FloatTree& to, const ope
 
 }  // namespace
 
-UpdateReach updateReachOf(const SurfaceStyle& style)
-{
-    const int band = int(std::ceil(style.halfWidthSamples)), leaf = int(FloatLeaf::DIM);
-    const int grownLeaves = style.smoothingSteps / kStepsPerLeaf;
-    const int roughening = style.fractureRoughness > 0.0 ? leaf : 0;  // the renormalisation's stencil
-    const int smoothed = style.smoothingSteps > 0 ? leaf * (kChangedLeaves + grownLeaves) : 0;
-    const int smoothingHalo = style.smoothingSteps > 0 ? leaf * (kHaloLeaves + 2 * grownLeaves) : 0;
-    UpdateReach reach;
-    // The mesher's renormalisation reads a sample either side of the band (MeshToVolume.h).
-    reach.rewrittenSamples = band + 2 + smoothed + roughening;
-    // A region's voxel reaches its leaf from up to a voxel away: the halo adds k samples.
-    reach.haloLeaves = (band + smoothingHalo + roughening + style.subdivisions + leaf - 1) / leaf;
-    return reach;
-}
-
 openvdb::FloatTree::Ptr updatedVoxelSurfaceLevelSet(const VoxelShapeSurface& previous, const VoxelShape& now, size_t exposedFaceCount,
                                                     double voxelSizeM, const SurfaceStyle& style)
 {
@@ -614,7 +621,7 @@ openvdb::FloatTree::Ptr updatedVoxelSurfaceLevelSet(const VoxelShapeSurface& pre
     openvdb::MaskTree rewritten(false);
     {
         openvdb::tree::ValueAccessor<openvdb::MaskTree> mark(rewritten);
-        for (const openvdb::Coord& v : voxelsThatDiffer(previous.shape, now, *now.voxels)) markLeavesNear(v, k, reach.rewrittenSamples, mark);
+        for (const openvdb::Coord& v : voxelsThatDiffer(previous.shape, now)) markLeavesNear(v, k, reach.rewrittenSamples, mark);
     }
     rewritten.topologyIntersection(shapeLeaves);
     openvdb::MaskTree worked(rewritten);

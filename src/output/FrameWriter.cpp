@@ -7,8 +7,6 @@
 #include <spall/core/Hash.h>
 #include <spall/core/Parallel.h>
 
-#include <openvdb/tools/Morphology.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

@@ -55,16 +55,6 @@ struct VoxelShapeSurface {
     VoxelShape shape;
     openvdb::FloatTree::Ptr surface;
 };
-/// How far a change of the voxels reaches in a level set (unit: samples), and how many leaves
-/// around those an update (updatedVoxelSurfaceLevelSet) works on to remake them: a level set's
-/// samples depend on the voxels within its band, a smoothed or roughened one's on those a few
-/// leaves further.
-struct UpdateReach {
-    int rewrittenSamples = 3;
-    int haloLeaves = 1;
-};
-UpdateReach updateReachOf(const SurfaceStyle& style);
-
 /// The level set voxelSurfaceLevelSet makes of `now` (`exposedFaceCount` faces), made from
 /// `previous`, an earlier shape in the same voxel indices and style with its level set: the leaves
 /// within reach of the voxels where the shapes or their broken faces differ are remade from the
