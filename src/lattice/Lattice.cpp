@@ -41,6 +41,8 @@ void Lattice::refreshForces()
     mBondTerms.resize(bondCount());
     mBondStretch.resize(bondCount());
     mSnapped.assign(bondCount(), 0);
+    mBroken.resize(bondCount());
+    for (size_t b = 0; b < bondCount(); ++b) mBroken[b] = bondDamage(b) >= 1.0;
     // Crushing's scratch exists only for a material that crushes (which it then flags).
     if (canCrush()) {
         mUncrushedLambdaTracePa.resize(particleCount());

@@ -228,6 +228,7 @@ uint8_t Lattice::measureBond(size_t b, const BondStrainRun& run, size_t lane, do
     // Compression carries what crushing left (a crack in tension or shear closes on itself).
     const double crushed = bond_laws::crushingDamage(history, strength), uncrushed = 1.0 - crushed;
     const bool broke = damage >= 1.0 && damageBefore < 1.0;
+    if (broke) mBroken[b] = 1;
     // What a pin held is lost where it fails (the glazing's own dissipation).
     const bool snapped = broke && mModel.damageLaw == LatticeDamageLaw::Softening && bond_laws::snapsAtPeak(strength) && !bond.pinned &&
                          bond_laws::crackingDamage(history, strength, mModel.damageLaw) >= 1.0;

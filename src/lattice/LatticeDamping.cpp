@@ -20,7 +20,7 @@ DisjointSets Lattice::intactPieces() const
 {
     DisjointSets sets(particleCount());
     for (size_t b = 0; b < bondCount(); ++b)
-        if (bondDamage(b) < 1.0) sets.join(mModel.bonds[b].low, mModel.bonds[b].high);
+        if (!isBroken(b)) sets.join(mModel.bonds[b].low, mModel.bonds[b].high);
     return sets;
 }
 
@@ -35,7 +35,7 @@ double Lattice::fundamentalFrequencyRadS(double thicknessM, double lengthM, bool
 
 bool Lattice::heldBySupport() const
 {
-    return std::any_of(mModel.bondsToHeld.begin(), mModel.bondsToHeld.end(), [&](uint32_t b) { return bondDamage(b) < 1.0; });
+    return std::any_of(mModel.bondsToHeld.begin(), mModel.bondsToHeld.end(), [&](uint32_t b) { return !isBroken(b); });
 }
 
 std::vector<uint32_t> Lattice::bondsFromHeld() const
@@ -52,7 +52,7 @@ std::vector<uint32_t> Lattice::bondsFromHeld() const
         const uint32_t p = front[next];
         for (int face = 0; face < 6; ++face) {
             const int32_t b = mModel.bondAcross[p][face];
-            if (b < 0 || bondDamage(size_t(b)) >= 1.0) continue;
+            if (b < 0 || isBroken(size_t(b))) continue;
             const uint32_t q = mModel.bonds[size_t(b)].low == p ? mModel.bonds[size_t(b)].high : mModel.bonds[size_t(b)].low;
             if (hops[q] != kUnreached) continue;
             hops[q] = hops[p] + 1;
@@ -126,7 +126,7 @@ void Lattice::findSupportBondsOfPieces(const std::vector<int32_t>& pieceOfRoot, 
     std::vector<std::vector<uint32_t>> supportBonds(mDampedPieces.size());
     for (size_t b = 0; b < bondCount(); ++b) {
         const LatticeBond& bond = mModel.bonds[b];
-        if (std::max(bond.low, bond.high) < mModel.voxelParticleCount || bondDamage(b) >= 1.0) continue;
+        if (std::max(bond.low, bond.high) < mModel.voxelParticleCount || isBroken(b)) continue;
         supportBonds[size_t(pieceOfRoot[sets.root(std::min(bond.low, bond.high))])].push_back(uint32_t(b));
     }
     mPieceSupportBonds.clear();

@@ -64,6 +64,7 @@ void Lattice::breakBond(size_t b)
     // Past both ends of its softening line (a bond that snaps at its peak breaks just past it).
     history.maxEquivalentStretchM = std::max({history.maxEquivalentStretchM, uf, u0}) * (1.0 + 1e-9);
     history.rateDamage = 1.0;
+    mBroken[b] = 1;
     mPiecesStale = true;
 }
 

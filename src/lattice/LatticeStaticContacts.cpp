@@ -92,7 +92,7 @@ size_t Lattice::particlesOnGround() const
 
 bool Lattice::bondedToGround(size_t p) const
 {
-    return p < mModel.groundBond.size() && mModel.groundBond[p] >= 0 && bondDamage(size_t(mModel.groundBond[p])) < 1.0;
+    return p < mModel.groundBond.size() && mModel.groundBond[p] >= 0 && !isBroken(size_t(mModel.groundBond[p]));
 }
 
 void Lattice::keepOutOf(const StaticWorld& supports)
@@ -167,7 +167,7 @@ bool Lattice::bears(const LatticeModel::BearingLoad& load) const
 
 void Lattice::holdByBearing(const LatticeModel::BearingLoad& load, double dtS)
 {
-    if (load.friction <= 0.0 || bondDamage(load.bond) < 1.0 || !bears(load)) return;
+    if (load.friction <= 0.0 || !isBroken(load.bond) || !bears(load)) return;
     const size_t p = load.voxel(mModel.bonds);
     const double normalN = load.forceN.norm();
     const Eigen::Vector3d across = load.forceN / normalN, v = state.velocityMS[p];

@@ -247,6 +247,11 @@ private:
     void findSupportBondsOfPieces(const std::vector<int32_t>& pieceOfRoot, DisjointSets& sets);
     /// Breaks a bond outright: its damage is 1 by cracking (contact in compression only).
     void breakBond(size_t b);
+    /// Per bond, 1 once its damage has reached 1 (bondDamage): set where damage grows
+    /// (measureBond, breakBond) and found again by refreshForces, so the passes that ask which
+    /// bonds hold (the pieces, the support, the ground) read a byte a bond, not its history.
+    std::vector<uint8_t> mBroken;
+    bool isBroken(size_t b) const { return mBroken[b] != 0; }
     /// Per bond, 1 while it has snapped at its peak in this substep and not yet given back its
     /// energy (releaseSnapEnergies); apart from the terms, which it would make 11 % larger.
     std::vector<uint8_t> mSnapped;
