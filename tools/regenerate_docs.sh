@@ -7,7 +7,7 @@
 # Without --full, the pictures that take about a minute in all: the default scene, the loads on
 # its wall, where its debris lands and Blender's render of it, its wall during the deformable phase at 2 ms intervals,
 # the timber post. --full adds the concrete slab,
-# the glass pane and its cracks, a block thrown at a pane at 2 ms intervals, the house wall (7 minutes), the 3 M-voxel wall (8 minutes) and
+# the glass pane and its cracks, a block thrown at a pane at 2 ms intervals, the house wall (3 minutes), the 3 M-voxel wall (8 minutes) and
 # the accuracy plots (whose run times vary from run to run, so --check leaves them out).
 # --check writes into a scratch directory and compares each picture byte for byte with the one
 # in docs/images (runs are deterministic); it exits 1 naming those that differ. ctest runs
