@@ -351,15 +351,13 @@ openvdb::CoordBBox samplesNearFace(const VoxelFace& f, int k, int band)
     return {lo, hi};
 }
 
-/// Squared distance from sample `u` to face `f`'s square (unit: samples², exact in integers).
-int squaredSampleDistance(const openvdb::Coord& u, const VoxelFace& f, int k)
+/// Squared distance from sample `u` to a face's square, given as its samples (samplesNearFace
+/// with no band) (unit: samples², exact in integers).
+int squaredSampleDistance(const openvdb::Coord& u, const openvdb::CoordBBox& square)
 {
     int sum = 0;
     for (int axis = 0; axis < 3; ++axis) {
-        const int low = k * f.voxel[axis] + kSampleIndexOffset;
-        const int plane = faceSign(f.face) > 0 ? low + k : low;
-        const int from = axis == faceAxis(f.face) ? plane : low, to = axis == faceAxis(f.face) ? plane : low + k;
-        const int gap = u[axis] < from ? from - u[axis] : (u[axis] > to ? u[axis] - to : 0);
+        const int gap = u[axis] < square.min()[axis] ? square.min()[axis] - u[axis] : std::max(0, u[axis] - square.max()[axis]);
         sum += gap * gap;
     }
     return sum;
@@ -385,9 +383,10 @@ FloatLeaf* distanceLeaf(const openvdb::Coord& cell, const std::vector<const Voxe
         openvdb::CoordBBox box = samplesNearFace(*f, k, band);
         box.intersect(leafBox);
         if (box.empty()) continue;
+        const openvdb::CoordBBox square = samplesNearFace(*f, k, 0);
         for (auto u = box.begin(); u; ++u) {
             int& d2 = nearest[FloatLeaf::coordToOffset(*u)];
-            d2 = std::min(d2, squaredSampleDistance(*u, *f, k));
+            d2 = std::min(d2, squaredSampleDistance(*u, square));
         }
     }
     const float background = halfWidthSamples * sampleM;
