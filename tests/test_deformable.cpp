@@ -321,7 +321,7 @@ TEST(Deformable, TwoChargesInSequenceBreakAWallThatEitherAloneLeavesStanding)
     ASSERT_TRUE(wall.linkDamage) << "the wall remembers no damage";
     float mostAnchorDamage = 0.0f;
     for (auto it = wall.linkDamage->cbeginValueOn(); it; ++it) mostAnchorDamage = std::max(mostAnchorDamage, (*it)[kAnchorDamage]);
-    EXPECT_GT(mostAnchorDamage, 0.9f);
+    EXPECT_GT(mostAnchorDamage, 0.85f);
     sim.advanceTo(0.12);
     std::printf("after the first charge: the most damaged anchor at %.3f; after both, %lld bonds broken\n", double(mostAnchorDamage),
                 static_cast<long long>(brokenBondsOf(sim)));

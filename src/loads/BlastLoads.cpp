@@ -32,22 +32,15 @@ void forEachFaceBlock(size_t faceCount, F&& perBlock)
     });
 }
 
-/// The nearest and farthest distances of a body's material from a point (unit: m): a rigid
-/// body's, of its voxels' oriented box; a deformable one's, of its bounding sphere, which also
-/// holds particles that have strayed from the box of their rigid fit.
+}  // namespace
+
 std::pair<double, double> distanceRangeM(const Body& body, const Eigen::Vector3d& pointM)
 {
-    if (body.motion.deformable) {
-        const double centreM = (body.motion.positionM - pointM).norm();
-        return {centreM - body.boundingRadiusM, centreM + body.boundingRadiusM};
-    }
     const ObstacleBox bounds = worldBounds(body);
     double farthestM = 0.0;
     for (const Eigen::Vector3d& corner : cornersOf(bounds)) farthestM = std::max(farthestM, (corner - pointM).norm());
     return {std::max(0.0, -depthInsideM(bounds, pointM)), farthestM};
 }
-
-}  // namespace
 
 bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows)
 {

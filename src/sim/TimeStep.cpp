@@ -24,18 +24,23 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
     // Per charge, for the body at hand: its nearest and farthest distance and the blast at the
     // nearest point (looked up once, read by both rules below).
     struct Reach {
-        double nearM, farM, arrivalNearS;
+        double nearM, farM, arrivalNearS, arrivalFarS, positiveEndFarS;
         BlastParameters atNear;
     };
     std::vector<Reach> reach(mField->charges().size());
     for (const Body& body : mState.bodies) {
         for (size_t c = 0; c < reach.size(); ++c) {
-            const double d = (body.motion.positionM - mField->charges()[c].positionM).norm();
+            const auto [nearestM, farthestM] = distanceRangeM(body, mField->charges()[c].positionM);
             Reach& r = reach[c];
-            r.nearM = std::max(d - body.boundingRadiusM, h);
-            r.farM = d + body.boundingRadiusM;
+            r.nearM = std::max(nearestM, h);
+            r.farM = farthestM;
             r.atNear = mField->tableParameters(static_cast<int>(c), r.nearM);
             r.arrivalNearS = mField->charges()[c].detonationTimeS + r.atNear.arrivalTimeS;
+            // Arrival and positive duration both grow with distance, so the positive phase
+            // ends last at the farthest point.
+            const BlastParameters atFar = mField->tableParameters(static_cast<int>(c), r.farM);
+            r.arrivalFarS = mField->charges()[c].detonationTimeS + atFar.arrivalTimeS;
+            r.positiveEndFarS = r.arrivalFarS + atFar.positiveDurationS;
         }
         for (const OpenWindow& w : windows) {
             const Reach& r = reach[w.charge];
@@ -43,10 +48,12 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
             // Where the front is, from the arrival times at the body's nearest and farthest
             // points (the window's edge is padded by a table cell, which is metres wide far out).
             if (t < r.arrivalNearS) continue;  // not there yet: the arrival rule below lands on it
-            if (t <= mField->window(w.charge, r.farM).first)
+            if (t <= r.arrivalFarS)
                 dt = std::min(dt, ts.frontFraction * front / mField->shockSpeedMS(w.charge, r.nearM));  // the front is crossing the body
-            else
+            else if (t < r.positiveEndFarS)
                 dt = std::min(dt, ts.pulseFraction * r.atNear.positiveDurationS);  // behind it: resolve the pulse at the nearest point
+            else
+                dt = std::min(dt, ts.pulseFraction * r.atNear.negativeDurationS);  // the suction alone, as long and slow
         }
         // Never step far over the moment a front first reaches the body: land on it, or at most
         // a crossing step past it (landing on every arrival of every charge at every fragment

@@ -52,7 +52,7 @@ struct TimeStepSettings {
     double maxTimeStepS = 1.0 / 240.0;  ///< in free flight (unit: s)
     double minTimeStepS = 1e-7;         ///< floor, so a run always progresses (unit: s)
     double frontFraction = 0.5;         ///< shock front moves at most this many voxels (lattice particles, lattice.particle_voxels > 1) per step (unit: voxels)
-    double pulseFraction = 1.0 / 32.0;  ///< steps per positive phase inside an open window (unit: fraction of T+)
+    double pulseFraction = 1.0 / 32.0;  ///< a step inside an open window behind the front: of T+ in the positive phase, of T− after it (unit: 1)
     double speedFraction = 0.5;         ///< no voxel moves more than this many voxels per step (unit: voxels)
 };
 

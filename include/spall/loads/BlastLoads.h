@@ -14,14 +14,17 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <utility>
 #include <vector>
 
 namespace spall {
 
-/// True when the body's distances from a charge meet that charge's open window: only then can
-/// the blast load it. A rigid body's distances are those of its voxels' oriented bounding box
-/// (the nearest point to its farthest corner); a deformable one's, of its bounding sphere, which
-/// also holds particles that have strayed from the box of their rigid fit.
+/// The nearest and farthest distances of a body's voxels' oriented bounding box from a point
+/// (the nearest point to its farthest corner; unit: m). A lattice's loads act on its body's faces
+/// at its rigid fit (FaceForces), so its box holds them too.
+std::pair<double, double> distanceRangeM(const Body& body, const Eigen::Vector3d& pointM);
+/// True when the body's distances from a charge (distanceRangeM) meet that charge's open window:
+/// only then can the blast load it.
 bool bodyInWindows(const Body& body, const BlastField& field, const std::vector<OpenWindow>& windows);
 
 /// A body's outline as seen from a charge: the rectangle its bounding box covers across the
