@@ -36,8 +36,10 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
             r.farM = farthestM;
             r.atNear = mField->tableParameters(static_cast<int>(c), r.nearM);
             r.arrivalNearS = mField->charges()[c].detonationTimeS + r.atNear.arrivalTimeS;
-            // Arrival and positive duration both grow with distance, so the positive phase
-            // ends last at the farthest point.
+            // Where arrival and positive duration both grow with distance the positive phase
+            // ends last at the farthest point (Kingery–Bulmash beyond Z ≈ 0.26 m/kg^(1/3);
+            // nearer, and under Kinney–Graham to Z ≈ 0.5, T+ falls faster than the arrival
+            // grows, and it can end first there: issue 49's note).
             const BlastParameters atFar = mField->tableParameters(static_cast<int>(c), r.farM);
             r.arrivalFarS = mField->charges()[c].detonationTimeS + atFar.arrivalTimeS;
             r.positiveEndFarS = r.arrivalFarS + atFar.positiveDurationS;
