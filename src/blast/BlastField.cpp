@@ -49,12 +49,14 @@ BlastTable::BlastTable(BlastDataset dataset, BurstType burst, int nodesPerDecade
     mNodesPerLog2 = nodesPerDecade / std::log2(10.0);
     const size_t count = static_cast<size_t>(std::ceil((std::log2(zHi) - mLog2ZMin) * mNodesPerLog2)) + 1;
     mNodes.resize(count);
-    double runningEnd = 0.0;
+    double runningEnd = 0.0, runningPositiveEnd = 0.0;
     for (size_t i = 0; i < count; ++i) {
         const BlastParameters s = scaledBlastDirect(dataset, burst, scaledDistanceOfNode(double(i)));
         runningEnd = std::max(runningEnd, s.arrivalTimeS + s.positiveDurationS + s.negativeDurationS);
-        mNodes[i] = {s.arrivalTimeS,    s.positiveDurationS, s.peakOverpressurePa,        s.decayCoefficient, s.negativePeakPa,
-                     runningEnd,        s.reflectedPressurePa, s.reflectedDecayCoefficient, s.shockSpeedMS};
+        runningPositiveEnd = std::max(runningPositiveEnd, s.arrivalTimeS + s.positiveDurationS);
+        mNodes[i] = {s.arrivalTimeS,       s.positiveDurationS,         s.peakOverpressurePa, s.decayCoefficient,
+                     s.negativePeakPa,     runningEnd,                  runningPositiveEnd,   s.reflectedPressurePa,
+                     s.reflectedDecayCoefficient, s.shockSpeedMS};
     }
 }
 
@@ -145,6 +147,12 @@ BlastParameters BlastField::tableParameters(int charge, double distanceM) const
     p.reflectedDecayCoefficient = n.reflectedDecayCoefficient;
     p.shockSpeedMS = n.shockSpeedMS * mSpeedScale;
     return p;
+}
+
+double BlastField::latestPositiveEndS(int charge, double distanceM) const
+{
+    const PerCharge& c = mPerCharge[charge];
+    return c.detonationTimeS + c.table->lookupLog2(std::log2(distanceM) + c.log2LengthScale).positiveEndS * c.timeScale;
 }
 
 PointPulse BlastField::pulseAt(int charge, double distanceSquaredM2) const

@@ -24,7 +24,8 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
     // Per charge, for the body at hand: its nearest and farthest distance and the blast at the
     // nearest point (looked up once, read by both rules below).
     struct Reach {
-        double nearM, farM, arrivalNearS, arrivalFarS, positiveEndFarS;
+        double nearM, farM, arrivalNearS, arrivalFarS;
+        double positiveEndFarS;  ///< the latest the positive phase ends anywhere up to the farthest point
         BlastParameters atNear;
     };
     std::vector<Reach> reach(mField->charges().size());
@@ -36,13 +37,8 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
             r.farM = farthestM;
             r.atNear = mField->tableParameters(static_cast<int>(c), r.nearM);
             r.arrivalNearS = mField->charges()[c].detonationTimeS + r.atNear.arrivalTimeS;
-            // Where arrival and positive duration both grow with distance the positive phase
-            // ends last at the farthest point (Kingery–Bulmash beyond Z ≈ 0.26 m/kg^(1/3);
-            // nearer, and under Kinney–Graham to Z ≈ 0.5, T+ falls faster than the arrival
-            // grows, and it can end first there: issue 49's note).
-            const BlastParameters atFar = mField->tableParameters(static_cast<int>(c), r.farM);
-            r.arrivalFarS = mField->charges()[c].detonationTimeS + atFar.arrivalTimeS;
-            r.positiveEndFarS = r.arrivalFarS + atFar.positiveDurationS;
+            r.arrivalFarS = mField->charges()[c].detonationTimeS + mField->tableParameters(static_cast<int>(c), r.farM).arrivalTimeS;
+            r.positiveEndFarS = mField->latestPositiveEndS(static_cast<int>(c), r.farM);
         }
         for (const OpenWindow& w : windows) {
             const Reach& r = reach[w.charge];

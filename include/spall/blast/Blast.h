@@ -127,7 +127,8 @@ class BlastTable {
 public:
     struct Node {
         double arrivalTimeS, positiveDurationS, peakOverpressurePa, decayCoefficient, negativePeakPa;
-        double windowEndS;  ///< arrival + T+ + T-, running maximum from the near end
+        double windowEndS;    ///< arrival + T+ + T-, running maximum from the near end
+        double positiveEndS;  ///< arrival + T+, running maximum from the near end
         double reflectedPeakPa, reflectedDecayCoefficient, shockSpeedMS;
     };
     BlastTable(BlastDataset dataset, BurstType burst, int nodesPerDecade);
@@ -149,6 +150,7 @@ public:
                 a.decayCoefficient + w * (b.decayCoefficient - a.decayCoefficient),
                 a.negativePeakPa + w * (b.negativePeakPa - a.negativePeakPa),
                 a.windowEndS + w * (b.windowEndS - a.windowEndS),
+                a.positiveEndS + w * (b.positiveEndS - a.positiveEndS),
                 a.reflectedPeakPa + w * (b.reflectedPeakPa - a.reflectedPeakPa),
                 a.reflectedDecayCoefficient + w * (b.reflectedDecayCoefficient - a.reflectedDecayCoefficient),
                 a.shockSpeedMS + w * (b.shockSpeedMS - a.shockSpeedMS)};
@@ -254,6 +256,10 @@ public:
 
     /// Parameters of one charge at a distance from the table (what the hot path uses).
     BlastParameters tableParameters(int charge, double distanceM) const;
+    /// The latest time (unit: s, detonation included) at which the positive phase of one charge
+    /// ends anywhere within distanceM of it. Near a charge the positive duration can fall faster
+    /// than the arrival grows, so the positive phase need not end last at the farthest point.
+    double latestPositiveEndS(int charge, double distanceM) const;
     /// One charge's pulse at squared distance r2 (unit: m^2), from the table.
     PointPulse pulseAt(int charge, double distanceSquaredM2) const;
 
