@@ -43,7 +43,6 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
     struct Reach {
         double nearM, farM, arrivalNearS, arrivalFarS;
         double positiveEndFarS;  ///< the latest the positive phase ends anywhere up to the farthest point
-        double shortestPositiveS;  ///< the shortest positive duration on the body
         BlastParameters atNear;
     };
     std::vector<Reach> reach(mField->charges().size());
@@ -57,7 +56,6 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
             r.arrivalNearS = mField->charges()[c].detonationTimeS + r.atNear.arrivalTimeS;
             r.arrivalFarS = mField->charges()[c].detonationTimeS + mField->tableParameters(static_cast<int>(c), r.farM).arrivalTimeS;
             r.positiveEndFarS = mField->latestPositiveEndS(static_cast<int>(c), r.farM);
-            r.shortestPositiveS = shortestPositiveDurationS(*mField, static_cast<int>(c), r.nearM, std::max(r.farM, r.nearM));
         }
         for (const OpenWindow& w : windows) {
             const Reach& r = reach[w.charge];
@@ -68,7 +66,8 @@ double Simulation::chooseTimeStep(const std::vector<OpenWindow>& windows) const
             if (t <= r.arrivalFarS)
                 dt = std::min(dt, ts.frontFraction * front / mField->shockSpeedMS(w.charge, r.nearM));  // the front is crossing the body
             else if (t < r.positiveEndFarS)
-                dt = std::min(dt, ts.pulseFraction * r.shortestPositiveS);  // behind it: resolve the shortest pulse on the body
+                // Behind it: resolve the shortest pulse on the body (sampled only here, where it is read).
+                dt = std::min(dt, ts.pulseFraction * shortestPositiveDurationS(*mField, w.charge, r.nearM, std::max(r.farM, r.nearM)));
             else
                 dt = std::min(dt, ts.pulseFraction * r.atNear.negativeDurationS);  // the suction alone, as long and slow
         }
